@@ -1,0 +1,51 @@
+// ns per evaluation of every terminator factor, over a fixed pool of random
+// configurations (so branch prediction sees realistic variety).
+#include <benchmark/benchmark.h>
+
+#include <vector>
+
+#include "core/random.h"
+#include "core/terminator.h"
+
+namespace {
+
+using penumbra::ShadingVectors;
+using penumbra::Vec3;
+
+const std::vector<ShadingVectors>& pool() {
+  static const std::vector<ShadingVectors> vectors = [] {
+    std::vector<ShadingVectors> out;
+    penumbra::Pcg32 rng(42);
+    auto hemisphere = [&](double max_cos_deviation) {
+      const double z = max_cos_deviation + (1.0 - max_cos_deviation) * rng.next_double();
+      const double phi = 2.0 * penumbra::kPi * rng.next_double();
+      const double r = std::sqrt(1.0 - z * z);
+      return Vec3{r * std::cos(phi), r * std::sin(phi), z};
+    };
+    for (int i = 0; i < 4096; ++i)
+      out.push_back({{0, 0, 1}, hemisphere(0.5), hemisphere(0.0), hemisphere(0.0)});
+    return out;
+  }();
+  return vectors;
+}
+
+void bm_factor(benchmark::State& state, penumbra::TerminatorMethod method) {
+  const auto& vectors = pool();
+  penumbra::MethodSettings settings{method, 0.5};
+  std::size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(penumbra::terminator_factor(settings, vectors[i]));
+    i = (i + 1) & 4095;
+  }
+}
+
+const int registered = [] {
+  for (const auto& info : penumbra::all_methods())
+    benchmark::RegisterBenchmark(("factor/" + std::string(info.id)).c_str(), bm_factor,
+                                 info.method);
+  return 0;
+}();
+
+}  // namespace
+
+BENCHMARK_MAIN();

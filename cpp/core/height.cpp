@@ -1,0 +1,100 @@
+#include "core/height.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/random.h"
+
+namespace penumbra {
+
+HeightSample evaluate_height(const HeightFunction& f, const Vec3& p) {
+  HeightSample out;
+  if (f.terms.empty()) return out;
+  if (f.combine == HeightCombine::kSum) {
+    for (const SineTerm& term : f.terms) {
+      const double arg = 2.0 * kPi * dot(term.k, p) + term.phase;
+      out.h += term.weight * std::sin(arg);
+      out.gradient += term.k * (2.0 * kPi * term.weight * std::cos(arg));
+    }
+    return out;
+  }
+  // Product rule, written for the handful of factors a weave has.
+  out.h = 1.0;
+  double sines[kMaxProductFactors];
+  double cosines[kMaxProductFactors];
+  const std::size_t m = std::min<std::size_t>(f.terms.size(), kMaxProductFactors);
+  for (std::size_t i = 0; i < m; ++i) {
+    const double arg = 2.0 * kPi * dot(f.terms[i].k, p) + f.terms[i].phase;
+    sines[i] = std::sin(arg);
+    cosines[i] = std::cos(arg);
+    out.h *= sines[i];
+  }
+  for (std::size_t i = 0; i < m; ++i) {
+    double others = 1.0;
+    for (std::size_t j = 0; j < m; ++j)
+      if (j != i) others *= sines[j];
+    out.gradient += f.terms[i].k * (2.0 * kPi * cosines[i] * others);
+  }
+  return out;
+}
+
+double max_abs_height(const HeightFunction& f) {
+  if (f.terms.empty()) return 0.0;
+  if (f.combine == HeightCombine::kProduct) return 1.0;
+  double bound = 0.0;
+  for (const SineTerm& term : f.terms) bound += std::abs(term.weight);
+  return bound;
+}
+
+double max_gradient_norm(const HeightFunction& f) {
+  double bound = 0.0;
+  for (const SineTerm& term : f.terms)
+    bound += 2.0 * kPi * length(term.k) *
+             (f.combine == HeightCombine::kSum ? std::abs(term.weight) : 1.0);
+  return bound;
+}
+
+double max_hessian_norm(const HeightFunction& f) {
+  double bound = 0.0;
+  if (f.combine == HeightCombine::kSum) {
+    for (const SineTerm& term : f.terms) {
+      const double w = 2.0 * kPi * length(term.k);
+      bound += std::abs(term.weight) * w * w;
+    }
+    return bound;
+  }
+  // Product of sines: every second derivative is bounded by (sum_i |w_i|)^2.
+  for (const SineTerm& term : f.terms) bound += 2.0 * kPi * length(term.k);
+  return bound * bound;
+}
+
+HeightFunction make_grating(const Vec3& direction, double frequency, double phase) {
+  return {{{normalize(direction) * frequency, phase, 1.0}}, HeightCombine::kSum};
+}
+
+HeightFunction make_weave(std::span<const Vec3> directions, double frequency,
+                          HeightCombine combine) {
+  HeightFunction f;
+  f.combine = combine;
+  for (const Vec3& d : directions) f.terms.push_back({normalize(d) * frequency, 0.0, 1.0});
+  return f;
+}
+
+HeightFunction make_noise(int terms, double frequency_min, double frequency_max,
+                          std::uint64_t seed) {
+  HeightFunction f;
+  Pcg32 rng(mix64(seed));
+  const double weight = 1.0 / std::sqrt(static_cast<double>(terms));
+  for (int i = 0; i < terms; ++i) {
+    const double z = 1.0 - 2.0 * rng.next_double();
+    const double phi = 2.0 * kPi * rng.next_double();
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const Vec3 direction{r * std::cos(phi), r * std::sin(phi), z};
+    const double frequency = frequency_min + (frequency_max - frequency_min) * rng.next_double();
+    const double phase = 2.0 * kPi * rng.next_double();
+    f.terms.push_back({direction * frequency, phase, weight});
+  }
+  return f;
+}
+
+}  // namespace penumbra

@@ -1,0 +1,59 @@
+// Height functions h(P) over the base surface, evaluated at the base point P
+// (scene units in, dimensionless out, |h| bounded by max_abs_height). Every
+// family is a combination of 3D sine gratings, so POV-Ray's function syntax
+// and Blender's shader math nodes can express it exactly; gradients are
+// analytic. The displaced surface is P' = P + A h(P) N(P) (reference, sec. 5).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/vec.h"
+
+namespace penumbra {
+
+// weight * sin(2 pi dot(k, P) + phase); k in cycles per scene unit.
+struct SineTerm {
+  Vec3 k;
+  double phase = 0.0;   // radians
+  double weight = 1.0;  // dimensionless
+};
+
+enum class HeightCombine { kSum, kProduct };
+
+// A product of more factors than this is refused by the scene layer: the
+// evaluator keeps the factors on the stack.
+inline constexpr int kMaxProductFactors = 8;
+
+struct HeightFunction {
+  std::vector<SineTerm> terms;  // no terms: h = 0
+  // kSum: h = sum of terms. kProduct: h = product of sin(...), weights unused
+  // (so |h| <= 1 whatever the number of factors).
+  HeightCombine combine = HeightCombine::kSum;
+};
+
+struct HeightSample {
+  double h = 0.0;
+  Vec3 gradient;  // 3D gradient of h, per scene unit
+};
+
+HeightSample evaluate_height(const HeightFunction& f, const Vec3& p);
+// Tight upper bound of |h| over all of space.
+double max_abs_height(const HeightFunction& f);
+// Upper bound of |grad h| over all of space, per scene unit.
+double max_gradient_norm(const HeightFunction& f);
+// Upper bound of the Hessian's spectral norm, per scene unit squared.
+double max_hessian_norm(const HeightFunction& f);
+
+// The families a scene can name.
+HeightFunction make_grating(const Vec3& direction, double frequency, double phase);
+HeightFunction make_weave(std::span<const Vec3> directions, double frequency,
+                          HeightCombine combine);
+// `terms` gratings, directions uniform on the sphere, frequencies uniform in
+// [frequency_min, frequency_max], phases uniform in [0, 2 pi), each weighted
+// 1/sqrt(terms) so that the RMS height does not grow with the term count.
+HeightFunction make_noise(int terms, double frequency_min, double frequency_max,
+                          std::uint64_t seed);
+
+}  // namespace penumbra

@@ -1,0 +1,76 @@
+// Analytic base shapes: ray intersection and the differential geometry the
+// bump and displacement representations need. Scene units throughout.
+#pragma once
+
+#include <optional>
+
+#include "core/height.h"
+#include "core/vec.h"
+
+namespace penumbra {
+
+struct Ray {
+  Vec3 origin;
+  Vec3 direction;  // unit length
+};
+
+enum class ShapeType { kCylinder, kSphere };
+
+// Cylinder: side of the given radius around `axis` through `center`, from
+// -height/2 to +height/2 along the axis, optionally closed by flat caps.
+// Sphere: `radius` around `center`; `axis` only fixes its (u, v)
+// parameterisation (poles on the axis).
+struct Shape {
+  ShapeType type = ShapeType::kSphere;
+  Vec3 center;
+  Vec3 axis{0, 1, 0};  // unit length
+  double radius = 1.0;
+  double height = 2.0;
+  bool caps = false;
+
+  // Frame whose n is the axis; set by with_frame() before intersecting.
+  Frame frame = Frame::from_z({0, 1, 0});
+};
+
+Shape with_frame(Shape shape);
+
+// Local geometry at a base-surface point. t1 x t2 = n, and t1, t2 are the
+// principal directions with curvatures kappa1, kappa2 (1/scene units,
+// positive where the surface bends away from n, i.e. convex).
+struct SurfaceGeometry {
+  Vec3 p, n, t1, t2;
+  double kappa1 = 0.0, kappa2 = 0.0;
+  // Parameters of the displaceable part: cylinder side u = azimuth in
+  // [0, 2 pi), v = axial coordinate in [-height/2, height/2]; sphere
+  // u = azimuth in [0, 2 pi), v = polar angle from +axis in [0, pi].
+  // Set by surface_at(); intersect() leaves them 0 (no renderer needs them
+  // there, and the azimuth costs an atan2 per camera ray).
+  double u = 0.0, v = 0.0;
+  bool displaceable = true;  // false on cylinder caps: h applies to the side only
+};
+
+struct Hit {
+  double t = 0.0;
+  SurfaceGeometry geometry;
+};
+
+// Closest hit with t in (t_min, t_max), from outside or inside; *hit is
+// written only when there is one.
+bool intersect(const Shape& shape, const Ray& ray, double t_min, double t_max, Hit* hit);
+// Any hit with t in (t_min, t_max); cheaper than intersect() for shadow rays.
+bool occluded(const Shape& shape, const Ray& ray, double t_min, double t_max);
+
+// Geometry of the displaceable part at parameters (u, v).
+SurfaceGeometry surface_at(const Shape& shape, double u, double v);
+
+// Normal of the displaced surface P' = P + A h(P) N(P) at the base point, in
+// closed form from the principal frame (exact, not first order):
+//   Ns ~ c1 c2 N - A g1 c2 t1 - A g2 c1 t2,  ci = 1 + A h kappa_i,  gi = grad h . ti.
+Vec3 displaced_normal(const SurfaceGeometry& g, double amplitude, const HeightSample& h);
+
+// The displaced point P + A h N.
+inline Vec3 displaced_point(const SurfaceGeometry& g, double amplitude, const HeightSample& h) {
+  return g.p + g.n * (amplitude * h.h);
+}
+
+}  // namespace penumbra

@@ -1,0 +1,79 @@
+// Small value types for the pure-math core: no I/O, no allocation.
+// Double precision throughout: the evaluator is a reference, and the shadowing
+// factors are most sensitive exactly where vectors are nearly parallel.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+namespace penumbra {
+
+inline constexpr double kPi = 3.14159265358979323846;
+inline constexpr double kInvPi = 1.0 / kPi;
+
+inline double degrees(double radians) { return radians * (180.0 / kPi); }
+inline double radians(double degrees) { return degrees * (kPi / 180.0); }
+
+struct Vec3 {
+  double x = 0, y = 0, z = 0;
+
+  constexpr Vec3() = default;
+  constexpr Vec3(double x_, double y_, double z_) : x(x_), y(y_), z(z_) {}
+
+  constexpr double operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+  constexpr Vec3 operator-() const { return {-x, -y, -z}; }
+  constexpr Vec3& operator+=(const Vec3& b) {
+    x += b.x;
+    y += b.y;
+    z += b.z;
+    return *this;
+  }
+  constexpr Vec3& operator*=(double s) {
+    x *= s;
+    y *= s;
+    z *= s;
+    return *this;
+  }
+  friend constexpr bool operator==(const Vec3& a, const Vec3& b) = default;
+};
+
+constexpr Vec3 operator+(const Vec3& a, const Vec3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+constexpr Vec3 operator-(const Vec3& a, const Vec3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+constexpr Vec3 operator*(const Vec3& a, double s) { return {a.x * s, a.y * s, a.z * s}; }
+constexpr Vec3 operator*(double s, const Vec3& a) { return a * s; }
+constexpr Vec3 operator/(const Vec3& a, double s) { return a * (1.0 / s); }
+
+constexpr double dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+// <a,b> of the reference sheet: the cosine clamped to the upper hemisphere.
+inline double clamped_dot(const Vec3& a, const Vec3& b) { return std::max(0.0, dot(a, b)); }
+constexpr Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline double length_squared(const Vec3& a) { return dot(a, a); }
+inline double length(const Vec3& a) { return std::sqrt(dot(a, a)); }
+inline Vec3 normalize(const Vec3& a) { return a / length(a); }
+inline bool is_finite(const Vec3& a) {
+  return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
+}
+
+// Angle between unit vectors, accurate also when they are nearly parallel
+// or antiparallel (acos of the dot product loses half the digits there).
+inline double angle_between(const Vec3& a, const Vec3& b) {
+  return std::atan2(length(cross(a, b)), dot(a, b));
+}
+
+// Orthonormal basis around a unit vector n (Duff et al. 2017, branchless).
+struct Frame {
+  Vec3 s, t, n;
+
+  static Frame from_z(const Vec3& n) {
+    const double sign = std::copysign(1.0, n.z);
+    const double a = -1.0 / (sign + n.z);
+    const double b = n.x * n.y * a;
+    return {{1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x}, {b, sign + n.y * n.y * a, -n.y}, n};
+  }
+  Vec3 to_local(const Vec3& v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
+  Vec3 to_world(const Vec3& v) const { return s * v.x + t * v.y + n * v.z; }
+};
+
+}  // namespace penumbra

@@ -1,0 +1,59 @@
+// The reference evaluator: direct light only, black background, real shadow
+// rays. Deterministic for a given scene (seed included) whatever the thread
+// count: every pixel draws from its own random stream and sums in a fixed order.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "scene/scene.h"
+
+namespace penumbra {
+
+// Interleaved float image with named channels.
+struct Image {
+  int width = 0, height = 0;
+  std::vector<std::string> channels;
+  std::vector<float> pixels;  // width * height * channels.size()
+
+  int channel_index(const std::string& name) const;
+  float at(int x, int y, int channel) const {
+    return pixels[(std::size_t(y) * width + x) * channels.size() + channel];
+  }
+};
+
+// Channels of every evaluator render, in this order:
+//   R, G, B      radiance (W m^-2 sr^-1), box-filtered over the pixel
+//   A            coverage: fraction of the pixel's samples that hit the object
+//   analysis.theta      degrees between wi and the base-surface normal at the
+//                       base point (for displacement: the base point under the hit)
+//   analysis.deviation  degrees between Ns and that base normal
+//   analysis.G          the terminator factor at the sample (1 for `none`)
+// The analysis channels are means over the samples that hit (0 where none did).
+// They live in the EXR layer "analysis" because "G" alone is the green channel.
+const std::vector<std::string>& evaluator_channels();
+
+struct RenderStats {
+  std::uint64_t camera_samples = 0;
+  std::uint64_t shadow_rays = 0;
+  double seconds = 0.0;        // wall time, preparation included
+  double build_seconds = 0.0;  // displacement: mesh + BVH build
+  std::size_t triangles = 0;   // displacement: mesh size
+};
+
+struct RenderOptions {
+  // Called with the fraction done, at most a few times per second, from
+  // whichever worker thread finished a row; must be thread-safe.
+  std::function<void(double)> progress;
+};
+
+Image render(const Scene& scene, const RenderOptions& options = {}, RenderStats* stats = nullptr);
+
+// Stratification of spp samples into nx * ny strata, nx <= ny, as square as
+// spp allows (16 -> 4x4, 8 -> 2x4, 7 -> 1x7).
+void strata(int spp, int* nx, int* ny);
+
+}  // namespace penumbra

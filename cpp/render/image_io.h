@@ -1,0 +1,32 @@
+// Image files through OpenImageIO. Writes go to a temporary name in the
+// target folder and are renamed into place, so a failed or interrupted write
+// never leaves a file that looks like a result.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "render/evaluator.h"
+
+namespace penumbra {
+
+// Cannot write an output (bad path, full disk): reported as bad input.
+class OutputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Fails early, before a long render, when `path` cannot be created.
+void check_writable(const std::string& path);
+
+// Linear 32-bit float OpenEXR, ZIP compressed, with string metadata.
+void write_exr(const Image& image, const std::string& path,
+               const std::vector<std::pair<std::string, std::string>>& metadata = {});
+// 8-bit sRGB PNG of R, G, B, A for a person to look at (values clamped to [0,1]).
+void write_preview_png(const Image& image, const std::string& path);
+// Reads any file OpenImageIO can read, all channels as float.
+Image read_image(const std::string& path);
+
+}  // namespace penumbra

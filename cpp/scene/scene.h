@@ -1,0 +1,92 @@
+// Typed scene description. Every field documents its unit and domain; the
+// JSON reader (scene_json.h) enforces them. Coordinates follow POV-Ray's
+// convention (left-handed, y up, the camera's `direction` into the screen),
+// so the POV-Ray export copies numbers unchanged.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "core/bsdf.h"
+#include "core/height.h"
+#include "core/shape.h"
+#include "core/terminator.h"
+#include "core/vec.h"
+
+namespace penumbra {
+
+inline constexpr int kSceneFormatVersion = 1;
+inline constexpr int kMaxImageSize = 16384;
+
+enum class Projection { kOrthographic, kPerspective };
+
+// Pixel (i, j), j = 0 at the top, sample offset (a, b) in [0,1)^2:
+//   x0 = (i + a)/width - 1/2,   y0 = 1/2 - (j + b)/height
+//   orthographic: origin = position + x0 right + y0 up, direction = direction
+//   perspective:  origin = position, direction = direction + x0 right + y0 up
+// (reference sheet, section 6). Directions are normalised for tracing only.
+struct Camera {
+  Projection projection = Projection::kOrthographic;
+  Vec3 position{0, 0, -5};
+  Vec3 direction{0, 0, 1};
+  Vec3 right{2.5, 0, 0};  // full image width in scene units (orthographic)
+  Vec3 up{0, 2.5, 0};     // full image height in scene units (orthographic)
+  int width = 256;        // pixels, [1, 16384]
+  int height = 256;       // pixels, [1, 16384]
+  int spp = 16;           // samples per pixel, [1, 65536], stratified
+  std::uint64_t seed = 0;
+  bool jitter = true;  // false: stratum centres (deterministic pixel grid)
+};
+
+enum class LightType { kDistant, kPoint };
+
+struct Light {
+  LightType type = LightType::kDistant;
+  Vec3 direction{-1, 0, 0};  // distant: unit vector towards the light
+  double irradiance = kPi;   // distant: W/m^2 on a plane facing the light, >= 0
+  Vec3 position;             // point: scene units
+  double intensity = 0.0;    // point: W/sr, >= 0
+};
+
+enum class Representation {
+  kSmooth,        // base geometry, Ns = base normal
+  kBump,          // base geometry, Ns = exact normal of the displaced surface
+  kDisplacement,  // the displaced surface itself (ground truth)
+};
+
+enum class ReferenceNormal { kGeometric, kInterpolated };  // "Ng" or "Ni"
+enum class Lobes { kDiffuse, kAll };
+
+struct TerminatorSettings {
+  MethodSettings method;
+  // Ng or Ni as the factor's reference normal; identical on analytic shapes,
+  // different on tessellated meshes.
+  ReferenceNormal reference_normal = ReferenceNormal::kGeometric;
+  Lobes lobes = Lobes::kDiffuse;
+};
+
+enum class HeightFamily { kNone, kGrating, kWeave, kNoise };
+
+struct HeightSpec {
+  HeightFamily family = HeightFamily::kNone;
+  double amplitude = 0.0;  // A, scene units, >= 0, A max|h| < radius
+  HeightFunction function;
+};
+
+struct DisplacementSettings {
+  double edge_length = 0.0;  // scene units, > 0; tessellation of the ground truth
+};
+
+struct Scene {
+  std::string name;
+  Camera camera;
+  Light light;
+  Shape shape;
+  Material material;
+  HeightSpec height;
+  Representation representation = Representation::kBump;
+  TerminatorSettings terminator;
+  DisplacementSettings displacement;
+};
+
+}  // namespace penumbra

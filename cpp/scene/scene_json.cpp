@@ -1,0 +1,438 @@
+#include "scene/scene_json.h"
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <set>
+#include <sstream>
+#include <utility>
+
+#include <fmt/format.h>
+
+namespace penumbra {
+
+using nlohmann::json;
+
+InputError::InputError(const std::string& file, const std::string& pointer,
+                       const std::string& message)
+    : std::runtime_error(fmt::format("{}: {}: {}", file, pointer.empty() ? "/" : pointer, message)),
+      file_(file),
+      pointer_(pointer) {}
+
+namespace {
+
+std::string describe(const json& j) {
+  std::string text = j.dump();
+  if (text.size() > 60) text = text.substr(0, 57) + "...";
+  return text;
+}
+
+// A JSON object being read: remembers which keys were used, so that finish()
+// can reject the rest (a misspelt key is an error, not a silent default).
+class Reader {
+ public:
+  Reader(const json& j, std::string pointer, const std::string& origin)
+      : j_(j), pointer_(std::move(pointer)), origin_(origin) {
+    if (!j_.is_object()) fail("", "expected an object, got " + describe(j_));
+  }
+
+  [[noreturn]] void fail(const std::string& key, const std::string& message) const {
+    throw InputError(origin_, key.empty() ? pointer_ : child_pointer(key), message);
+  }
+  std::string child_pointer(const std::string& key) const {
+    std::string escaped;  // RFC 6901: '~' -> "~0", '/' -> "~1"
+    for (char c : key) escaped += c == '~' ? "~0" : (c == '/' ? "~1" : std::string(1, c));
+    return pointer_ + "/" + escaped;
+  }
+  bool has(const std::string& key) {
+    known_.insert(key);
+    return j_.contains(key);
+  }
+  const json& at(const std::string& key) {
+    known_.insert(key);
+    if (!j_.contains(key)) fail(key, "missing required key");
+    return j_.at(key);
+  }
+  Reader object(const std::string& key) { return Reader(at(key), child_pointer(key), origin_); }
+
+  double number(const std::string& key, const std::function<bool(double)>& valid,
+                const char* domain) {
+    const json& v = at(key);
+    if (!v.is_number() || !std::isfinite(v.get<double>()))
+      fail(key, fmt::format("expected a number {}, got {}", domain, describe(v)));
+    const double x = v.get<double>();
+    if (!valid(x)) fail(key, fmt::format("expected a number {}, got {}", domain, describe(v)));
+    return x;
+  }
+  double number_or(const std::string& key, double fallback,
+                   const std::function<bool(double)>& valid, const char* domain) {
+    return has(key) ? number(key, valid, domain) : fallback;
+  }
+  long long integer(const std::string& key, long long lo, long long hi) {
+    const json& v = at(key);
+    if (!v.is_number_integer() || v.get<long long>() < lo || v.get<long long>() > hi)
+      fail(key, fmt::format("expected an integer in [{}, {}], got {}", lo, hi, describe(v)));
+    return v.get<long long>();
+  }
+  long long integer_or(const std::string& key, long long fallback, long long lo, long long hi) {
+    return has(key) ? integer(key, lo, hi) : fallback;
+  }
+  bool boolean_or(const std::string& key, bool fallback) {
+    if (!has(key)) return fallback;
+    const json& v = at(key);
+    if (!v.is_boolean()) fail(key, "expected true or false, got " + describe(v));
+    return v.get<bool>();
+  }
+  std::string string(const std::string& key) {
+    const json& v = at(key);
+    if (!v.is_string()) fail(key, "expected a string, got " + describe(v));
+    return v.get<std::string>();
+  }
+  // One of a fixed set of names; the error lists them.
+  template <typename Enum>
+  Enum choice(const std::string& key, std::initializer_list<std::pair<const char*, Enum>> options,
+              std::optional<Enum> fallback = std::nullopt) {
+    if (fallback && !has(key)) return *fallback;
+    const json& v = at(key);
+    std::string names;
+    for (const auto& [name, value] : options) {
+      if (v.is_string() && v.get<std::string>() == name) return value;
+      names += (names.empty() ? "" : ", ") + fmt::format("\"{}\"", name);
+    }
+    fail(key, fmt::format("expected one of {}, got {}", names, describe(v)));
+  }
+  Vec3 vec3(const std::string& key) {
+    const json& v = at(key);
+    if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() ||
+        !v[2].is_number())
+      fail(key, "expected an array of 3 numbers, got " + describe(v));
+    const Vec3 out{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+    if (!is_finite(out)) fail(key, "expected finite numbers, got " + describe(v));
+    return out;
+  }
+  Vec3 vec3_or(const std::string& key, const Vec3& fallback) {
+    return has(key) ? vec3(key) : fallback;
+  }
+  // A direction: any non-zero finite vector, returned normalised.
+  Vec3 direction(const std::string& key) { return check_direction(key, vec3(key)); }
+  Vec3 check_direction(const std::string& key, const Vec3& v) const {
+    if (!(length(v) > 1e-12))
+      fail(key, fmt::format("expected a non-zero vector (a direction), got [{}, {}, {}]", v.x,
+                            v.y, v.z));
+    return normalize(v);
+  }
+
+  void finish() const {
+    for (const auto& [key, value] : j_.items()) {
+      if (known_.count(key)) continue;
+      std::string names;
+      for (const std::string& k : known_) names += (names.empty() ? "" : ", ") + k;
+      fail(key, fmt::format("unknown key (expected one of: {})", names));
+    }
+  }
+  const std::string& pointer() const { return pointer_; }
+  const std::string& origin() const { return origin_; }
+
+ private:
+  const json& j_;
+  std::string pointer_;
+  const std::string& origin_;
+  std::set<std::string> known_;
+};
+
+bool positive(double x) { return x > 0.0; }
+bool non_negative(double x) { return x >= 0.0; }
+bool unit_interval(double x) { return x >= 0.0 && x <= 1.0; }
+bool any_number(double) { return true; }
+
+Camera read_camera(Reader r) {
+  Camera c;
+  c.projection = r.choice<Projection>(
+      "projection",
+      {{"orthographic", Projection::kOrthographic}, {"perspective", Projection::kPerspective}},
+      Projection::kOrthographic);
+  c.position = r.vec3("position");
+  c.direction = r.vec3("direction");  // keep the length: it is the focal length in perspective
+  r.check_direction("direction", c.direction);
+  c.right = r.vec3("right");
+  r.check_direction("right", c.right);
+  c.up = r.vec3("up");
+  r.check_direction("up", c.up);
+  c.width = static_cast<int>(r.integer("width", 1, kMaxImageSize));
+  c.height = static_cast<int>(r.integer("height", 1, kMaxImageSize));
+  c.spp = static_cast<int>(r.integer_or("spp", 16, 1, 65536));
+  c.seed = static_cast<std::uint64_t>(r.integer_or("seed", 0, 0, (1ll << 53)));
+  c.jitter = r.boolean_or("jitter", true);
+  r.finish();
+  return c;
+}
+
+Light read_light(Reader r) {
+  Light l;
+  l.type = r.choice<LightType>("type", {{"distant", LightType::kDistant}, {"point", LightType::kPoint}});
+  if (l.type == LightType::kDistant) {
+    l.direction = r.direction("direction");
+    l.irradiance = r.number("irradiance", non_negative, ">= 0 (W/m^2)");
+  } else {
+    l.position = r.vec3("position");
+    l.intensity = r.number("intensity", non_negative, ">= 0 (W/sr)");
+  }
+  r.finish();
+  return l;
+}
+
+Shape read_shape(Reader r) {
+  Shape s;
+  s.type = r.choice<ShapeType>("type", {{"cylinder", ShapeType::kCylinder}, {"sphere", ShapeType::kSphere}});
+  s.center = r.vec3_or("center", {0, 0, 0});
+  s.axis = r.has("axis") ? r.direction("axis") : Vec3{0, 1, 0};
+  s.radius = r.number("radius", positive, "> 0 (scene units)");
+  if (s.type == ShapeType::kCylinder) {
+    s.height = r.number("height", positive, "> 0 (scene units)");
+    s.caps = r.boolean_or("caps", false);
+  }
+  r.finish();
+  return with_frame(s);
+}
+
+Material read_material(Reader r) {
+  Material m;
+  m.albedo = r.number_or("albedo", m.albedo, unit_interval, "in [0, 1]");
+  if (r.has("specular")) {
+    Reader s = r.object("specular");
+    m.specular_weight = s.number("weight", unit_interval, "in [0, 1]");
+    m.specular_roughness =
+        s.number_or("roughness", m.specular_roughness,
+                    [](double x) { return x > 0.0 && x <= 1.0; }, "in (0, 1] (GGX alpha)");
+    s.finish();
+  }
+  r.finish();
+  return m;
+}
+
+HeightSpec read_height(Reader r, const Shape& shape) {
+  HeightSpec h;
+  h.family = r.choice<HeightFamily>("type", {{"none", HeightFamily::kNone},
+                                             {"grating", HeightFamily::kGrating},
+                                             {"weave", HeightFamily::kWeave},
+                                             {"noise", HeightFamily::kNoise}});
+  if (h.family == HeightFamily::kNone) {
+    r.finish();
+    return h;
+  }
+  h.amplitude = r.number("amplitude", non_negative, ">= 0 (scene units)");
+  switch (h.family) {
+    case HeightFamily::kGrating: {
+      const double frequency = r.number("frequency", positive, "> 0 (cycles per scene unit)");
+      const Vec3 direction = r.direction("direction");
+      const double phase = r.number_or("phase", 0.0, any_number, "(radians)");
+      h.function = make_grating(direction, frequency, phase);
+      break;
+    }
+    case HeightFamily::kWeave: {
+      const double frequency = r.number("frequency", positive, "> 0 (cycles per scene unit)");
+      const json& list = r.at("directions");
+      if (!list.is_array() || list.size() < 2 || list.size() > kMaxProductFactors)
+        r.fail("directions", fmt::format("expected an array of 2 to {} directions, got {}",
+                                         kMaxProductFactors, describe(list)));
+      std::vector<Vec3> directions;
+      for (std::size_t i = 0; i < list.size(); ++i) {
+        const json wrapper{{"d", list[i]}};
+        Reader item(wrapper, r.child_pointer("directions") + "/" + std::to_string(i), r.origin());
+        const Vec3 d = item.vec3("d");
+        if (!(length(d) > 1e-12))
+          throw InputError(r.origin(), item.pointer(), "expected a non-zero vector (a direction)");
+        directions.push_back(d);
+      }
+      const HeightCombine combine = r.choice<HeightCombine>(
+          "combine", {{"product", HeightCombine::kProduct}, {"sum", HeightCombine::kSum}},
+          HeightCombine::kProduct);
+      h.function = make_weave(directions, frequency, combine);
+      break;
+    }
+    case HeightFamily::kNoise: {
+      const int terms = static_cast<int>(r.integer("terms", 1, 256));
+      const double f_min = r.number("frequency_min", positive, "> 0 (cycles per scene unit)");
+      const double f_max = r.number("frequency_max", positive, "> 0 (cycles per scene unit)");
+      if (f_max < f_min)
+        r.fail("frequency_max", fmt::format("expected a number >= frequency_min ({}), got {}",
+                                            f_min, f_max));
+      const auto seed = static_cast<std::uint64_t>(r.integer_or("seed", 0, 0, (1ll << 53)));
+      h.function = make_noise(terms, f_min, f_max, seed);
+      break;
+    }
+    case HeightFamily::kNone:
+      break;
+  }
+  r.finish();
+  // The displaced surface must not reach the axis (cylinder) or the centre
+  // (sphere): past that the displacement folds the surface through itself.
+  const double reach = h.amplitude * max_abs_height(h.function);
+  if (reach >= shape.radius)
+    r.fail("amplitude", fmt::format("expected amplitude * max|h| < radius ({} scene units), got "
+                                    "{} * {} = {}",
+                                    shape.radius, h.amplitude, max_abs_height(h.function), reach));
+  return h;
+}
+
+TerminatorSettings read_terminator(Reader r) {
+  TerminatorSettings t;
+  if (r.has("method")) {
+    const std::string id = r.string("method");
+    const auto method = method_from_id(id);
+    if (!method) {
+      std::string ids;
+      for (const MethodInfo& info : all_methods())
+        ids += (ids.empty() ? "" : ", ") + std::string(info.id);
+      r.fail("method", fmt::format("unknown method \"{}\" (valid: {})", id, ids));
+    }
+    t.method.method = *method;
+  }
+  const MethodInfo& info = method_info(t.method.method);
+  if (r.has("parameters")) {
+    Reader p = r.object("parameters");
+    for (const MethodParameter& parameter : info.parameters) {
+      const std::string name(parameter.name);
+      const double value = p.number_or(
+          name, parameter.default_value,
+          [&](double x) { return x >= parameter.min_value && x <= parameter.max_value; },
+          fmt::format("in [{}, {}]", parameter.min_value, parameter.max_value).c_str());
+      if (t.method.method == TerminatorMethod::kShadingOffset) t.method.shading_offset = value;
+    }
+    p.finish();
+  }
+  t.reference_normal = r.choice<ReferenceNormal>(
+      "reference_normal",
+      {{"Ng", ReferenceNormal::kGeometric}, {"Ni", ReferenceNormal::kInterpolated}},
+      ReferenceNormal::kGeometric);
+  t.lobes = r.choice<Lobes>("lobes", {{"diffuse", Lobes::kDiffuse}, {"all", Lobes::kAll}},
+                            Lobes::kDiffuse);
+  r.finish();
+  return t;
+}
+
+// The ground-truth tessellation is capped so that a typo cannot ask for more
+// memory than the machine has (about 100 bytes per triangle with the BVH).
+constexpr double kMaxDisplacementTriangles = 4.0e7;
+
+double estimated_triangles(const Shape& shape, double reach, double edge) {
+  const double r = shape.radius + reach;
+  if (shape.type == ShapeType::kSphere)
+    return 2.0 * std::ceil(2.0 * kPi * r / edge) * std::ceil(kPi * r / edge);
+  return 2.0 * std::ceil(2.0 * kPi * r / edge) * std::ceil(shape.height / edge);
+}
+
+}  // namespace
+
+Override parse_override(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || text.empty() || text[0] != '/')
+    throw InputError("--set", text, "expected /json/pointer=VALUE");
+  Override o;
+  o.pointer = text.substr(0, eq);
+  const std::string value = text.substr(eq + 1);
+  o.value = json::parse(value, nullptr, /*allow_exceptions=*/false);
+  if (o.value.is_discarded()) o.value = value;  // a bare word is a string
+  return o;
+}
+
+void apply_overrides(json& document, const std::vector<Override>& overrides,
+                     const std::string& origin) {
+  for (const Override& o : overrides) {
+    try {
+      const json::json_pointer pointer(o.pointer);
+      if (!pointer.parent_pointer().empty() && !document.contains(pointer.parent_pointer()))
+        throw InputError(origin, o.pointer,
+                         "--set names a key whose parent " + pointer.parent_pointer().to_string() +
+                             " does not exist");
+      document[pointer] = o.value;
+    } catch (const json::exception& e) {
+      throw InputError(origin, o.pointer, std::string("cannot apply --set: ") + e.what());
+    }
+  }
+}
+
+json read_json_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "cannot open the file for reading");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  try {
+    return json::parse(buffer.str());
+  } catch (const json::parse_error& e) {
+    throw InputError(path, "", fmt::format("not valid JSON (byte {}): {}", e.byte, e.what()));
+  }
+}
+
+Scene scene_from_json(const json& document, const std::string& origin) {
+  Reader r(document, "", origin);
+  const long long version = r.integer("version", 1, 1000);
+  if (version != kSceneFormatVersion)
+    r.fail("version", fmt::format("expected scene format version {}, got {}", kSceneFormatVersion,
+                                  version));
+  Scene s;
+  if (r.has("name")) s.name = r.string("name");
+  s.camera = read_camera(r.object("camera"));
+  s.light = read_light(r.object("light"));
+  s.shape = read_shape(r.object("shape"));
+  if (r.has("material")) s.material = read_material(r.object("material"));
+  if (r.has("height")) s.height = read_height(r.object("height"), s.shape);
+  s.representation = r.choice<Representation>("representation",
+                                              {{"smooth", Representation::kSmooth},
+                                               {"bump", Representation::kBump},
+                                               {"displacement", Representation::kDisplacement}},
+                                              Representation::kBump);
+  if (r.has("terminator")) s.terminator = read_terminator(r.object("terminator"));
+  s.displacement.edge_length = s.shape.radius / 256.0;
+  if (r.has("displacement")) {
+    Reader d = r.object("displacement");
+    s.displacement.edge_length =
+        d.number_or("edge_length", s.displacement.edge_length, positive, "> 0 (scene units)");
+    d.finish();
+  }
+  r.finish();
+  const double reach = s.height.amplitude * max_abs_height(s.height.function);
+  const double triangles = estimated_triangles(s.shape, reach, s.displacement.edge_length);
+  if (s.representation == Representation::kDisplacement && triangles > kMaxDisplacementTriangles)
+    throw InputError(origin, "/displacement/edge_length",
+                     fmt::format("expected an edge length giving at most {:.0f} million "
+                                 "triangles, got {} ({:.0f} million)",
+                                 kMaxDisplacementTriangles / 1e6, s.displacement.edge_length,
+                                 triangles / 1e6));
+  return s;
+}
+
+Scene load_scene(const std::string& path, const std::vector<Override>& overrides) {
+  json document = read_json_file(path);
+  const std::string origin = overrides.empty() ? path : path + " (after --set)";
+  apply_overrides(document, overrides, origin);
+  return scene_from_json(document, origin);
+}
+
+const char* to_string(Representation r) {
+  switch (r) {
+    case Representation::kSmooth:
+      return "smooth";
+    case Representation::kBump:
+      return "bump";
+    case Representation::kDisplacement:
+      return "displacement";
+  }
+  return "?";
+}
+
+const char* to_string(HeightFamily f) {
+  switch (f) {
+    case HeightFamily::kNone:
+      return "none";
+    case HeightFamily::kGrating:
+      return "grating";
+    case HeightFamily::kWeave:
+      return "weave";
+    case HeightFamily::kNoise:
+      return "noise";
+  }
+  return "?";
+}
+
+}  // namespace penumbra
