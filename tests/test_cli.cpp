@@ -1,1 +1,126 @@
+// The command line: exit codes, messages, and no half-written output.
 #include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/cli.h"
+#include "render/image_io.h"
+
+namespace penumbra {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kScenes = std::string(PENUMBRA_SOURCE_DIR) + "/scenes";
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+Result run(std::vector<std::string> args) {
+  args.insert(args.begin(), "penumbra");
+  std::vector<const char*> argv;
+  for (const std::string& a : args) argv.push_back(a.c_str());
+  std::ostringstream out, err;
+  const int code = run_cli(static_cast<int>(argv.size()), argv.data(), out, err);
+  return {code, out.str(), err.str()};
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("penumbra-cli-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  // Nothing but the files named may exist: no temporary left behind either.
+  void expect_only(const std::vector<std::string>& names) const {
+    std::vector<std::string> found;
+    for (const auto& e : fs::directory_iterator(dir_)) found.push_back(e.path().filename().string());
+    std::sort(found.begin(), found.end());
+    std::vector<std::string> expected = names;
+    std::sort(expected.begin(), expected.end());
+    EXPECT_EQ(found, expected);
+  }
+  fs::path dir_;
+};
+
+TEST_F(Cli, MethodsListsEveryIdAsTextAndJson) {
+  const Result text = run({"methods"});
+  EXPECT_EQ(text.code, kExitOk);
+  const Result js = run({"methods", "--json"});
+  EXPECT_EQ(js.code, kExitOk);
+  const auto list = nlohmann::json::parse(js.out);
+  std::vector<std::string> ids;
+  for (const auto& m : list) ids.push_back(m.at("id"));
+  for (const char* id : {"none", "chiang2019", "chiang2019-sine", "estevez2019",
+                         "estevez2019-reciprocal", "deshmukh2020", "shading-offset"}) {
+    EXPECT_NE(std::find(ids.begin(), ids.end(), id), ids.end()) << id;
+    EXPECT_NE(text.out.find(id), std::string::npos) << id;
+  }
+}
+
+TEST_F(Cli, RenderWritesExrWithAnalysisChannelsAndPreview) {
+  const Result r = run({"render", kScenes + "/sphere-grating.json", "-o", path("out.exr"),
+                        "--preview", path("out.png"), "--width", "40", "--height", "30", "--spp",
+                        "4", "--method", "chiang2019", "--set", "/light/direction=[-1,0.2,-0.3]"});
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  const Image image = read_image(path("out.exr"));
+  EXPECT_EQ(image.width, 40);
+  EXPECT_EQ(image.height, 30);
+  for (const char* c : {"R", "G", "B", "A", "analysis.theta", "analysis.deviation", "analysis.G"})
+    EXPECT_GE(image.channel_index(c), 0) << c;
+  EXPECT_TRUE(fs::exists(path("out.png")));
+  expect_only({"out.exr", "out.png"});
+}
+
+TEST_F(Cli, BadSceneExitsTwoWithOneLineAndNoOutput) {
+  std::ofstream(path("bad.json")) << R"({"version": 1, "camera": {}})";
+  const Result r = run({"render", path("bad.json"), "-o", path("out.exr")});
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.err.find(path("bad.json") + ": /camera/position: missing required key"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1);
+  expect_only({"bad.json"});
+}
+
+TEST_F(Cli, UnknownMethodListsTheValidIds) {
+  const Result r = run({"render", kScenes + "/sphere-grating.json", "-o", path("out.exr"),
+                        "--method", "chaing2019"});
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.err.find("/terminator/method: unknown method \"chaing2019\" (valid: none, chiang2019"),
+            std::string::npos)
+      << r.err;
+  expect_only({});
+}
+
+TEST_F(Cli, UnwritableOutputExitsTwoBeforeRendering) {
+  const Result r = run({"render", kScenes + "/sphere-grating.json", "-o",
+                        path("missing-folder/out.exr")});
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
+  expect_only({});
+}
+
+TEST_F(Cli, UnreadableSceneAndUsageErrorsExitTwo) {
+  EXPECT_EQ(run({"render", path("nope.json"), "-o", path("out.exr")}).code, kExitBadInput);
+  EXPECT_EQ(run({"render"}).code, kExitBadInput);
+  EXPECT_EQ(run({"frobnicate"}).code, kExitBadInput);
+  EXPECT_EQ(run({"render", kScenes + "/sphere-grating.json", "-o", path("o.exr"), "--spp", "0"}).code,
+            kExitBadInput);
+  expect_only({});
+}
+
+}  // namespace
+}  // namespace penumbra

@@ -1,1 +1,184 @@
+// Height functions and shape geometry against finite differences and closed
+// forms computed here.
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/height.h"
+#include "core/random.h"
+#include "core/shape.h"
+
+namespace penumbra {
+namespace {
+
+std::vector<HeightFunction> families() {
+  const Vec3 dirs[] = {{1, 0, 0}, {0, 1, 0.3}};
+  return {make_grating({1, 0.2, 0}, 8.0, 0.3), make_weave(dirs, 6.0, HeightCombine::kProduct),
+          make_weave(dirs, 6.0, HeightCombine::kSum), make_noise(8, 4.0, 12.0, 7)};
+}
+
+TEST(Height, AnalyticGradientMatchesCentralDifferences) {
+  Pcg32 rng(10);
+  for (const HeightFunction& f : families())
+    for (int i = 0; i < 1000; ++i) {
+      const Vec3 p{rng.next_double() * 2 - 1, rng.next_double() * 2 - 1, rng.next_double() * 2 - 1};
+      const HeightSample s = evaluate_height(f, p);
+      const double h = 1e-6;
+      for (int axis = 0; axis < 3; ++axis) {
+        Vec3 e;
+        (axis == 0 ? e.x : axis == 1 ? e.y : e.z) = h;
+        const double fd = (evaluate_height(f, p + e).h - evaluate_height(f, p - e).h) / (2 * h);
+        EXPECT_NEAR(s.gradient[axis], fd, 1e-5 * (1 + std::abs(fd)));
+      }
+    }
+}
+
+TEST(Height, BoundsHoldOnSamples) {
+  Pcg32 rng(11);
+  for (const HeightFunction& f : families()) {
+    double max_h = 0, max_g = 0;
+    for (int i = 0; i < 20000; ++i) {
+      const Vec3 p{rng.next_double() * 4 - 2, rng.next_double() * 4 - 2, rng.next_double() * 4 - 2};
+      const HeightSample s = evaluate_height(f, p);
+      max_h = std::max(max_h, std::abs(s.h));
+      max_g = std::max(max_g, length(s.gradient));
+    }
+    EXPECT_LE(max_h, max_abs_height(f));
+    EXPECT_GT(max_h, 0.5 * max_abs_height(f) / std::sqrt(double(f.terms.size())));
+    EXPECT_LE(max_g, max_gradient_norm(f));
+  }
+}
+
+TEST(Height, NoiseIsDeterministicPerSeed) {
+  const HeightFunction a = make_noise(8, 4, 12, 7), b = make_noise(8, 4, 12, 7),
+                       c = make_noise(8, 4, 12, 8);
+  ASSERT_EQ(a.terms.size(), 8u);
+  for (std::size_t i = 0; i < a.terms.size(); ++i) {
+    EXPECT_EQ(a.terms[i].k, b.terms[i].k);
+    EXPECT_EQ(a.terms[i].phase, b.terms[i].phase);
+    const double f = length(a.terms[i].k);
+    EXPECT_GE(f, 4.0);
+    EXPECT_LE(f, 12.0);
+  }
+  EXPECT_NE(a.terms[0].k, c.terms[0].k);
+}
+
+Shape cylinder(bool caps) {
+  Shape s;
+  s.type = ShapeType::kCylinder;
+  s.center = {0.1, -0.2, 0.3};
+  s.axis = normalize(Vec3{0.2, 1, 0.1});
+  s.radius = 0.9;
+  s.height = 1.7;
+  s.caps = caps;
+  return with_frame(s);
+}
+
+Shape sphere() {
+  Shape s;
+  s.type = ShapeType::kSphere;
+  s.center = {0.1, -0.2, 0.3};
+  s.axis = normalize(Vec3{0.3, 1, -0.2});
+  s.radius = 1.1;
+  return with_frame(s);
+}
+
+TEST(Shape, PrincipalFrameIsRightHandedAndOrthonormal) {
+  Pcg32 rng(12);
+  for (const Shape& s : {cylinder(false), sphere()})
+    for (int i = 0; i < 1000; ++i) {
+      const double u = 2 * kPi * rng.next_double();
+      const double v = s.type == ShapeType::kSphere ? 0.05 + 3.0 * rng.next_double()
+                                                    : (rng.next_double() - 0.5) * s.height;
+      const SurfaceGeometry g = surface_at(s, u, v);
+      EXPECT_NEAR(length(cross(g.t1, g.t2) - g.n), 0.0, 1e-12);
+      EXPECT_NEAR(dot(g.t1, g.t2), 0.0, 1e-12);
+      EXPECT_NEAR(length(g.p - s.center) , s.type == ShapeType::kSphere ? s.radius
+                  : std::hypot(s.radius, dot(g.p - s.center, s.axis)), 1e-12);
+    }
+}
+
+TEST(Shape, RaysHitWhereTheClosedFormSays) {
+  const Shape s = sphere();
+  Pcg32 rng(13);
+  for (int i = 0; i < 1000; ++i) {
+    const Vec3 d = normalize(Vec3{rng.next_double() - 0.5, rng.next_double() - 0.5, 1.0});
+    const Vec3 o = s.center - d * 5.0 + Vec3{rng.next_double() - 0.5, rng.next_double() - 0.5, 0} * 2.0;
+    // Distance of the line from the centre decides hit or miss.
+    const Vec3 oc = o - s.center;
+    const double b = dot(oc, d), c = dot(oc, oc) - s.radius * s.radius;
+    Hit hit;
+    const bool got = intersect(s, {o, d}, 0.0, 1e30, &hit);
+    EXPECT_EQ(got, b * b - c > 0);
+    if (got) {
+      EXPECT_NEAR(hit.t, -b - std::sqrt(b * b - c), 1e-9);
+      EXPECT_NEAR(length(hit.geometry.p - s.center), s.radius, 1e-12);
+      EXPECT_LT(dot(hit.geometry.n, d), 0.0);
+    }
+  }
+}
+
+TEST(Shape, CylinderCapsAndOpenEnds) {
+  Shape s = cylinder(true);
+  const Ray down{s.center + s.axis * 3.0, -s.axis};
+  Hit hit;
+  ASSERT_TRUE(intersect(s, down, 0.0, 1e30, &hit));
+  EXPECT_NEAR(hit.t, 3.0 - 0.5 * s.height, 1e-12);
+  EXPECT_FALSE(hit.geometry.displaceable);
+  EXPECT_NEAR(dot(hit.geometry.n, s.axis), 1.0, 1e-12);
+  s.caps = false;
+  EXPECT_FALSE(intersect(s, down, 0.0, 1e30, &hit));  // straight through the open tube
+}
+
+TEST(Shape, ShadowRayFromTheSurfaceSkipsItsOwnOrigin) {
+  const Shape s = sphere();
+  const SurfaceGeometry g = surface_at(s, 1.0, 1.2);
+  const Vec3 away = normalize(g.n + g.t1 * 0.3);
+  EXPECT_FALSE(occluded(s, {g.p, away}, 1e-7 * s.radius, 1e30));
+  const Vec3 into = normalize(-g.n + g.t1 * 0.3);
+  EXPECT_TRUE(occluded(s, {g.p, into}, 1e-7 * s.radius, 1e30));
+}
+
+// The closed-form displaced normal against the normal of P'(u,v) computed by
+// central differences of the displaced positions themselves.
+TEST(Shape, DisplacedNormalMatchesFiniteDifferencesOfTheDisplacedSurface) {
+  Pcg32 rng(14);
+  for (const Shape& s : {cylinder(false), sphere()})
+    for (const HeightFunction& f : families())
+      for (double amplitude : {0.001, 0.02, 0.08})
+        for (int i = 0; i < 200; ++i) {
+          const double u = 2 * kPi * rng.next_double();
+          const double v = s.type == ShapeType::kSphere ? 0.3 + 2.5 * rng.next_double()
+                                                        : (rng.next_double() - 0.5) * s.height;
+          auto displaced = [&](double uu, double vv) {
+            const SurfaceGeometry g = surface_at(s, uu, vv);
+            return displaced_point(g, amplitude, evaluate_height(f, g.p));
+          };
+          const double h = 1e-6;
+          const Vec3 du = (displaced(u + h, v) - displaced(u - h, v)) / (2 * h);
+          const Vec3 dv = (displaced(u, v + h) - displaced(u, v - h)) / (2 * h);
+          Vec3 fd = normalize(cross(du, dv));
+          const SurfaceGeometry g = surface_at(s, u, v);
+          if (dot(fd, g.n) < 0) fd = -fd;
+          const Vec3 ns = displaced_normal(g, amplitude, evaluate_height(f, g.p));
+          EXPECT_NEAR(length(ns - fd), 0.0, 1e-6) << amplitude;
+        }
+}
+
+// First order, Ns ~ normalize(N - A grad_s h) (reference sheet, section 5).
+TEST(Shape, DisplacedNormalIsFirstOrderBumpForSmallAmplitude) {
+  const Shape s = cylinder(false);
+  const HeightFunction f = make_grating({1, 0, 0}, 8.0, 0.0);
+  const SurfaceGeometry g = surface_at(s, 0.7, 0.2);
+  const HeightSample hs = evaluate_height(f, g.p);
+  for (double amplitude : {1e-2, 1e-3, 1e-4}) {
+    const Vec3 grad_s = hs.gradient - g.n * dot(hs.gradient, g.n);
+    const Vec3 first = normalize(g.n - grad_s * amplitude);
+    const double error = length(displaced_normal(g, amplitude, hs) - first);
+    EXPECT_LT(error, 5.0 * amplitude * amplitude * length(hs.gradient) * (1 + length(hs.gradient)));
+  }
+}
+
+}  // namespace
+}  // namespace penumbra

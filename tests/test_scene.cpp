@@ -1,1 +1,164 @@
+// Scene reading: every shipped scene loads; every kind of bad input is
+// rejected with a message that names the file, the JSON pointer and what was
+// expected.
 #include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <string>
+
+#include "scene/scene_json.h"
+
+namespace penumbra {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+const std::string kScenes = std::string(PENUMBRA_SOURCE_DIR) + "/scenes";
+
+json base_scene() { return read_json_file(kScenes + "/cylinder-grating.json"); }
+
+// The error message of loading `document`, or "" when it loads.
+std::string error_of(const json& document) {
+  try {
+    scene_from_json(document, "test.json");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Scene, EveryShippedSceneLoads) {
+  int count = 0;
+  for (const auto& entry : fs::directory_iterator(kScenes)) {
+    if (entry.path().extension() != ".json") continue;
+    EXPECT_NO_THROW(load_scene(entry.path().string())) << entry.path();
+    ++count;
+  }
+  EXPECT_GE(count, 6);
+}
+
+TEST(Scene, ReadsTypedValues) {
+  const Scene s = load_scene(kScenes + "/sphere-weave.json");
+  EXPECT_EQ(s.shape.type, ShapeType::kSphere);
+  EXPECT_EQ(s.height.family, HeightFamily::kWeave);
+  EXPECT_EQ(s.height.function.terms.size(), 2u);
+  EXPECT_NEAR(length(s.light.direction), 1.0, 1e-15);  // normalised
+  EXPECT_EQ(s.camera.width, 256);
+}
+
+struct BadCase {
+  const char* what;
+  std::function<void(json&)> edit;
+  const char* pointer;
+  const char* expected;  // a fragment of the message
+};
+
+TEST(Scene, BadInputIsRejectedWithFilePointerAndExpectation) {
+  const std::vector<BadCase> cases = {
+      {"missing key", [](json& j) { j["camera"].erase("width"); }, "/camera/width",
+       "missing required key"},
+      {"unknown key", [](json& j) { j["shape"]["radiuss"] = 1; }, "/shape/radiuss", "unknown key"},
+      {"unknown top-level key", [](json& j) { j["lights"] = json::array(); }, "/lights",
+       "unknown key"},
+      {"wrong type", [](json& j) { j["camera"]["width"] = "big"; }, "/camera/width",
+       "expected an integer in [1, 16384]"},
+      {"wrong type for a vector", [](json& j) { j["camera"]["position"] = {0, 0}; },
+       "/camera/position", "expected an array of 3 numbers"},
+      {"non-positive radius", [](json& j) { j["shape"]["radius"] = -1; }, "/shape/radius",
+       "expected a number > 0"},
+      {"zero radius", [](json& j) { j["shape"]["radius"] = 0; }, "/shape/radius", "> 0"},
+      {"non-positive height", [](json& j) { j["shape"]["height"] = 0; }, "/shape/height", "> 0"},
+      {"spp 0", [](json& j) { j["camera"]["spp"] = 0; }, "/camera/spp", "expected an integer in [1, 65536]"},
+      {"resolution 0", [](json& j) { j["camera"]["height"] = 0; }, "/camera/height",
+       "expected an integer in [1, 16384]"},
+      {"resolution above 16384", [](json& j) { j["camera"]["width"] = 16385; }, "/camera/width",
+       "expected an integer in [1, 16384]"},
+      {"amplitude reaching the axis", [](json& j) { j["height"]["amplitude"] = 1.0; },
+       "/height/amplitude", "amplitude * max|h| < radius"},
+      {"zero light direction", [](json& j) { j["light"]["direction"] = {0, 0, 0}; },
+       "/light/direction", "expected a non-zero vector"},
+      {"zero grating direction", [](json& j) { j["height"]["direction"] = {0, 0, 0}; },
+       "/height/direction", "non-zero vector"},
+      {"infinite number", [](json& j) { j["light"]["irradiance"] = std::numeric_limits<double>::infinity(); }, "/light/irradiance",
+       "expected a number"},
+      {"unknown method", [](json& j) { j["terminator"]["method"] = "chiang"; },
+       "/terminator/method", "valid: none, chiang2019, chiang2019-sine, estevez2019"},
+      {"parameter out of range",
+       [](json& j) {
+         j["terminator"]["method"] = "shading-offset";
+         j["terminator"]["parameters"] = {{"s", 2}};
+       },
+       "/terminator/parameters/s", "in [0, 1]"},
+      {"parameter of another method",
+       [](json& j) { j["terminator"]["parameters"] = {{"s", 0.5}}; }, "/terminator/parameters/s",
+       "unknown key"},
+      {"unknown representation", [](json& j) { j["representation"] = "displaced"; },
+       "/representation", "\"smooth\", \"bump\", \"displacement\""},
+      {"albedo above 1", [](json& j) { j["material"]["albedo"] = 1.5; }, "/material/albedo",
+       "in [0, 1]"},
+      {"wrong version", [](json& j) { j["version"] = 2; }, "/version", "version 1"},
+      {"not an object", [](json& j) { j["camera"] = 3; }, "/camera", "expected an object"},
+      {"too fine a tessellation",
+       [](json& j) {
+         j["representation"] = "displacement";
+         j["displacement"]["edge_length"] = 1e-5;
+       },
+       "/displacement/edge_length", "million triangles"},
+  };
+  for (const BadCase& c : cases) {
+    json document = base_scene();
+    c.edit(document);
+    const std::string message = error_of(document);
+    EXPECT_NE(message.find(std::string("test.json: ") + c.pointer + ": "), std::string::npos)
+        << c.what << ": " << message;
+    EXPECT_NE(message.find(c.expected), std::string::npos) << c.what << ": " << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << c.what << ": one line";
+  }
+}
+
+TEST(Scene, UnreadableAndMalformedFiles) {
+  try {
+    load_scene("/nonexistent/scene.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.json"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("cannot open"), std::string::npos);
+  }
+  const fs::path bad = fs::temp_directory_path() / "penumbra-malformed.json";
+  std::ofstream(bad) << "{\"version\": 1, ";
+  try {
+    load_scene(bad.string());
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not valid JSON"), std::string::npos);
+  }
+  fs::remove(bad);
+}
+
+TEST(Scene, OverridesUseJsonPointers) {
+  const Scene s = load_scene(kScenes + "/cylinder-grating.json",
+                             {parse_override("/light/direction=[0,0,-1]"),
+                              parse_override("/representation=smooth"),
+                              parse_override("/camera/spp=4")});
+  EXPECT_EQ(s.light.direction, (Vec3{0, 0, -1}));
+  EXPECT_EQ(s.representation, Representation::kSmooth);
+  EXPECT_EQ(s.camera.spp, 4);
+  try {
+    load_scene(kScenes + "/cylinder-grating.json", {parse_override("/shape/radius=-2")});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("(after --set): /shape/radius: expected a number > 0"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(load_scene(kScenes + "/cylinder-grating.json", {parse_override("/nope/x=1")}),
+               InputError);
+  EXPECT_THROW(parse_override("radius=1"), InputError);
+}
+
+}  // namespace
+}  // namespace penumbra

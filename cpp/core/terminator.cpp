@@ -111,10 +111,12 @@ double shading_offset_frequency(double s) { return 1.0 / (1.0 - 0.5 * s); }
 
 double shading_offset(double s, const Vec3& ns, const Vec3& wi) {
   const double f = shading_offset_frequency(s);
+  // s = 0 is "off" in Cycles: exactly the identity, not cos(acos(c))/c.
+  if (f == 1.0) return 1.0;
   const double cos_theta = std::min(dot(ns, wi), 1.0);
   // At and below the horizon the contribution is zero whatever the factor;
   // report the limit from above so that the factor stays continuous.
-  if (!(cos_theta > 0.0)) return f == 1.0 ? 1.0 : 0.0;
+  if (!(cos_theta > 0.0)) return 0.0;
   const double theta = std::acos(cos_theta);
   return clamp01(std::max(std::cos(f * theta), 0.0) / cos_theta);
 }
