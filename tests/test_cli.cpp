@@ -37,7 +37,8 @@ class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("penumbra-cli-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("penumbra-cli-" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -46,7 +47,8 @@ class Cli : public ::testing::Test {
   // Nothing but the files named may exist: no temporary left behind either.
   void expect_only(const std::vector<std::string>& names) const {
     std::vector<std::string> found;
-    for (const auto& e : fs::directory_iterator(dir_)) found.push_back(e.path().filename().string());
+    for (const auto& e : fs::directory_iterator(dir_))
+      found.push_back(e.path().filename().string());
     std::sort(found.begin(), found.end());
     std::vector<std::string> expected = names;
     std::sort(expected.begin(), expected.end());
@@ -99,15 +101,16 @@ TEST_F(Cli, UnknownMethodListsTheValidIds) {
   const Result r = run({"render", kScenes + "/sphere-grating.json", "-o", path("out.exr"),
                         "--method", "chaing2019"});
   EXPECT_EQ(r.code, kExitBadInput);
-  EXPECT_NE(r.err.find("/terminator/method: unknown method \"chaing2019\" (valid: none, chiang2019"),
-            std::string::npos)
+  EXPECT_NE(
+      r.err.find("/terminator/method: unknown method \"chaing2019\" (valid: none, chiang2019"),
+      std::string::npos)
       << r.err;
   expect_only({});
 }
 
 TEST_F(Cli, UnwritableOutputExitsTwoBeforeRendering) {
-  const Result r = run({"render", kScenes + "/sphere-grating.json", "-o",
-                        path("missing-folder/out.exr")});
+  const Result r =
+      run({"render", kScenes + "/sphere-grating.json", "-o", path("missing-folder/out.exr")});
   EXPECT_EQ(r.code, kExitBadInput);
   EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
   expect_only({});
@@ -117,8 +120,9 @@ TEST_F(Cli, UnreadableSceneAndUsageErrorsExitTwo) {
   EXPECT_EQ(run({"render", path("nope.json"), "-o", path("out.exr")}).code, kExitBadInput);
   EXPECT_EQ(run({"render"}).code, kExitBadInput);
   EXPECT_EQ(run({"frobnicate"}).code, kExitBadInput);
-  EXPECT_EQ(run({"render", kScenes + "/sphere-grating.json", "-o", path("o.exr"), "--spp", "0"}).code,
-            kExitBadInput);
+  EXPECT_EQ(
+      run({"render", kScenes + "/sphere-grating.json", "-o", path("o.exr"), "--spp", "0"}).code,
+      kExitBadInput);
   expect_only({});
 }
 

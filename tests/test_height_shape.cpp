@@ -84,6 +84,18 @@ Shape sphere() {
   return with_frame(s);
 }
 
+TEST(Vec, AcosApproximationStaysWithinItsStatedBound) {
+  double worst = 0.0;
+  for (int k = 0; k <= 2'000'000; ++k) {
+    const double x = -1.0 + k * 1e-6;
+    worst = std::max(worst, std::abs(acos_approx(x) - std::acos(std::clamp(x, -1.0, 1.0))));
+  }
+  EXPECT_LT(worst, 2.5e-8);
+  EXPECT_EQ(acos_approx(1.0), 0.0);
+  EXPECT_NEAR(acos_approx(-1.0), kPi, 1e-8);
+  EXPECT_EQ(acos_approx(1.0 + 1e-15), 0.0);  // rounding past 1 is clamped
+}
+
 TEST(Shape, PrincipalFrameIsRightHandedAndOrthonormal) {
   Pcg32 rng(12);
   for (const Shape& s : {cylinder(false), sphere()})
@@ -94,8 +106,10 @@ TEST(Shape, PrincipalFrameIsRightHandedAndOrthonormal) {
       const SurfaceGeometry g = surface_at(s, u, v);
       EXPECT_NEAR(length(cross(g.t1, g.t2) - g.n), 0.0, 1e-12);
       EXPECT_NEAR(dot(g.t1, g.t2), 0.0, 1e-12);
-      EXPECT_NEAR(length(g.p - s.center) , s.type == ShapeType::kSphere ? s.radius
-                  : std::hypot(s.radius, dot(g.p - s.center, s.axis)), 1e-12);
+      EXPECT_NEAR(length(g.p - s.center),
+                  s.type == ShapeType::kSphere ? s.radius
+                                               : std::hypot(s.radius, dot(g.p - s.center, s.axis)),
+                  1e-12);
     }
 }
 
@@ -104,7 +118,8 @@ TEST(Shape, RaysHitWhereTheClosedFormSays) {
   Pcg32 rng(13);
   for (int i = 0; i < 1000; ++i) {
     const Vec3 d = normalize(Vec3{rng.next_double() - 0.5, rng.next_double() - 0.5, 1.0});
-    const Vec3 o = s.center - d * 5.0 + Vec3{rng.next_double() - 0.5, rng.next_double() - 0.5, 0} * 2.0;
+    const Vec3 o =
+        s.center - d * 5.0 + Vec3{rng.next_double() - 0.5, rng.next_double() - 0.5, 0} * 2.0;
     // Distance of the line from the centre decides hit or miss.
     const Vec3 oc = o - s.center;
     const double b = dot(oc, d), c = dot(oc, oc) - s.radius * s.radius;

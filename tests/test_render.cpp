@@ -91,9 +91,9 @@ bool sphere_hit(const Ray& r, Vec3* n, Vec3* p) {
 }
 
 TEST(Render, SmoothSphereMatchesAnalyticRadiance) {
-  expect_analytic(scene_with("sphere-grating.json", {"/representation=smooth", "/camera/spp=1",
-                                                     "/camera/jitter=false", "/camera/width=64",
-                                                     "/camera/height=64"}),
+  expect_analytic(scene_with("sphere-grating.json",
+                             {"/representation=smooth", "/camera/spp=1", "/camera/jitter=false",
+                              "/camera/width=64", "/camera/height=64"}),
                   sphere_hit);
 }
 
@@ -124,9 +124,9 @@ TEST(Render, BumpWithZeroAmplitudeEqualsSmoothBitForBit) {
 TEST(Render, SameBitsWhateverTheThreadCount) {
   for (const char* representation : {"bump", "displacement"}) {
     const Scene scene = scene_with(
-        "cylinder-noise.json", {std::string("/representation=") + representation,
-                                "/camera/width=64", "/camera/height=64", "/camera/spp=4",
-                                "/terminator/method=estevez2019", "/displacement/edge_length=0.01"});
+        "cylinder-noise.json",
+        {std::string("/representation=") + representation, "/camera/width=64", "/camera/height=64",
+         "/camera/spp=4", "/terminator/method=estevez2019", "/displacement/edge_length=0.01"});
     std::vector<float> one, two;
     {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
@@ -146,8 +146,8 @@ TEST(Render, SameBitsWhateverTheThreadCount) {
 // because shadow rays hit the base shape.
 TEST(Render, RawBumpHasAHardTerminatorFromRealShadowRays) {
   const Image image =
-      render(scene_with("cylinder-grating.json", {"/camera/spp=1", "/camera/jitter=false",
-                                                  "/height/amplitude=0.03"}));
+      render(scene_with("cylinder-grating.json",
+                        {"/camera/spp=1", "/camera/jitter=false", "/height/amplitude=0.03"}));
   const int theta = image.channel_index("analysis.theta");
   const int deviation = image.channel_index("analysis.deviation");
   int bumped_towards_light_beyond_terminator = 0;
@@ -186,10 +186,11 @@ TEST(Render, BumpConvergesToDisplacementLinearlyAsAmplitudeVanishes) {
   std::vector<double> differences;
   for (double amplitude : {0.008, 0.004, 0.002, 0.001}) {
     auto make = [&](const char* representation) {
-      return render(scene_with(
-          "cylinder-grating.json",
-          {"/representation=" + std::string(representation), "/height/amplitude=" + std::to_string(amplitude),
-           "/camera/width=128", "/camera/height=128", "/camera/spp=4", "/camera/jitter=false"}));
+      return render(
+          scene_with("cylinder-grating.json",
+                     {"/representation=" + std::string(representation),
+                      "/height/amplitude=" + std::to_string(amplitude), "/camera/width=128",
+                      "/camera/height=128", "/camera/spp=4", "/camera/jitter=false"}));
     };
     differences.push_back(mean_abs_difference(make("bump"), make("displacement")));
   }
@@ -201,7 +202,8 @@ TEST(Render, BumpConvergesToDisplacementLinearlyAsAmplitudeVanishes) {
   for (std::size_t k = 0; k + 1 < differences.size(); ++k) {
     const double ratio = differences[k] / differences[k + 1];
     RecordProperty("ratio_" + std::to_string(k), std::to_string(ratio));
-    EXPECT_GT(ratio, 1.8) << "A ratio " << k << ": " << differences[k] << " / " << differences[k + 1];
+    EXPECT_GT(ratio, 1.8) << "A ratio " << k << ": " << differences[k] << " / "
+                          << differences[k + 1];
   }
   // And the renders do converge: at A = 0.001 (radius / 1000) the mean
   // difference is under 0.1 % of the peak radiance albedo E / pi = 0.8.

@@ -19,7 +19,9 @@ using nlohmann::json;
 
 const std::string kScenes = std::string(PENUMBRA_SOURCE_DIR) + "/scenes";
 
-json base_scene() { return read_json_file(kScenes + "/cylinder-grating.json"); }
+json base_scene() {
+  return read_json_file(kScenes + "/cylinder-grating.json");
+}
 
 // The error message of loading `document`, or "" when it loads.
 std::string error_of(const json& document) {
@@ -66,25 +68,36 @@ TEST(Scene, BadInputIsRejectedWithFilePointerAndExpectation) {
        "unknown key"},
       {"wrong type", [](json& j) { j["camera"]["width"] = "big"; }, "/camera/width",
        "expected an integer in [1, 16384]"},
-      {"wrong type for a vector", [](json& j) { j["camera"]["position"] = {0, 0}; },
+      {"wrong type for a vector",
+       [](json& j) {
+         j["camera"]["position"] = {0, 0};
+       },
        "/camera/position", "expected an array of 3 numbers"},
       {"non-positive radius", [](json& j) { j["shape"]["radius"] = -1; }, "/shape/radius",
        "expected a number > 0"},
       {"zero radius", [](json& j) { j["shape"]["radius"] = 0; }, "/shape/radius", "> 0"},
       {"non-positive height", [](json& j) { j["shape"]["height"] = 0; }, "/shape/height", "> 0"},
-      {"spp 0", [](json& j) { j["camera"]["spp"] = 0; }, "/camera/spp", "expected an integer in [1, 65536]"},
+      {"spp 0", [](json& j) { j["camera"]["spp"] = 0; }, "/camera/spp",
+       "expected an integer in [1, 65536]"},
       {"resolution 0", [](json& j) { j["camera"]["height"] = 0; }, "/camera/height",
        "expected an integer in [1, 16384]"},
       {"resolution above 16384", [](json& j) { j["camera"]["width"] = 16385; }, "/camera/width",
        "expected an integer in [1, 16384]"},
       {"amplitude reaching the axis", [](json& j) { j["height"]["amplitude"] = 1.0; },
        "/height/amplitude", "amplitude * max|h| < radius"},
-      {"zero light direction", [](json& j) { j["light"]["direction"] = {0, 0, 0}; },
+      {"zero light direction",
+       [](json& j) {
+         j["light"]["direction"] = {0, 0, 0};
+       },
        "/light/direction", "expected a non-zero vector"},
-      {"zero grating direction", [](json& j) { j["height"]["direction"] = {0, 0, 0}; },
+      {"zero grating direction",
+       [](json& j) {
+         j["height"]["direction"] = {0, 0, 0};
+       },
        "/height/direction", "non-zero vector"},
-      {"infinite number", [](json& j) { j["light"]["irradiance"] = std::numeric_limits<double>::infinity(); }, "/light/irradiance",
-       "expected a number"},
+      {"infinite number",
+       [](json& j) { j["light"]["irradiance"] = std::numeric_limits<double>::infinity(); },
+       "/light/irradiance", "expected a number"},
       {"unknown method", [](json& j) { j["terminator"]["method"] = "chiang"; },
        "/terminator/method", "valid: none, chiang2019, chiang2019-sine, estevez2019"},
       {"parameter out of range",
@@ -94,8 +107,10 @@ TEST(Scene, BadInputIsRejectedWithFilePointerAndExpectation) {
        },
        "/terminator/parameters/s", "in [0, 1]"},
       {"parameter of another method",
-       [](json& j) { j["terminator"]["parameters"] = {{"s", 0.5}}; }, "/terminator/parameters/s",
-       "unknown key"},
+       [](json& j) {
+         j["terminator"]["parameters"] = {{"s", 0.5}};
+       },
+       "/terminator/parameters/s", "unknown key"},
       {"unknown representation", [](json& j) { j["representation"] = "displaced"; },
        "/representation", "\"smooth\", \"bump\", \"displacement\""},
       {"albedo above 1", [](json& j) { j["material"]["albedo"] = 1.5; }, "/material/albedo",
@@ -140,10 +155,10 @@ TEST(Scene, UnreadableAndMalformedFiles) {
 }
 
 TEST(Scene, OverridesUseJsonPointers) {
-  const Scene s = load_scene(kScenes + "/cylinder-grating.json",
-                             {parse_override("/light/direction=[0,0,-1]"),
-                              parse_override("/representation=smooth"),
-                              parse_override("/camera/spp=4")});
+  const Scene s =
+      load_scene(kScenes + "/cylinder-grating.json",
+                 {parse_override("/light/direction=[0,0,-1]"),
+                  parse_override("/representation=smooth"), parse_override("/camera/spp=4")});
   EXPECT_EQ(s.light.direction, (Vec3{0, 0, -1}));
   EXPECT_EQ(s.representation, Representation::kSmooth);
   EXPECT_EQ(s.camera.spp, 4);

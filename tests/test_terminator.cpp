@@ -19,7 +19,9 @@ Vec3 random_unit(Pcg32& rng) {
 }
 
 // Unit vector in the x-z plane at `angle` from +z towards +x.
-Vec3 in_plane(double angle) { return {std::sin(angle), 0.0, std::cos(angle)}; }
+Vec3 in_plane(double angle) {
+  return {std::sin(angle), 0.0, std::cos(angle)};
+}
 
 std::vector<MethodSettings> every_method(double s) {
   std::vector<MethodSettings> out;
@@ -45,18 +47,18 @@ TEST(Terminator, EveryFactorIsFiniteAndInUnitIntervalForDegenerateInputs) {
   const Vec3 z{0, 0, 1};
   const double tiny = 1e-12;
   const std::vector<ShadingVectors> cases = {
-      {z, z, {1, 0, 0}, z},                                  // light at the terminator, dot = 0
-      {z, z, z, z},                                          // Ns == Ng == wi == wo
-      {z, in_plane(0.3), {1, 0, 0}, z},                      // dot(Ng, wi) = 0 with deviation
-      {z, {1, 0, 0}, in_plane(0.5), z},                      // Ns on the horizon
-      {z, in_plane(2.0), in_plane(0.5), z},                  // Ns below the horizon
-      {z, -z, z, z},                                         // Ns opposite Ng
-      {z, in_plane(0.4), in_plane(-2.0), z},                 // light below the horizon
-      {z, in_plane(tiny), in_plane(tiny), in_plane(tiny)},   // nearly parallel
-      {z, in_plane(0.5), in_plane(0.5 + tiny), z},           // Ns nearly along wi
-      {z, in_plane(0.5), in_plane(kPi / 2 - tiny), z},       // just before the terminator
-      {z, in_plane(0.5), in_plane(kPi / 2 + tiny), z},       // just after it
-      {z, in_plane(0.5), in_plane(0.4), {0, 0, -1}},         // viewer below
+      {z, z, {1, 0, 0}, z},                                 // light at the terminator, dot = 0
+      {z, z, z, z},                                         // Ns == Ng == wi == wo
+      {z, in_plane(0.3), {1, 0, 0}, z},                     // dot(Ng, wi) = 0 with deviation
+      {z, {1, 0, 0}, in_plane(0.5), z},                     // Ns on the horizon
+      {z, in_plane(2.0), in_plane(0.5), z},                 // Ns below the horizon
+      {z, -z, z, z},                                        // Ns opposite Ng
+      {z, in_plane(0.4), in_plane(-2.0), z},                // light below the horizon
+      {z, in_plane(tiny), in_plane(tiny), in_plane(tiny)},  // nearly parallel
+      {z, in_plane(0.5), in_plane(0.5 + tiny), z},          // Ns nearly along wi
+      {z, in_plane(0.5), in_plane(kPi / 2 - tiny), z},      // just before the terminator
+      {z, in_plane(0.5), in_plane(kPi / 2 + tiny), z},      // just after it
+      {z, in_plane(0.5), in_plane(0.4), {0, 0, -1}},        // viewer below
   };
   for (const ShadingVectors& v : cases)
     for (double s : {0.0, 0.5, 1.0})
@@ -155,9 +157,11 @@ TEST(Chiang2019, IsC1ContinuousWhereGReachesOne) {
     auto slope = [&](auto f, double a, double b) { return (f(b) - f(a)) / (b - a); };
     auto smooth = [&](double t) { return chiang2019(ng, ns, in_plane(t)); };
     auto raw = [&](double t) { return chiang2019_raw_g(ng, ns, in_plane(t)); };
-    const double left = slope(smooth, at - 2 * h, at - h), right = slope(smooth, at + h, at + 2 * h);
+    const double left = slope(smooth, at - 2 * h, at - h),
+                 right = slope(smooth, at + h, at + 2 * h);
     EXPECT_NEAR(left, right, 1e-3) << deviation;
-    const double raw_left = slope(raw, at - 2 * h, at - h), raw_right = slope(raw, at + h, at + 2 * h);
+    const double raw_left = slope(raw, at - 2 * h, at - h),
+                 raw_right = slope(raw, at + h, at + 2 * h);
     EXPECT_GT(std::abs(raw_left - raw_right), 0.05) << deviation;
   }
 }
@@ -199,8 +203,10 @@ TEST(Estevez2019, ReciprocalVariantAppliesTheSameG1ToTheViewer) {
   EXPECT_DOUBLE_EQ(terminator_factor({TerminatorMethod::kEstevez2019Reciprocal}, {ng, ns, wi, wo}),
                    estevez2019_g1(ng, wi, a2) * estevez2019_g1(ng, wo, a2));
   // It darkens silhouettes (grazing wo) where the plain variant does not.
-  EXPECT_LT(terminator_factor({TerminatorMethod::kEstevez2019Reciprocal}, {ng, ns, in_plane(0.2), in_plane(1.5)}),
-            0.8 * terminator_factor({TerminatorMethod::kEstevez2019}, {ng, ns, in_plane(0.2), in_plane(1.5)}));
+  EXPECT_LT(terminator_factor({TerminatorMethod::kEstevez2019Reciprocal},
+                              {ng, ns, in_plane(0.2), in_plane(1.5)}),
+            0.8 * terminator_factor({TerminatorMethod::kEstevez2019},
+                                    {ng, ns, in_plane(0.2), in_plane(1.5)}));
 }
 
 // RTG Fig. 12-5: the GGX slope distribution truncated at radius 4 alpha keeps
@@ -229,8 +235,8 @@ TEST(Estevez2019, Figure12_5TruncatedGgxVarianceClaim) {
   // Estevez's alpha mapping follows: tan(theta_d) = 2 sigma, sigma^2 = 2 alpha^2.
   const Vec3 ng{0, 0, 1};
   const double theta_d = 0.4;
-  EXPECT_NEAR(estevez2019_alpha2(ng, in_plane(theta_d)),
-              std::pow(std::tan(theta_d) / 2.0, 2) / 2.0, 1e-12);
+  EXPECT_NEAR(estevez2019_alpha2(ng, in_plane(theta_d)), std::pow(std::tan(theta_d) / 2.0, 2) / 2.0,
+              1e-12);
 }
 
 // Chiang et al., Fig. 5 (reference sheet, section 8), on a grid of light

@@ -8,11 +8,11 @@
 #include <memory>
 #include <optional>
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include "render/evaluator.h"
 #include "render/image_io.h"
@@ -90,7 +90,8 @@ std::vector<Override> collect_overrides(const RenderArgs& a) {
 // Makes sure the intermediate objects that shortcut options write into exist.
 void ensure_objects(json& document, const std::vector<Override>& overrides) {
   for (const Override& o : overrides)
-    if (o.pointer == "/terminator/method" && document.is_object() && !document.contains("terminator"))
+    if (o.pointer == "/terminator/method" && document.is_object() &&
+        !document.contains("terminator"))
       document["terminator"] = json::object();
 }
 
@@ -158,28 +159,30 @@ double peak_rss_mib() {
 
 // The benchmark scene of the evaluator issue: a 512x512, 16 spp bump cylinder.
 json bench_scene(int size, int spp) {
-  return {{"version", 1},
-          {"name", "bench-cylinder-grating"},
-          {"camera",
-           {{"position", {0, 0, -5}},
-            {"direction", {0, 0, 1}},
-            {"right", {2.5, 0, 0}},
-            {"up", {0, 2.5, 0}},
-            {"width", size},
-            {"height", size},
-            {"spp", spp},
-            {"seed", 1}}},
-          {"light", {{"type", "distant"}, {"direction", {-1, 0, -0.2}}, {"irradiance", kPi}}},
-          {"shape", {{"type", "cylinder"}, {"radius", 1.0}, {"height", 2.0}}},
-          {"material", {{"albedo", 0.8}}},
-          {"height",
-           {{"type", "grating"}, {"amplitude", 0.01}, {"frequency", 8.0}, {"direction", {1, 0, 0}}}},
-          {"representation", "bump"}};
+  return {
+      {"version", 1},
+      {"name", "bench-cylinder-grating"},
+      {"camera",
+       {{"position", {0, 0, -5}},
+        {"direction", {0, 0, 1}},
+        {"right", {2.5, 0, 0}},
+        {"up", {0, 2.5, 0}},
+        {"width", size},
+        {"height", size},
+        {"spp", spp},
+        {"seed", 1}}},
+      {"light", {{"type", "distant"}, {"direction", {-1, 0, -0.2}}, {"irradiance", kPi}}},
+      {"shape", {{"type", "cylinder"}, {"radius", 1.0}, {"height", 2.0}}},
+      {"material", {{"albedo", 0.8}}},
+      {"height",
+       {{"type", "grating"}, {"amplitude", 0.01}, {"frequency", 8.0}, {"direction", {1, 0, 0}}}},
+      {"representation", "bump"}};
 }
 
 int command_bench(int size, int spp, std::ostream& out) {
-  out << fmt::format("penumbra bench: {}x{}, {} spp, bump cylinder (grating, A = 0.01), {} threads\n",
-                     size, size, spp, tbb::info::default_concurrency());
+  out << fmt::format(
+      "penumbra bench: {}x{}, {} spp, bump cylinder (grating, A = 0.01), {} threads\n", size, size,
+      spp, tbb::info::default_concurrency());
   out << fmt::format("{:<24} {:>10} {:>16}\n", "method", "wall s", "M samples/s");
   for (const MethodInfo& m : all_methods()) {
     json document = bench_scene(size, spp);
@@ -229,9 +232,11 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   render_cmd->add_option("--method", r.method, "terminator method id (see `penumbra methods`)");
   render_cmd->add_option("--representation", r.representation, "smooth, bump or displacement");
   render_cmd->add_option("--width", r.width, "image width in pixels")->check(CLI::PositiveNumber);
-  render_cmd->add_option("--height", r.height, "image height in pixels")->check(CLI::PositiveNumber);
+  render_cmd->add_option("--height", r.height, "image height in pixels")
+      ->check(CLI::PositiveNumber);
   render_cmd->add_option("--spp", r.spp, "samples per pixel")->check(CLI::PositiveNumber);
-  render_cmd->add_option("--set", r.sets, "override a scene value: /json/pointer=VALUE (repeatable)");
+  render_cmd->add_option("--set", r.sets,
+                         "override a scene value: /json/pointer=VALUE (repeatable)");
   render_cmd->add_flag("-q,--quiet", r.quiet, "no progress or summary");
 
   int bench_size = 512, bench_spp = 16;

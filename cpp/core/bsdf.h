@@ -9,9 +9,9 @@ namespace penumbra {
 // (F = 1) on purpose: the lobe exists so that a study can choose whether a
 // terminator factor touches specular light, not to model a real material.
 struct Material {
-  double albedo = 0.8;               // diffuse reflectance, [0,1]
-  double specular_weight = 0.0;      // [0,1]; diffuse is scaled by 1 - weight
-  double specular_roughness = 0.3;   // GGX alpha, (0,1]
+  double albedo = 0.8;              // diffuse reflectance, [0,1]
+  double specular_weight = 0.0;     // [0,1]; diffuse is scaled by 1 - weight
+  double specular_roughness = 0.3;  // GGX alpha, (0,1]
 };
 
 // GGX normal distribution D(m) for cos_theta_m = dot(m, n) (Walter et al. 2007).

@@ -14,26 +14,48 @@ constexpr std::array<MethodParameter, 1> kShadingOffsetParameters{{
 }};
 
 constexpr std::array<MethodInfo, 7> kMethods{{
-    {TerminatorMethod::kNone, "none", "-",
+    {TerminatorMethod::kNone,
+     "none",
+     "-",
      "raw bump: light dropped only where dot(Ns,wi) <= 0 or a shadow ray is blocked",
-     {}, true, ""},
-    {TerminatorMethod::kChiang2019, "chiang2019",
-     "Chiang, Li, Burley 2019, 'Taming the Shadow Terminator', SIGGRAPH talk, eqs. (1)-(2)",
-     "G = min(1, <Ng,wi>/(<Ns,wi><Ng,Ns>)), smoothed by -G^3+G^2+G", {}, true, ""},
-    {TerminatorMethod::kChiang2019Sine, "chiang2019-sine", "MoonRay SINE_COMPENSATION",
-     "chiang2019 with <Ng,Ns> replaced by |Ng x Ns|; denominators clamped to >= 1e-7", {},
-     true, ""},
-    {TerminatorMethod::kEstevez2019, "estevez2019",
-     "Conty Estevez, Lecocq, Stein 2019, Ray Tracing Gems ch. 12, Listing 12-1",
-     "GGX Smith G1 for wi with alpha^2 = tan^2(theta_d)/8 from the Ng-Ns deviation", {}, true,
+     {},
+     true,
      ""},
-    {TerminatorMethod::kEstevez2019Reciprocal, "estevez2019-reciprocal",
+    {TerminatorMethod::kChiang2019,
+     "chiang2019",
+     "Chiang, Li, Burley 2019, 'Taming the Shadow Terminator', SIGGRAPH talk, eqs. (1)-(2)",
+     "G = min(1, <Ng,wi>/(<Ns,wi><Ng,Ns>)), smoothed by -G^3+G^2+G",
+     {},
+     true,
+     ""},
+    {TerminatorMethod::kChiang2019Sine,
+     "chiang2019-sine",
+     "MoonRay SINE_COMPENSATION",
+     "chiang2019 with <Ng,Ns> replaced by |Ng x Ns|; denominators clamped to >= 1e-7",
+     {},
+     true,
+     ""},
+    {TerminatorMethod::kEstevez2019,
+     "estevez2019",
+     "Conty Estevez, Lecocq, Stein 2019, Ray Tracing Gems ch. 12, Listing 12-1",
+     "GGX Smith G1 for wi with alpha^2 = tan^2(theta_d)/8 from the Ng-Ns deviation",
+     {},
+     true,
+     ""},
+    {TerminatorMethod::kEstevez2019Reciprocal,
+     "estevez2019-reciprocal",
      "Ray Tracing Gems ch. 12, Fig. 12-7 right (rejected by the authors)",
-     "the estevez2019 G1 for wi times the same G1 for wo; darkens silhouettes", {}, true, ""},
-    {TerminatorMethod::kDeshmukh2020, "deshmukh2020",
+     "the estevez2019 G1 for wi times the same G1 for wo; darkens silhouettes",
+     {},
+     true,
+     ""},
+    {TerminatorMethod::kDeshmukh2020,
+     "deshmukh2020",
      "Deshmukh & Green 2020, 'Predictable and Targeted Softening of the Shadow Terminator', "
      "SIGGRAPH talk; MoonRay CUSTOM",
-     "smoothstep of <Ng,wi>/d with d = lerp(0.14922, 0.01999, <Ns,Ng>)", {}, false,
+     "smoothstep of <Ng,wi>/d with d = lerp(0.14922, 0.01999, <Ns,Ng>)",
+     {},
+     false,
      "darkens the last 1.15 degrees before the geometric terminator even where Ns == Ng "
      "(<Ng,wi> < 0.01999)"},
     {TerminatorMethod::kShadingOffset, "shading-offset",
@@ -43,11 +65,15 @@ constexpr std::array<MethodInfo, 7> kMethods{{
      "darkens every surface, bumped or not, for s > 0; the identity only for s = 0"},
 }};
 
-double clamp01(double x) { return std::clamp(x, 0.0, 1.0); }
+double clamp01(double x) {
+  return std::clamp(x, 0.0, 1.0);
+}
 
 }  // namespace
 
-std::span<const MethodInfo> all_methods() { return kMethods; }
+std::span<const MethodInfo> all_methods() {
+  return kMethods;
+}
 
 const MethodInfo& method_info(TerminatorMethod method) {
   return kMethods[static_cast<std::size_t>(method)];
@@ -70,7 +96,9 @@ double chiang2019_raw_g(const Vec3& ng, const Vec3& ns, const Vec3& wi) {
   return clamp01(std::min(1.0, cos_g_i / denominator));
 }
 
-double chiang2019_smooth(double g) { return clamp01(-g * g * g + g * g + g); }
+double chiang2019_smooth(double g) {
+  return clamp01(-g * g * g + g * g + g);
+}
 
 double chiang2019(const Vec3& ng, const Vec3& ns, const Vec3& wi) {
   return chiang2019_smooth(chiang2019_raw_g(ng, ns, wi));
@@ -107,7 +135,9 @@ double deshmukh2020(const Vec3& ng, const Vec3& ns, const Vec3& wi) {
   return t * t * (3.0 - 2.0 * t);
 }
 
-double shading_offset_frequency(double s) { return 1.0 / (1.0 - 0.5 * s); }
+double shading_offset_frequency(double s) {
+  return 1.0 / (1.0 - 0.5 * s);
+}
 
 double shading_offset(double s, const Vec3& ns, const Vec3& wi) {
   const double f = shading_offset_frequency(s);

@@ -98,8 +98,8 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
   }
   vertices_ = vertex_count;
   triangles_ = triangle_count;
-  const double kappa = 1.0 / std::max(m.shape.radius - reach, 1e-12) +
-                       m.amplitude * max_hessian_norm(m.height);
+  const double kappa =
+      1.0 / std::max(m.shape.radius - reach, 1e-12) + m.amplitude * max_hessian_norm(m.height);
   shadow_offset_ = e * e * kappa / 8.0 + 1e-9 * m.shape.radius;
 
   m.device = rtcNewDevice(nullptr);
@@ -126,7 +126,8 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
     put(0, m.vertex(0.0, 0.0));
     put(vertex_count - 1, m.vertex(0.0, kPi));
     tbb::parallel_for(1u, nv, [&](unsigned j) {
-      for (unsigned i = 0; i < nu; ++i) put(1 + std::size_t(j - 1) * nu + i, m.vertex(m.u_at(i), m.v_at(j)));
+      for (unsigned i = 0; i < nu; ++i)
+        put(1 + std::size_t(j - 1) * nu + i, m.vertex(m.u_at(i), m.v_at(j)));
     });
     auto ring = [&](unsigned j, unsigned i) { return 1 + (j - 1) * nu + (i % nu); };
     const unsigned south = static_cast<unsigned>(vertex_count - 1);
@@ -143,7 +144,8 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
     });
   } else {
     tbb::parallel_for(0u, nv + 1, [&](unsigned j) {
-      for (unsigned i = 0; i < nu; ++i) put(std::size_t(j) * nu + i, m.vertex(m.u_at(i), m.v_at(j)));
+      for (unsigned i = 0; i < nu; ++i)
+        put(std::size_t(j) * nu + i, m.vertex(m.u_at(i), m.v_at(j)));
     });
     auto at = [&](unsigned j, unsigned i) { return j * nu + (i % nu); };
     tbb::parallel_for(0u, nv, [&](unsigned j) {
@@ -168,8 +170,9 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
   rtcReleaseGeometry(geometry);
   rtcCommitScene(m.scene);
   if (rtcGetDeviceError(m.device) != RTC_ERROR_NONE)
-    throw std::runtime_error(fmt::format(
-        "Embree could not build the displaced mesh ({} triangles): out of memory?", triangle_count));
+    throw std::runtime_error(
+        fmt::format("Embree could not build the displaced mesh ({} triangles): out of memory?",
+                    triangle_count));
 }
 
 DisplacedMesh::~DisplacedMesh() {
@@ -210,8 +213,8 @@ std::optional<MeshHit> DisplacedMesh::intersect(const Ray& ray) const {
   double u[3], v[3];
   m.corners(rh.hit.primID, u, v);
   const double b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1.0 - b1 - b2;
-  hit.geometry = surface_at(m.shape, b0 * u[0] + b1 * u[1] + b2 * u[2],
-                            b0 * v[0] + b1 * v[1] + b2 * v[2]);
+  hit.geometry =
+      surface_at(m.shape, b0 * u[0] + b1 * u[1] + b2 * u[2], b0 * v[0] + b1 * v[1] + b2 * v[2]);
   return hit;
 }
 

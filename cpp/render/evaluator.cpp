@@ -99,8 +99,8 @@ class MeshTracer {
     if (!hit) return false;
     out->geometry = hit->geometry;
     if (hit->geometry.displaceable)
-      out->shading_point = displaced_point(hit->geometry, amplitude_,
-                                           evaluate_height(height_, hit->geometry.p));
+      out->shading_point =
+          displaced_point(hit->geometry, amplitude_, evaluate_height(height_, hit->geometry.p));
     else
       out->shading_point = hit->geometry.p;
     return true;
@@ -179,20 +179,17 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
             // analytic base Ng and Ni coincide with the base normal.
             const Vec3 ng_ref = is_ground_truth ? ns : n;
             const LightSample light = sample_light(scene.light, hit.shading_point);
-            const double factor =
-                terminator_factor(terminator.method, {ng_ref, ns, light.wi, wo});
+            const double factor = terminator_factor(terminator.method, {ng_ref, ns, light.wi, wo});
             sums.hits += 1.0;
-            // acos is accurate to ~1e-6 degrees even for parallel vectors,
-            // far below what a float channel holds, and cheaper than atan2.
-            sums.theta += degrees(std::acos(std::clamp(dot(n, light.wi), -1.0, 1.0)));
-            sums.deviation += degrees(std::acos(std::clamp(dot(ns, n), -1.0, 1.0)));
+            // Within 1.2e-6 degrees: below what the float channels resolve.
+            sums.theta += degrees(acos_approx(dot(n, light.wi)));
+            sums.deviation += degrees(acos_approx(dot(ns, n)));
             sums.g += factor;
             const double cos_theta_s = dot(ns, light.wi);
             if (!(cos_theta_s > 0.0) || light.irradiance == 0.0) continue;
             const LobeValues lobes = evaluate_lobes(scene.material, ns, light.wi, wo);
-            const double f =
-                lobes.diffuse * factor +
-                lobes.specular * (terminator.lobes == Lobes::kAll ? factor : 1.0);
+            const double f = lobes.diffuse * factor +
+                             lobes.specular * (terminator.lobes == Lobes::kAll ? factor : 1.0);
             if (!(f > 0.0)) continue;
             ++local_shadow_rays;
             if (tracer.occluded(hit.shading_point, ns, light.wi, light.distance)) continue;

@@ -19,8 +19,8 @@ namespace {
 std::string temporary_name(const std::string& path) {
   const fs::path p(path);
   // Keep the extension: OpenImageIO picks the format from it.
-  return (p.parent_path() / fmt::format(".{}.tmp{}{}", p.stem().string(), ::getpid(),
-                                        p.extension().string()))
+  return (p.parent_path() /
+          fmt::format(".{}.tmp{}{}", p.stem().string(), ::getpid(), p.extension().string()))
       .string();
 }
 
@@ -29,8 +29,8 @@ void commit(const std::string& temporary, const std::string& path) {
   fs::rename(temporary, path, ec);
   if (ec) {
     fs::remove(temporary, ec);
-    throw OutputError(fmt::format("{}: cannot move the finished file into place: {}", path,
-                                  ec.message()));
+    throw OutputError(
+        fmt::format("{}: cannot move the finished file into place: {}", path, ec.message()));
   }
 }
 
@@ -81,8 +81,8 @@ void write_preview_png(const Image& image, const std::string& path) {
   // The preview is composited over black, so premultiplied RGB is what shows.
   OIIO::ImageBuf encoded = OIIO::ImageBufAlgo::colorconvert(linear, "linear", "sRGB", false);
   if (encoded.has_error())
-    throw std::runtime_error(fmt::format("{}: colour conversion failed: {}", path,
-                                         encoded.geterror()));
+    throw std::runtime_error(
+        fmt::format("{}: colour conversion failed: {}", path, encoded.geterror()));
   encoded.set_write_format(OIIO::TypeDesc::UINT8);
   write_buffer(encoded, path);
 }

@@ -117,8 +117,8 @@ class Reader {
   Vec3 direction(const std::string& key) { return check_direction(key, vec3(key)); }
   Vec3 check_direction(const std::string& key, const Vec3& v) const {
     if (!(length(v) > 1e-12))
-      fail(key, fmt::format("expected a non-zero vector (a direction), got [{}, {}, {}]", v.x,
-                            v.y, v.z));
+      fail(key, fmt::format("expected a non-zero vector (a direction), got [{}, {}, {}]", v.x, v.y,
+                            v.z));
     return normalize(v);
   }
 
@@ -140,10 +140,18 @@ class Reader {
   std::set<std::string> known_;
 };
 
-bool positive(double x) { return x > 0.0; }
-bool non_negative(double x) { return x >= 0.0; }
-bool unit_interval(double x) { return x >= 0.0 && x <= 1.0; }
-bool any_number(double) { return true; }
+bool positive(double x) {
+  return x > 0.0;
+}
+bool non_negative(double x) {
+  return x >= 0.0;
+}
+bool unit_interval(double x) {
+  return x >= 0.0 && x <= 1.0;
+}
+bool any_number(double) {
+  return true;
+}
 
 Camera read_camera(Reader r) {
   Camera c;
@@ -169,7 +177,8 @@ Camera read_camera(Reader r) {
 
 Light read_light(Reader r) {
   Light l;
-  l.type = r.choice<LightType>("type", {{"distant", LightType::kDistant}, {"point", LightType::kPoint}});
+  l.type =
+      r.choice<LightType>("type", {{"distant", LightType::kDistant}, {"point", LightType::kPoint}});
   if (l.type == LightType::kDistant) {
     l.direction = r.direction("direction");
     l.irradiance = r.number("irradiance", non_negative, ">= 0 (W/m^2)");
@@ -183,7 +192,8 @@ Light read_light(Reader r) {
 
 Shape read_shape(Reader r) {
   Shape s;
-  s.type = r.choice<ShapeType>("type", {{"cylinder", ShapeType::kCylinder}, {"sphere", ShapeType::kSphere}});
+  s.type = r.choice<ShapeType>(
+      "type", {{"cylinder", ShapeType::kCylinder}, {"sphere", ShapeType::kSphere}});
   s.center = r.vec3_or("center", {0, 0, 0});
   s.axis = r.has("axis") ? r.direction("axis") : Vec3{0, 1, 0};
   s.radius = r.number("radius", positive, "> 0 (scene units)");
@@ -201,9 +211,9 @@ Material read_material(Reader r) {
   if (r.has("specular")) {
     Reader s = r.object("specular");
     m.specular_weight = s.number("weight", unit_interval, "in [0, 1]");
-    m.specular_roughness =
-        s.number_or("roughness", m.specular_roughness,
-                    [](double x) { return x > 0.0 && x <= 1.0; }, "in (0, 1] (GGX alpha)");
+    m.specular_roughness = s.number_or(
+        "roughness", m.specular_roughness, [](double x) { return x > 0.0 && x <= 1.0; },
+        "in (0, 1] (GGX alpha)");
     s.finish();
   }
   r.finish();
@@ -255,8 +265,8 @@ HeightSpec read_height(Reader r, const Shape& shape) {
       const double f_min = r.number("frequency_min", positive, "> 0 (cycles per scene unit)");
       const double f_max = r.number("frequency_max", positive, "> 0 (cycles per scene unit)");
       if (f_max < f_min)
-        r.fail("frequency_max", fmt::format("expected a number >= frequency_min ({}), got {}",
-                                            f_min, f_max));
+        r.fail("frequency_max",
+               fmt::format("expected a number >= frequency_min ({}), got {}", f_min, f_max));
       const auto seed = static_cast<std::uint64_t>(r.integer_or("seed", 0, 0, (1ll << 53)));
       h.function = make_noise(terms, f_min, f_max, seed);
       break;
@@ -368,8 +378,8 @@ Scene scene_from_json(const json& document, const std::string& origin) {
   Reader r(document, "", origin);
   const long long version = r.integer("version", 1, 1000);
   if (version != kSceneFormatVersion)
-    r.fail("version", fmt::format("expected scene format version {}, got {}", kSceneFormatVersion,
-                                  version));
+    r.fail("version",
+           fmt::format("expected scene format version {}, got {}", kSceneFormatVersion, version));
   Scene s;
   if (r.has("name")) s.name = r.string("name");
   s.camera = read_camera(r.object("camera"));
@@ -394,11 +404,11 @@ Scene scene_from_json(const json& document, const std::string& origin) {
   const double reach = s.height.amplitude * max_abs_height(s.height.function);
   const double triangles = estimated_triangles(s.shape, reach, s.displacement.edge_length);
   if (s.representation == Representation::kDisplacement && triangles > kMaxDisplacementTriangles)
-    throw InputError(origin, "/displacement/edge_length",
-                     fmt::format("expected an edge length giving at most {:.0f} million "
-                                 "triangles, got {} ({:.0f} million)",
-                                 kMaxDisplacementTriangles / 1e6, s.displacement.edge_length,
-                                 triangles / 1e6));
+    throw InputError(
+        origin, "/displacement/edge_length",
+        fmt::format("expected an edge length giving at most {:.0f} million "
+                    "triangles, got {} ({:.0f} million)",
+                    kMaxDisplacementTriangles / 1e6, s.displacement.edge_length, triangles / 1e6));
   return s;
 }
 
