@@ -87,14 +87,6 @@ std::vector<Override> collect_overrides(const RenderArgs& a) {
   return overrides;
 }
 
-// Makes sure the intermediate objects that shortcut options write into exist.
-void ensure_objects(json& document, const std::vector<Override>& overrides) {
-  for (const Override& o : overrides)
-    if (o.pointer == "/terminator/method" && document.is_object() &&
-        !document.contains("terminator"))
-      document["terminator"] = json::object();
-}
-
 class ProgressLine {
  public:
   ProgressLine(std::ostream& err, bool enabled, std::string label)
@@ -115,7 +107,6 @@ class ProgressLine {
 int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
   const std::vector<Override> overrides = collect_overrides(a);
   json document = read_json_file(a.scene);
-  ensure_objects(document, overrides);
   const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
   apply_overrides(document, overrides, origin);
   const Scene scene = scene_from_json(document, origin);
@@ -248,7 +239,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e, out, err);  // --help, --version
-    err << "penumbra: error: " << e.what() << "\n";
+    err << "penumbra: error: " << e.what() << " (see penumbra --help)\n";
     return kExitBadInput;
   }
 

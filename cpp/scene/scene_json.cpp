@@ -348,14 +348,11 @@ Override parse_override(const std::string& text) {
 
 void apply_overrides(json& document, const std::vector<Override>& overrides,
                      const std::string& origin) {
+  // Missing intermediate objects are created: a misspelt key is still
+  // caught, with its pointer, by the strict reader's unknown-key check.
   for (const Override& o : overrides) {
     try {
-      const json::json_pointer pointer(o.pointer);
-      if (!pointer.parent_pointer().empty() && !document.contains(pointer.parent_pointer()))
-        throw InputError(origin, o.pointer,
-                         "--set names a key whose parent " + pointer.parent_pointer().to_string() +
-                             " does not exist");
-      document[pointer] = o.value;
+      document[json::json_pointer(o.pointer)] = o.value;
     } catch (const json::exception& e) {
       throw InputError(origin, o.pointer, std::string("cannot apply --set: ") + e.what());
     }
