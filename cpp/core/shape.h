@@ -2,8 +2,6 @@
 // bump and displacement representations need. Scene units throughout.
 #pragma once
 
-#include <optional>
-
 #include "core/height.h"
 #include "core/vec.h"
 
