@@ -5,8 +5,11 @@
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <thread>
 
 #include <fmt/format.h>
 #include <tbb/global_control.h>
@@ -14,16 +17,28 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "analysis/metrics.h"
+#include "analysis/metrics_json.h"
+#include "export/export.h"
 #include "render/evaluator.h"
 #include "render/image_io.h"
+#include "renderers/renderers.h"
+#include "report/calibration.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {
 namespace {
 
 using nlohmann::json;
+namespace fs = std::filesystem;
 
-constexpr const char* kVersion = "0.1.0";
+constexpr const char* kSourceDir = PENUMBRA_SOURCE_DIR;
+
+// A command-line value that parses but makes no sense.
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 struct RenderArgs {
   std::string scene;
@@ -34,6 +49,22 @@ struct RenderArgs {
   int width = 0, height = 0, spp = 0;
   std::vector<std::string> sets;
   bool quiet = false;
+  std::string renderer = "evaluator";
+  double timeout = 600.0;
+};
+
+struct CompareArgs {
+  std::string reference, test;
+  bool json = false;
+  double scale = 0.0;
+  double max_rmse = -1.0;
+};
+
+struct ExportArgs {
+  std::string to;
+  std::string scene;
+  std::string output;
+  std::vector<std::string> sets;
 };
 
 std::string parameter_domain(const MethodParameter& p) {
@@ -104,7 +135,18 @@ class ProgressLine {
   std::string label_;
 };
 
+// The log of an external render sits beside its output: out.exr -> out.povray.log.
+std::string log_path_for(const std::string& output, RendererKind renderer) {
+  fs::path p(output);
+  p.replace_extension(std::string(".") + to_string(renderer) + ".log");
+  return p.string();
+}
+
 int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
+  const std::optional<RendererKind> renderer = renderer_from_id(a.renderer);
+  if (!renderer)
+    throw UsageError(
+        fmt::format("--renderer: expected evaluator, povray or blender, got \"{}\"", a.renderer));
   const std::vector<Override> overrides = collect_overrides(a);
   json document = read_json_file(a.scene);
   const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
@@ -114,21 +156,33 @@ int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
   if (!a.preview.empty()) check_writable(a.preview);
 
   const ProgressLine progress(err, !a.quiet, "rendering " + a.output);
-  RenderOptions options;
-  options.progress = [&](double f) { progress(f); };
-  RenderStats stats;
-  const Image image = render(scene, options, &stats);
+  RenderSettings settings;
+  settings.timeout_s = a.timeout;
+  settings.log_path = log_path_for(a.output, *renderer);
+  settings.progress.progress = [&](double f) { progress(f); };
+  if (*renderer != RendererKind::kEvaluator && !a.quiet)
+    err << fmt::format("running {} (log {}) ...\n", to_string(*renderer), settings.log_path);
+  const RendererRun run = render_with(*renderer, scene, settings);
   progress.finish();
+  const Image& image = run.image;
+  const RenderStats& stats = run.stats;
 
   write_exr(image, a.output,
-            {{"penumbra:version", kVersion},
-             {"penumbra:renderer", "evaluator"},
+            {{"penumbra:version", kPenumbraVersion},
+             {"penumbra:renderer", to_string(*renderer)},
              {"penumbra:scene", document.dump()},
              {"penumbra:method", std::string(method_info(scene.terminator.method.method).id)},
              {"penumbra:representation", to_string(scene.representation)},
              {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
   if (!a.preview.empty()) write_preview_png(image, a.preview);
-  if (!a.quiet) {
+  if (!a.quiet && *renderer != RendererKind::kEvaluator) {
+    out << fmt::format(
+        "wrote {} ({}x{}, {} spp, {}, method {}, {}): {} {:.2f} s wall, evaluator geometry pass "
+        "{:.2f} s\n",
+        a.output, image.width, image.height, scene.camera.spp, to_string(scene.representation),
+        method_info(scene.terminator.method.method).id, to_string(*renderer), to_string(*renderer),
+        run.seconds, run.geometry_seconds);
+  } else if (!a.quiet) {
     out << fmt::format(
         "wrote {} ({}x{}, {} spp, {}, method {}): {:.3f} s, {:.2f} M camera samples/s", a.output,
         image.width, image.height, scene.camera.spp, to_string(scene.representation),
@@ -138,6 +192,159 @@ int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
       out << fmt::format(", {} triangles built in {:.3f} s", stats.triangles, stats.build_seconds);
     out << "\n";
     if (!a.preview.empty()) out << "wrote " << a.preview << "\n";
+  }
+  return kExitOk;
+}
+
+int command_export(const ExportArgs& a, std::ostream& out) {
+  std::vector<Override> overrides;
+  for (const std::string& s : a.sets) overrides.push_back(parse_override(s));
+  json document = read_json_file(a.scene);
+  const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
+  apply_overrides(document, overrides, origin);
+  const Scene scene = scene_from_json(document, origin);
+  std::error_code ec;
+  fs::create_directories(a.output, ec);
+  if (ec || !fs::is_directory(a.output))
+    throw OutputError(fmt::format("{}: cannot create the output folder: {}", a.output,
+                                  ec ? ec.message() : "not a folder"));
+  if (a.to == "povray") {
+    const PovrayExport job = export_povray(scene);
+    const std::string path = (fs::path(a.output) / "scene.pov").string();
+    write_text_file(path, job.sdl);
+    out << fmt::format(
+        "wrote {} (render {}x{} without anti-aliasing, box-filter {}x{} down to "
+        "{}x{}; the command line is in its first lines)\n",
+        path, job.width * job.supersample_x, job.height * job.supersample_y, job.supersample_x,
+        job.supersample_y, job.width, job.height);
+    return kExitOk;
+  }
+  const BlenderExport job = export_blender(scene);
+  const fs::path dir(a.output);
+  const TriangleMesh& m = job.mesh;
+  write_binary_file((dir / kBlenderPositionsFile).string(), m.positions.data(),
+                    m.positions.size() * sizeof(float));
+  write_binary_file((dir / kBlenderNormalsFile).string(), m.normals.data(),
+                    m.normals.size() * sizeof(float));
+  write_binary_file((dir / kBlenderTrianglesFile).string(), m.triangles.data(),
+                    m.triangles.size() * sizeof(unsigned));
+  write_text_file((dir / kBlenderJobFile).string(), job.job_json);
+  out << fmt::format(
+      "wrote {} and its mesh ({} vertices, {} triangles); render with\n  blender -b "
+      "--factory-startup -noaudio --python-exit-code 1 --python {}/harness/blender_render.py -- "
+      "{} out.exr\n",
+      (dir / kBlenderJobFile).string(), m.vertex_count(), m.triangle_count(), kSourceDir,
+      (dir / kBlenderJobFile).string());
+  return kExitOk;
+}
+
+// albedo * E / pi of the scene stored in a Penumbra EXR.
+Image read_image_checked(const std::string& path) {
+  if (!fs::is_regular_file(path)) throw UsageError(fmt::format("{}: no such file", path));
+  return read_image(path);
+}
+
+// Copies the analysis channels of `geometry` onto `image` (same size).
+Image with_channels_of(const Image& image, const Image& geometry) {
+  Image out = geometry;
+  const std::size_t nc = out.channels.size();
+  const char* names[4] = {"R", "G", "B", "A"};
+  for (int c = 0; c < 4; ++c) {
+    const int from = image.channel_index(names[c]);
+    if (from < 0) throw UsageError(fmt::format("an image has no {} channel", names[c]));
+    for (int y = 0; y < out.height; ++y)
+      for (int x = 0; x < out.width; ++x)
+        out.pixels[(std::size_t(y) * out.width + x) * nc + c] = image.at(x, y, from);
+  }
+  return out;
+}
+
+double radiance_scale_of(const std::string& path) {
+  const std::string text = read_image_attribute(path, "penumbra:scene");
+  if (text.empty())
+    throw UsageError(fmt::format(
+        "{}: no penumbra:scene metadata to take albedo * E / pi from; give --scale", path));
+  const Scene scene = scene_from_json(json::parse(text), path + " (penumbra:scene metadata)");
+  return radiance_scale(scene);
+}
+
+int command_compare(const CompareArgs& a, std::ostream& out) {
+  const Image reference = read_image_checked(a.reference);
+  const Image test = read_image_checked(a.test);
+  const double scale = a.scale > 0.0 ? a.scale : radiance_scale_of(a.reference);
+  if (reference.width != test.width || reference.height != test.height)
+    throw UsageError(fmt::format("{} is {}x{} but {} is {}x{}", a.reference, reference.width,
+                                 reference.height, a.test, test.width, test.height));
+  if (reference.channel_index("analysis.theta") < 0)
+    throw UsageError(
+        fmt::format("{}: no analysis.theta channel (render it with penumbra)", a.reference));
+  const ProfileOptions options;
+  const Profile pr = terminator_profile(reference, scale, options);
+  // theta comes from the reference: both images show the same base points.
+  Image test_with_theta = test;
+  if (test.channel_index("analysis.theta") < 0) test_with_theta = with_channels_of(test, reference);
+  const Profile pt = terminator_profile(test_with_theta, scale, options);
+  const ProfileMetrics pm = compare_profiles(pt, pr, options);
+  const ImageMetrics im = compare_images(test, reference);
+  const bool nonfinite = im.nonfinite > 0;
+  const bool over = a.max_rmse >= 0.0 && !(pm.rmse_overall <= a.max_rmse);
+  if (a.json) {
+    out << json{{"reference", a.reference},
+                {"test", a.test},
+                {"radiance_scale", scale},
+                {"radiance_scale_unit", "W m^-2 sr^-1 (albedo * E / pi)"},
+                {"profile", profile_metrics_json(pm)},
+                {"image", image_metrics_json(im)},
+                {"pass", !nonfinite && !over}}
+               .dump(2)
+        << "\n";
+  } else {
+    out << fmt::format("reference {}\ntest      {}\n", a.reference, a.test);
+    out << fmt::format(
+        "profile (1-degree theta bins, fraction of albedo*E/pi = {:.6g} W m^-2 "
+        "sr^-1; {} common bins):\n",
+        scale, pm.common_bins);
+    out << fmt::format("  RMSE terminator [60,100) deg  {:.6f}\n", pm.rmse_terminator);
+    out << fmt::format("  RMSE overall                  {:.6f}\n", pm.rmse_overall);
+    out << fmt::format("  max error terminator          {:.6f}\n", pm.max_error);
+    out << fmt::format("  largest bin step              {:.6f} (reference {:.6f})\n", pm.max_step,
+                       pm.reference_max_step);
+    out << fmt::format(
+        "  terminator position (L<{})  {:.3f} deg (reference {:.3f}, error {:+.3f})\n", kDarkLevel,
+        pm.position, pm.reference_position, pm.position_error);
+    out << fmt::format("  transition width 90%->10%     {:.3f} deg (reference {:.3f})\n", pm.width,
+                       pm.reference_width);
+    out << fmt::format("  lit-region bias (<60 deg)     {:+.6f}\n", pm.lit_bias);
+    out << fmt::format("image (pixels fully covered in both: {}):\n", im.pixels);
+    out << fmt::format("  mask IoU (alpha>=0.5)         {:.6f}\n", im.mask_iou);
+    out << fmt::format("  RMSE                          {:.6g} W m^-2 sr^-1\n", im.rmse);
+    out << fmt::format("  max error                     {:.6g} W m^-2 sr^-1\n", im.max_error);
+    out << fmt::format("  mean error (test-reference)   {:+.6g} W m^-2 sr^-1\n", im.mean_error);
+    out << fmt::format("  NaN/Inf values                {}\n", im.nonfinite);
+    if (over)
+      out << fmt::format("FAIL: profile RMSE {:.6f} above --max-profile-rmse {}\n", pm.rmse_overall,
+                         a.max_rmse);
+  }
+  return nonfinite || over ? kExitThreshold : kExitOk;
+}
+
+int command_calibrate(const CalibrationOptions& options, bool quiet, std::ostream& out,
+                      std::ostream& err) {
+  CalibrationOptions o = options;
+  if (!quiet) o.log = [&](const std::string& line) { err << line << "\n" << std::flush; };
+  const CalibrationResult result = run_calibration(o);
+  write_calibration_reports(result, o.output_dir);
+  out << calibration_table(result);
+  out << fmt::format("wrote {0}/calibration.md, {0}/calibration.json, {0}/calibration.csv\n",
+                     o.output_dir);
+  if (!result.all_rendered()) {
+    err << "penumbra: failed: some renders did not finish (see above and the logs in "
+        << o.output_dir << "/renders)\n";
+    return kExitFailure;
+  }
+  if (!result.all_pass()) {
+    err << "penumbra: calibration bounds missed (FAIL rows above)\n";
+    return kExitThreshold;
   }
   return kExitOk;
 }
@@ -203,7 +410,7 @@ int command_bench(int size, int spp, std::ostream& out) {
 int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
   CLI::App app{"Penumbra: shadow-terminator laboratory (reference evaluator)", "penumbra"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", kVersion);
+  app.set_version_flag("--version", kPenumbraVersion);
   app.footer(
       "Exit status: 0 success; 1 a run failed (renderer or internal error); 2 bad input "
       "(usage, scene file, output path).");
@@ -230,6 +437,57 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
                          "override a scene value: /json/pointer=VALUE (repeatable)");
   render_cmd->add_flag("-q,--quiet", r.quiet, "no progress or summary");
 
+  render_cmd->add_option("--renderer", r.renderer, "evaluator (default), povray or blender");
+  render_cmd->add_option("--timeout", r.timeout, "seconds an external renderer may run")
+      ->check(CLI::PositiveNumber);
+
+  ExportArgs x;
+  CLI::App* export_cmd =
+      app.add_subcommand("export", "write a scene for POV-Ray (.pov) or Blender (job + mesh)");
+  export_cmd->add_option("--to", x.to, "povray or blender")
+      ->required()
+      ->check(CLI::IsMember({"povray", "blender"}));
+  export_cmd->add_option("scene", x.scene, "scene JSON file")->required();
+  export_cmd->add_option("-o,--output", x.output, "output folder")->required();
+  export_cmd->add_option("--set", x.sets, "override a scene value: /json/pointer=VALUE");
+
+  CompareArgs c;
+  CLI::App* compare_cmd = app.add_subcommand(
+      "compare", "terminator-profile and image metrics of TEST against REFERENCE");
+  compare_cmd->add_option("reference", c.reference, "reference EXR (e.g. displacement)")
+      ->required();
+  compare_cmd->add_option("test", c.test, "EXR to compare")->required();
+  compare_cmd->add_flag("--json", c.json, "print JSON");
+  compare_cmd
+      ->add_option("--scale", c.scale,
+                   "albedo*E/pi in W m^-2 sr^-1 (default: from the reference's metadata)")
+      ->check(CLI::PositiveNumber);
+  compare_cmd
+      ->add_option("--max-profile-rmse", c.max_rmse,
+                   "exit 3 when the overall profile RMSE exceeds this")
+      ->check(CLI::NonNegativeNumber);
+
+  CalibrationOptions cal;
+  cal.scenes_dir = std::string(kSourceDir) + "/scenes/calibration";
+  cal.output_dir = "results/calibration";
+  cal.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  bool cal_quiet = false;
+  CLI::App* calibrate_cmd = app.add_subcommand(
+      "calibrate", "render the calibration set with all three renderers and compare them");
+  calibrate_cmd->add_option("-o,--output", cal.output_dir, "output folder")->capture_default_str();
+  calibrate_cmd->add_option("--scenes", cal.scenes_dir, "folder with cylinder.json and sphere.json")
+      ->capture_default_str();
+  calibrate_cmd->add_option("--jobs", cal.jobs, "renders in parallel (default: cores)")
+      ->check(CLI::Range(1, 256));
+  calibrate_cmd->add_option("--timeout", cal.timeout_s, "seconds per external render")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  calibrate_cmd->add_option("--blender-spp", cal.blender_spp, "Cycles samples per pixel")
+      ->check(CLI::Range(1, 65536))
+      ->capture_default_str();
+  calibrate_cmd->add_option("--set", cal.sets, "override a value of both base scenes");
+  calibrate_cmd->add_flag("-q,--quiet", cal_quiet, "no per-render lines");
+
   int bench_size = 512, bench_spp = 16;
   CLI::App* bench = app.add_subcommand("bench", "print evaluator throughput figures");
   bench->add_option("--size", bench_size, "image size in pixels")->check(CLI::Range(16, 4096));
@@ -250,13 +508,25 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   try {
     if (*methods) return command_methods(methods_json, out);
     if (*render_cmd) return command_render(r, out, err);
+    if (*export_cmd) return command_export(x, out);
+    if (*compare_cmd) return command_compare(c, out);
+    if (*calibrate_cmd) return command_calibrate(cal, cal_quiet, out, err);
     if (*bench) return command_bench(bench_size, bench_spp, out);
   } catch (const InputError& e) {
     err << "penumbra: error: " << e.what() << "\n";
     return kExitBadInput;
+  } catch (const ExportError& e) {
+    err << "penumbra: error: cannot export: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const UsageError& e) {
+    err << "penumbra: error: " << e.what() << " (see penumbra --help)\n";
+    return kExitBadInput;
   } catch (const OutputError& e) {
     err << "penumbra: error: " << e.what() << "\n";
     return kExitBadInput;
+  } catch (const RendererError& e) {
+    err << "penumbra: failed: " << e.what() << "\n";
+    return kExitFailure;
   } catch (const std::exception& e) {
     err << "penumbra: failed: " << e.what() << "\n";
     return kExitFailure;

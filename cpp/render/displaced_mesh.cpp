@@ -1,21 +1,18 @@
 #include "render/displaced_mesh.h"
 
+#include "core/grid_mesh.h"
+
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
-#include <tbb/parallel_for.h>
 
 namespace penumbra {
 
-// Grid layout (primitive ids are decoded, not stored):
-//  cylinder side: vertex (i, j) = j*nu + i, i in [0, nu) wrapping around,
-//    j in [0, nv]; quad (i, j) -> primitives 2 (j nu + i) + {0, 1};
-//    caps, if any, follow as two fans around a centre vertex.
-//  sphere: pole 0, rings j = 1..nv-1 at 1 + (j-1) nu + i, pole last;
-//    primitives: top fan [0, nu), quads, bottom fan.
+// Primitive ids are decoded with the layout documented in core/grid_mesh.h.
 struct DisplacedMesh::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
@@ -25,11 +22,8 @@ struct DisplacedMesh::Impl {
   unsigned nu = 0, nv = 0;
   unsigned side_primitives = 0;
 
-  double u_at(unsigned i) const { return 2.0 * kPi * i / nu; }
-  double v_at(unsigned j) const {
-    return shape.type == ShapeType::kSphere ? kPi * j / nv
-                                            : -0.5 * shape.height + shape.height * j / nv;
-  }
+  double u_at(unsigned i) const { return grid_u({nu, nv}, i); }
+  double v_at(unsigned j) const { return grid_v(shape, {nu, nv}, j); }
 
   // (u, v) of the three corners of a side primitive, in Embree's vertex order.
   void corners(unsigned prim, double u[3], double v[3]) const {
@@ -64,11 +58,6 @@ struct DisplacedMesh::Impl {
     u[0] = 0.5 * (u_at(i) + u_at(i + 1)), v[0] = kPi;
     u[1] = u_at(i + 1), v[1] = v_at(nv - 1), u[2] = u_at(i), v[2] = v_at(nv - 1);
   }
-
-  Vec3 vertex(double u, double v) const {
-    const SurfaceGeometry g = surface_at(shape, u, v);
-    return displaced_point(g, amplitude, evaluate_height(height, g.p));
-  }
 };
 
 DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>()) {
@@ -78,26 +67,12 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
   m.height = scene.height.function;
   const double e = scene.displacement.edge_length;
   const double reach = m.amplitude * max_abs_height(m.height);
-  const double r = m.shape.radius + reach;
-  const bool sphere = m.shape.type == ShapeType::kSphere;
-  m.nu = std::max(8u, static_cast<unsigned>(std::ceil(2.0 * kPi * r / e)));
-  m.nv = sphere ? std::max(4u, static_cast<unsigned>(std::ceil(kPi * r / e)))
-                : std::max(1u, static_cast<unsigned>(std::ceil(m.shape.height / e)));
-  const unsigned nu = m.nu, nv = m.nv;
-  const bool caps = !sphere && m.shape.caps;
-
-  std::size_t vertex_count, triangle_count;
-  if (sphere) {
-    vertex_count = 2 + std::size_t(nu) * (nv - 1);
-    m.side_primitives = nu + 2 * nu * (nv - 2) + nu;
-    triangle_count = m.side_primitives;
-  } else {
-    vertex_count = std::size_t(nu) * (nv + 1) + (caps ? 2 : 0);
-    m.side_primitives = 2 * nu * nv;
-    triangle_count = m.side_primitives + (caps ? 2 * nu : 0);
-  }
-  vertices_ = vertex_count;
-  triangles_ = triangle_count;
+  const GridResolution resolution = grid_resolution(m.shape, e, reach);
+  m.nu = resolution.nu, m.nv = resolution.nv;
+  const TriangleMesh mesh = make_grid_mesh(m.shape, m.height, m.amplitude, resolution);
+  m.side_primitives = static_cast<unsigned>(mesh.side_triangles);
+  vertices_ = mesh.vertex_count();
+  triangles_ = mesh.triangle_count();
   const double kappa =
       1.0 / std::max(m.shape.radius - reach, 1e-12) + m.amplitude * max_hessian_norm(m.height);
   shadow_offset_ = e * e * kappa / 8.0 + 1e-9 * m.shape.radius;
@@ -108,71 +83,19 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
   rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST);
   RTCGeometry geometry = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
   auto* positions = static_cast<float*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertex_count));
+      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertices_));
   auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangle_count));
+      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles_));
   if (!positions || !indices) throw std::runtime_error("Embree: cannot allocate the mesh buffers");
-
-  auto put = [&](std::size_t index, const Vec3& p) {
-    positions[3 * index] = static_cast<float>(p.x);
-    positions[3 * index + 1] = static_cast<float>(p.y);
-    positions[3 * index + 2] = static_cast<float>(p.z);
-  };
-  auto tri = [&](std::size_t t, unsigned a, unsigned b, unsigned c) {
-    indices[3 * t] = a, indices[3 * t + 1] = b, indices[3 * t + 2] = c;
-  };
-
-  if (sphere) {
-    put(0, m.vertex(0.0, 0.0));
-    put(vertex_count - 1, m.vertex(0.0, kPi));
-    tbb::parallel_for(1u, nv, [&](unsigned j) {
-      for (unsigned i = 0; i < nu; ++i)
-        put(1 + std::size_t(j - 1) * nu + i, m.vertex(m.u_at(i), m.v_at(j)));
-    });
-    auto ring = [&](unsigned j, unsigned i) { return 1 + (j - 1) * nu + (i % nu); };
-    const unsigned south = static_cast<unsigned>(vertex_count - 1);
-    tbb::parallel_for(0u, nu, [&](unsigned i) {
-      tri(i, 0, ring(1, i), ring(1, i + 1));
-      tri(nu + 2 * nu * (nv - 2) + i, south, ring(nv - 1, i + 1), ring(nv - 1, i));
-    });
-    tbb::parallel_for(1u, nv - 1, [&](unsigned j) {
-      for (unsigned i = 0; i < nu; ++i) {
-        const std::size_t t = nu + 2 * (std::size_t(j - 1) * nu + i);
-        tri(t, ring(j, i), ring(j, i + 1), ring(j + 1, i + 1));
-        tri(t + 1, ring(j, i), ring(j + 1, i + 1), ring(j + 1, i));
-      }
-    });
-  } else {
-    tbb::parallel_for(0u, nv + 1, [&](unsigned j) {
-      for (unsigned i = 0; i < nu; ++i)
-        put(std::size_t(j) * nu + i, m.vertex(m.u_at(i), m.v_at(j)));
-    });
-    auto at = [&](unsigned j, unsigned i) { return j * nu + (i % nu); };
-    tbb::parallel_for(0u, nv, [&](unsigned j) {
-      for (unsigned i = 0; i < nu; ++i) {
-        const std::size_t t = 2 * (std::size_t(j) * nu + i);
-        tri(t, at(j, i), at(j, i + 1), at(j + 1, i + 1));
-        tri(t + 1, at(j, i), at(j + 1, i + 1), at(j + 1, i));
-      }
-    });
-    if (caps) {
-      const unsigned bottom = nu * (nv + 1), top = bottom + 1;
-      put(bottom, m.shape.center - m.shape.axis * (0.5 * m.shape.height));
-      put(top, m.shape.center + m.shape.axis * (0.5 * m.shape.height));
-      for (unsigned i = 0; i < nu; ++i) {
-        tri(m.side_primitives + i, bottom, at(0, i + 1), at(0, i));
-        tri(m.side_primitives + nu + i, top, at(nv, i), at(nv, i + 1));
-      }
-    }
-  }
+  std::copy(mesh.positions.begin(), mesh.positions.end(), positions);
+  std::copy(mesh.triangles.begin(), mesh.triangles.end(), indices);
   rtcCommitGeometry(geometry);
   rtcAttachGeometry(m.scene, geometry);
   rtcReleaseGeometry(geometry);
   rtcCommitScene(m.scene);
   if (rtcGetDeviceError(m.device) != RTC_ERROR_NONE)
-    throw std::runtime_error(
-        fmt::format("Embree could not build the displaced mesh ({} triangles): out of memory?",
-                    triangle_count));
+    throw std::runtime_error(fmt::format(
+        "Embree could not build the displaced mesh ({} triangles): out of memory?", triangles_));
 }
 
 DisplacedMesh::~DisplacedMesh() {

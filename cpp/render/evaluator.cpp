@@ -27,14 +27,6 @@ int Image::channel_index(const std::string& name) const {
   return -1;
 }
 
-void strata(int spp, int* nx, int* ny) {
-  int best = 1;
-  for (int a = 1; a * a <= spp; ++a)
-    if (spp % a == 0) best = a;
-  *nx = best;
-  *ny = spp / best;
-}
-
 namespace {
 
 using Clock = std::chrono::steady_clock;

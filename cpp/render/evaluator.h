@@ -52,8 +52,4 @@ struct RenderOptions {
 
 Image render(const Scene& scene, const RenderOptions& options = {}, RenderStats* stats = nullptr);
 
-// Stratification of spp samples into nx * ny strata, nx <= ny, as square as
-// spp allows (16 -> 4x4, 8 -> 2x4, 7 -> 1x7).
-void strata(int spp, int* nx, int* ny);
-
 }  // namespace penumbra

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
@@ -85,6 +86,31 @@ void write_preview_png(const Image& image, const std::string& path) {
         fmt::format("{}: colour conversion failed: {}", path, encoded.geterror()));
   encoded.set_write_format(OIIO::TypeDesc::UINT8);
   write_buffer(encoded, path);
+}
+
+void write_binary_file(const std::string& path, const void* data, std::size_t bytes) {
+  const std::string temporary = temporary_name(path);
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
+    out.flush();
+    if (!out) {
+      std::error_code ec;
+      fs::remove(temporary, ec);
+      throw OutputError(fmt::format("{}: cannot write: {}", path, std::strerror(errno)));
+    }
+  }
+  commit(temporary, path);
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+  write_binary_file(path, text.data(), text.size());
+}
+
+std::string read_image_attribute(const std::string& path, const std::string& name) {
+  auto input = OIIO::ImageInput::open(path);
+  if (!input) throw std::runtime_error(fmt::format("{}: cannot read: {}", path, OIIO::geterror()));
+  return input->spec().get_string_attribute(name);
 }
 
 Image read_image(const std::string& path) {

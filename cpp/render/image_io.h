@@ -26,6 +26,11 @@ void write_exr(const Image& image, const std::string& path,
                const std::vector<std::pair<std::string, std::string>>& metadata = {});
 // 8-bit sRGB PNG of R, G, B, A for a person to look at (values clamped to [0,1]).
 void write_preview_png(const Image& image, const std::string& path);
+// Any file, through the same temporary name and rename.
+void write_binary_file(const std::string& path, const void* data, std::size_t bytes);
+void write_text_file(const std::string& path, const std::string& text);
+// A string attribute of an image file's header ("" if absent).
+std::string read_image_attribute(const std::string& path, const std::string& name);
 // Reads any file OpenImageIO can read, all channels as float.
 Image read_image(const std::string& path);
 

@@ -16,6 +16,7 @@
 namespace penumbra {
 
 inline constexpr int kSceneFormatVersion = 1;
+inline constexpr const char* kPenumbraVersion = "0.2.0";
 inline constexpr int kMaxImageSize = 16384;
 
 enum class Projection { kOrthographic, kPerspective };
@@ -37,6 +38,17 @@ struct Camera {
   std::uint64_t seed = 0;
   bool jitter = true;  // false: stratum centres (deterministic pixel grid)
 };
+
+// Stratification of spp samples into nx * ny strata, nx <= ny, as square as
+// spp allows (16 -> 4x4, 8 -> 2x4, 7 -> 1x7). Samples sit at stratum centres
+// when the camera does not jitter; POV-Ray renders exactly those.
+inline void strata(int spp, int* nx, int* ny) {
+  int best = 1;
+  for (int a = 1; a * a <= spp; ++a)
+    if (spp % a == 0) best = a;
+  *nx = best;
+  *ny = spp / best;
+}
 
 enum class LightType { kDistant, kPoint };
 

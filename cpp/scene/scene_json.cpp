@@ -98,7 +98,8 @@ class Reader {
     std::string names;
     for (const auto& [name, value] : options) {
       if (v.is_string() && v.get<std::string>() == name) return value;
-      names += (names.empty() ? "" : ", ") + fmt::format("\"{}\"", name);
+      if (!names.empty()) names.append(", ");
+      names.append("\"").append(name).append("\"");
     }
     fail(key, fmt::format("expected one of {}, got {}", names, describe(v)));
   }

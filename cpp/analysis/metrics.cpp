@@ -1,0 +1,186 @@
+#include "analysis/metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace penumbra {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+int require_channel(const Image& image, const char* name) {
+  const int c = image.channel_index(name);
+  if (c < 0) throw std::invalid_argument(fmt::format("the image has no {} channel", name));
+  return c;
+}
+
+float radiance(const Image& image, int x, int y, const int rgb[3]) {
+  return (image.at(x, y, rgb[0]) + image.at(x, y, rgb[1]) + image.at(x, y, rgb[2])) / 3.0f;
+}
+
+bool usable(const Profile& a, std::size_t k, std::uint64_t min_count) {
+  return k < a.count.size() && a.count[k] >= min_count;
+}
+
+}  // namespace
+
+double radiance_scale(const Scene& scene) {
+  double e = scene.light.irradiance;
+  if (scene.light.type == LightType::kPoint)
+    e = scene.light.intensity / length_squared(scene.light.position - scene.shape.center);
+  return scene.material.albedo * e / kPi;
+}
+
+Profile terminator_profile(const Image& image, double radiance_scale,
+                           const ProfileOptions& options) {
+  const int rgb[3] = {require_channel(image, "R"), require_channel(image, "G"),
+                      require_channel(image, "B")};
+  const int alpha = require_channel(image, "A");
+  const int theta = require_channel(image, "analysis.theta");
+  Profile p;
+  p.bin_degrees = options.bin_degrees;
+  const std::size_t bins = static_cast<std::size_t>(std::ceil(180.0 / options.bin_degrees));
+  std::vector<double> sum(bins, 0.0);
+  p.count.assign(bins, 0);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      if (image.at(x, y, alpha) < options.min_coverage) continue;
+      const double t = image.at(x, y, theta);
+      const double v = radiance(image, x, y, rgb);
+      if (!std::isfinite(t) || !std::isfinite(v)) continue;
+      const auto k =
+          std::min(bins - 1, static_cast<std::size_t>(std::max(0.0, t) / options.bin_degrees));
+      sum[k] += v;
+      ++p.count[k];
+    }
+  p.value.assign(bins, 0.0);
+  for (std::size_t k = 0; k < bins; ++k)
+    if (p.count[k]) p.value[k] = sum[k] / double(p.count[k]) / radiance_scale;
+  return p;
+}
+
+double crossing(const Profile& p, double level, std::uint64_t min_count, double from_deg) {
+  // The last downward crossing: bump and displacement profiles oscillate in
+  // the lit region (a grating's dark flanks), so the first dip below the
+  // level is not the terminator; the last bin still above it is.
+  double result = kNaN, last_theta = 0.0, last_value = 0.0;
+  bool have_last = false;
+  for (std::size_t k = 0; k < p.value.size(); ++k) {
+    if (!usable(p, k, min_count) || p.centre(k) < from_deg) continue;
+    const double v = p.value[k], t = p.centre(k);
+    if (have_last && last_value >= level && v < level)
+      result = last_theta + (t - last_theta) * (last_value - level) / (last_value - v);
+    last_theta = t, last_value = v, have_last = true;
+  }
+  return result;
+}
+
+namespace {
+
+// Theta of the 90 % and 10 % points of the fall from the value at 60 degrees.
+double transition_width(const Profile& p, std::uint64_t min_count) {
+  double l60 = kNaN;
+  for (std::size_t k = 0; k < p.value.size(); ++k)
+    if (usable(p, k, min_count) && p.centre(k) >= kLitEnd) {
+      l60 = p.value[k];
+      break;
+    }
+  if (!(l60 > 0.0)) return kNaN;
+  return crossing(p, 0.1 * l60, min_count, kLitEnd) - crossing(p, 0.9 * l60, min_count, kLitEnd);
+}
+
+}  // namespace
+
+ProfileMetrics compare_profiles(const Profile& test, const Profile& reference,
+                                const ProfileOptions& options) {
+  if (test.bin_degrees != reference.bin_degrees)
+    throw std::invalid_argument("profiles with different bin widths");
+  ProfileMetrics m;
+  double sum_all = 0.0, sum_term = 0.0, sum_lit = 0.0;
+  std::size_t n_all = 0, n_term = 0, n_lit = 0;
+  const std::size_t bins = std::min(test.value.size(), reference.value.size());
+  for (std::size_t k = 0; k < bins; ++k) {
+    if (!usable(test, k, options.min_count) || !usable(reference, k, options.min_count)) continue;
+    const double d = test.value[k] - reference.value[k], t = test.centre(k);
+    sum_all += d * d, ++n_all;
+    if (t >= kTerminatorBegin && t < kTerminatorEnd) {
+      sum_term += d * d, ++n_term;
+      m.max_error = std::max(m.max_error, std::abs(d));
+    }
+    if (t < kLitEnd) sum_lit += d, ++n_lit;
+  }
+  m.common_bins = n_all;
+  m.rmse_overall = n_all ? std::sqrt(sum_all / double(n_all)) : kNaN;
+  m.rmse_terminator = n_term ? std::sqrt(sum_term / double(n_term)) : kNaN;
+  if (!n_term) m.max_error = kNaN;
+  m.lit_bias = n_lit ? sum_lit / double(n_lit) : kNaN;
+  auto max_step = [&](const Profile& p) {
+    double step = 0.0;
+    for (std::size_t k = 0; k + 1 < p.value.size(); ++k) {
+      if (!usable(p, k, options.min_count) || !usable(p, k + 1, options.min_count)) continue;
+      const double t = p.centre(k);
+      if (t >= kTerminatorBegin && t + p.bin_degrees < kTerminatorEnd)
+        step = std::max(step, std::abs(p.value[k + 1] - p.value[k]));
+    }
+    return step;
+  };
+  m.max_step = max_step(test);
+  m.reference_max_step = max_step(reference);
+  m.position = crossing(test, kDarkLevel, options.min_count);
+  m.reference_position = crossing(reference, kDarkLevel, options.min_count);
+  m.position_error = m.position - m.reference_position;
+  m.width = transition_width(test, options.min_count);
+  m.reference_width = transition_width(reference, options.min_count);
+  return m;
+}
+
+ImageMetrics compare_images(const Image& test, const Image& reference, double min_coverage) {
+  if (test.width != reference.width || test.height != reference.height)
+    throw std::invalid_argument(fmt::format("image sizes differ: {}x{} and {}x{}", test.width,
+                                            test.height, reference.width, reference.height));
+  const int trgb[3] = {require_channel(test, "R"), require_channel(test, "G"),
+                       require_channel(test, "B")};
+  const int rrgb[3] = {require_channel(reference, "R"), require_channel(reference, "G"),
+                       require_channel(reference, "B")};
+  const int ta = require_channel(test, "A"), ra = require_channel(reference, "A");
+  ImageMetrics m;
+  std::size_t both = 0, either = 0;
+  double sum_sq = 0.0, sum = 0.0, sum_ref = 0.0;
+  for (int y = 0; y < test.height; ++y)
+    for (int x = 0; x < test.width; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        if (!std::isfinite(test.at(x, y, trgb[c]))) ++m.nonfinite;
+        if (!std::isfinite(reference.at(x, y, rrgb[c]))) ++m.nonfinite;
+      }
+      const float at = test.at(x, y, ta), ar = reference.at(x, y, ra);
+      if (!std::isfinite(at) || !std::isfinite(ar)) {
+        ++m.nonfinite;
+        continue;
+      }
+      both += (at >= 0.5f && ar >= 0.5f);
+      either += (at >= 0.5f || ar >= 0.5f);
+      if (at < min_coverage || ar < min_coverage) continue;
+      const double vt = radiance(test, x, y, trgb), vr = radiance(reference, x, y, rrgb);
+      if (!std::isfinite(vt) || !std::isfinite(vr)) continue;
+      const double d = vt - vr;
+      sum_sq += d * d, sum += d, sum_ref += vr;
+      m.max_error = std::max(m.max_error, std::abs(d));
+      m.peak = std::max(m.peak, vr);
+      ++m.pixels;
+    }
+  m.mask_iou = either ? double(both) / double(either) : 1.0;
+  if (m.pixels) {
+    m.rmse = std::sqrt(sum_sq / double(m.pixels));
+    m.mean_error = sum / double(m.pixels);
+    m.reference_mean = sum_ref / double(m.pixels);
+  } else {
+    m.rmse = m.max_error = m.mean_error = kNaN;
+  }
+  return m;
+}
+
+}  // namespace penumbra

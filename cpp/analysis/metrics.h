@@ -1,0 +1,87 @@
+// The terminator gradient and the metrics that compare renders (reference
+// sheet, section 7). Images are those every renderer produces: R G B A plus
+// the evaluator's analysis channels (analysis.theta in degrees).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "render/evaluator.h"
+#include "scene/scene.h"
+
+namespace penumbra {
+
+// Mean radiance per theta bin over fully covered pixels, divided by
+// albedo * E / pi, so that a smooth Lambertian surface gives cos(theta).
+// Bins are [k w, (k+1) w) degrees over [0, 180).
+struct Profile {
+  double bin_degrees = 1.0;
+  std::vector<double> value;         // dimensionless; 0 where count is 0
+  std::vector<std::uint64_t> count;  // pixels in the bin
+  double centre(std::size_t bin) const { return (double(bin) + 0.5) * bin_degrees; }
+};
+
+struct ProfileOptions {
+  double bin_degrees = 1.0;
+  double min_coverage = 0.999;  // alpha at or above this: the pixel is all object
+  // Bins with fewer pixels than this in either profile are left out of
+  // comparisons: a handful of pixels is pixel noise, not a gradient.
+  std::uint64_t min_count = 4;
+};
+
+// albedo * E / pi in W m^-2 sr^-1: the radiance of a Lambertian surface facing
+// the light. Point lights: E at the shape's centre.
+double radiance_scale(const Scene& scene);
+
+// `radiance_scale` = albedo * E / pi of the scene (W m^-2 sr^-1).
+Profile terminator_profile(const Image& image, double radiance_scale,
+                           const ProfileOptions& options = {});
+
+// Degrees: the terminator region of the reference sheet, and the lit region.
+inline constexpr double kTerminatorBegin = 60.0, kTerminatorEnd = 100.0;
+inline constexpr double kLitEnd = 60.0;
+// Level, as a fraction of albedo * E / pi, below which the profile counts as
+// dark: where it first crosses it is the terminator position.
+inline constexpr double kDarkLevel = 0.05;
+
+// Profile metrics of `test` against `reference`, over bins both populate.
+// Values are fractions of albedo * E / pi; angles in degrees. NaN where a
+// quantity is undefined (no common bins, or the profile never gets dark).
+struct ProfileMetrics {
+  double rmse_terminator = 0.0;  // RMS difference over [60, 100) degrees
+  double rmse_overall = 0.0;     // RMS difference over all common bins
+  double max_error = 0.0;        // largest |difference| in the terminator region
+  double max_step = 0.0;         // test: largest |L(k+1) - L(k)| in the terminator region
+  double reference_max_step = 0.0;
+  double position = 0.0;  // test: theta of the last fall below kDarkLevel
+  double reference_position = 0.0;
+  double position_error = 0.0;  // position - reference_position
+  double width = 0.0;           // test: theta(L = 0.1 L60) - theta(L = 0.9 L60)
+  double reference_width = 0.0;
+  double lit_bias = 0.0;  // mean(test - reference) over theta < 60 degrees
+  std::size_t common_bins = 0;
+};
+
+ProfileMetrics compare_profiles(const Profile& test, const Profile& reference,
+                                const ProfileOptions& options = {});
+
+// Theta (degrees) of the profile's last fall below `level` at or after
+// `from_deg`, linear between bin centres; NaN if it never falls below it.
+double crossing(const Profile& p, double level, std::uint64_t min_count, double from_deg = 0.0);
+
+// Image-space comparison inside the object.
+struct ImageMetrics {
+  double mask_iou = 0.0;        // |A>=0.5 in both| / |A>=0.5 in either|
+  double rmse = 0.0;            // W m^-2 sr^-1, pixels fully covered in both
+  double max_error = 0.0;       // W m^-2 sr^-1, same pixels
+  double mean_error = 0.0;      // mean(test - reference), same pixels
+  double reference_mean = 0.0;  // mean reference radiance over those pixels
+  double peak = 0.0;            // largest reference radiance over those pixels
+  std::size_t pixels = 0;       // pixels fully covered in both
+  std::size_t nonfinite = 0;    // NaN or Inf values in either image (a failure)
+};
+
+ImageMetrics compare_images(const Image& test, const Image& reference, double min_coverage = 0.999);
+
+}  // namespace penumbra

@@ -1,0 +1,52 @@
+// A shape's displaceable surface as a regular (u, v) grid of triangles, with
+// the exact (displaced) normal at every vertex. The ground-truth tracer and
+// the Blender export share it, so both see the same triangles.
+//
+// Layout (the tracer decodes primitive ids from it instead of storing them):
+//  cylinder side: vertex (i, j) = j*nu + i, i in [0, nu) wrapping around,
+//    j in [0, nv]; quad (i, j) -> triangles 2 (j nu + i) + {0, 1};
+//    caps, if any, follow as two fans (bottom, then top) around centre
+//    vertices, with their own rim vertices so that their normals stay flat.
+//  sphere: pole 0, rings j = 1..nv-1 at 1 + (j-1) nu + i, pole last;
+//    triangles: top fan [0, nu), quads, bottom fan.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "core/height.h"
+#include "core/shape.h"
+
+namespace penumbra {
+
+struct GridResolution {
+  unsigned nu = 0;  // segments around (azimuth)
+  unsigned nv = 0;  // segments along the axis (cylinder) or pole to pole (sphere)
+};
+
+// Segments so that no edge of the displaced grid is much longer than `edge`
+// (scene units, > 0); `reach` = A max|h|.
+GridResolution grid_resolution(const Shape& shape, double edge, double reach);
+
+struct TriangleMesh {
+  std::vector<float> positions;     // 3 per vertex, scene units
+  std::vector<float> normals;       // 3 per vertex, unit
+  std::vector<unsigned> triangles;  // 3 vertex indices per triangle
+  std::size_t side_triangles = 0;   // triangles before the cylinder caps
+  std::size_t vertex_count() const { return positions.size() / 3; }
+  std::size_t triangle_count() const { return triangles.size() / 3; }
+};
+
+// The displaced surface P + A h(P) N(P) (A = 0: the base surface), its
+// vertex normals the exact normals of that surface. Shape must carry its
+// frame (with_frame).
+TriangleMesh make_grid_mesh(const Shape& shape, const HeightFunction& height, double amplitude,
+                            GridResolution resolution);
+
+// Grid parameters of vertex column i and row j (see the layout above).
+inline double grid_u(GridResolution r, unsigned i) {
+  return 2.0 * kPi * i / r.nu;
+}
+double grid_v(const Shape& shape, GridResolution r, unsigned j);
+
+}  // namespace penumbra

@@ -1,0 +1,185 @@
+#include <cmath>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "export/export.h"
+#include "scene/scene_json.h"
+
+namespace penumbra {
+namespace {
+
+using nlohmann::json;
+
+json to_json(const Vec3& v) {
+  return json::array({v.x, v.y, v.z});
+}
+
+bool nearly(double a, double b) {
+  return std::abs(a - b) <= 1e-9 * std::max(std::abs(a), std::abs(b));
+}
+
+// Blender's camera looks down its local -Z with +Y up and +X right; Cycles
+// has no separate right/up lengths, so the camera must be orthonormal with
+// square pixels.
+json camera_json(const Camera& c) {
+  const double lr = length(c.right), lu = length(c.up), ld = length(c.direction);
+  const Vec3 x = to_blender(c.right / lr), y = to_blender(c.up / lu),
+             z = to_blender(-c.direction / ld);
+  if (std::abs(dot(c.right, c.up)) > 1e-9 * lr * lu ||
+      std::abs(dot(c.right, c.direction)) > 1e-9 * lr * ld ||
+      std::abs(dot(c.up, c.direction)) > 1e-9 * lu * ld)
+    throw ExportError("Blender export needs camera right, up and direction mutually orthogonal");
+  if (!nearly(lr / c.width, lu / c.height))
+    throw ExportError(
+        fmt::format("Blender export needs square pixels: |right|/width = {} but |up|/height = {}",
+                    lr / c.width, lu / c.height));
+  const Vec3 p = to_blender(c.position);
+  json camera = {
+      {"projection", c.projection == Projection::kOrthographic ? "orthographic" : "perspective"},
+      {"matrix_world",
+       json::array({json::array({x.x, y.x, z.x, p.x}), json::array({x.y, y.y, z.y, p.y}),
+                    json::array({x.z, y.z, z.z, p.z}), json::array({0.0, 0.0, 0.0, 1.0})})},
+      {"width", c.width},
+      {"height", c.height}};
+  if (c.projection == Projection::kOrthographic) {
+    // ortho_scale spans the larger image side (sensor fit AUTO).
+    camera["ortho_scale"] = std::max(lr, lu);
+  } else {
+    // Horizontal field: tan(fov/2) = (|right|/2) / |direction|.
+    constexpr double kSensor = 36.0;  // mm
+    camera["sensor_width"] = kSensor;
+    camera["lens"] = kSensor * ld / lr;
+  }
+  return camera;
+}
+
+}  // namespace
+
+std::vector<TerminatorMethod> methods_offered(const std::string& renderer,
+                                              Representation representation) {
+  if (renderer == "evaluator") {
+    std::vector<TerminatorMethod> all;
+    for (const MethodInfo& m : all_methods()) all.push_back(m.method);
+    return all;
+  }
+  if (renderer == "povray") return {TerminatorMethod::kNone};
+  if (renderer == "blender") {
+    if (representation == Representation::kBump)
+      return {TerminatorMethod::kNone, TerminatorMethod::kChiang2019,
+              TerminatorMethod::kShadingOffset};
+    return {TerminatorMethod::kNone, TerminatorMethod::kShadingOffset};
+  }
+  return {};
+}
+
+BlenderExport export_blender(const Scene& scene) {
+  const TerminatorMethod method = scene.terminator.method.method;
+  bool offered = false;
+  for (TerminatorMethod m : methods_offered("blender", scene.representation))
+    offered = offered || m == method;
+  if (!offered)
+    throw ExportError(fmt::format(
+        "Blender Cycles 3.4 offers `none`, `chiang2019` (bump only) and `shading-offset`; "
+        "`{}` is not available for the {} representation",
+        method_info(method).id, to_string(scene.representation)));
+  if (method == TerminatorMethod::kChiang2019 && scene.terminator.lobes != Lobes::kDiffuse)
+    throw ExportError(
+        "Cycles applies chiang2019 to diffuse lobes only: set /terminator/lobes to "
+        "\"diffuse\"");
+  if (scene.light.type != LightType::kDistant)
+    throw ExportError(
+        "Blender export supports distant lights only (a sun with angle 0); point lights carry "
+        "Blender's own power convention, which the evaluator does not model");
+  if (scene.material.specular_weight > 0.0)
+    throw ExportError("Blender export supports Lambertian materials only (specular_weight 0)");
+
+  BlenderExport out;
+  const HeightFunction& hf = scene.height.function;
+  const double amplitude = scene.height.amplitude;
+  const bool has_height = amplitude > 0.0 && !hf.terms.empty();
+  switch (scene.representation) {
+    case Representation::kSmooth:
+      out.shading = BlenderShading::kSmooth;
+      break;
+    case Representation::kBump:
+      out.shading = !has_height                               ? BlenderShading::kSmooth
+                    : method == TerminatorMethod::kChiang2019 ? BlenderShading::kBumpNode
+                                                              : BlenderShading::kBumpDisplacement;
+      break;
+    case Representation::kDisplacement:
+      out.shading = BlenderShading::kMesh;
+      break;
+  }
+
+  const bool displaced = out.shading == BlenderShading::kMesh && has_height;
+  const double reach = displaced ? amplitude * max_abs_height(hf) : 0.0;
+  const GridResolution res = grid_resolution(scene.shape, scene.displacement.edge_length, reach);
+  out.mesh = make_grid_mesh(scene.shape, hf, displaced ? amplitude : 0.0, res);
+  // Swap y and z (a mirror), then restore outward winding: Cycles flips the
+  // shading normal on back faces, so a reversed triangle would shade dark.
+  TriangleMesh& mesh = out.mesh;
+  for (std::size_t i = 0; i < mesh.positions.size(); i += 3) {
+    std::swap(mesh.positions[i + 1], mesh.positions[i + 2]);
+    std::swap(mesh.normals[i + 1], mesh.normals[i + 2]);
+  }
+  auto point = [&](unsigned v) {
+    return Vec3{mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]};
+  };
+  auto normal = [&](unsigned v) {
+    return Vec3{mesh.normals[3 * v], mesh.normals[3 * v + 1], mesh.normals[3 * v + 2]};
+  };
+  for (std::size_t t = 0; t < mesh.triangles.size(); t += 3) {
+    unsigned* tri = &mesh.triangles[t];
+    const Vec3 ng = cross(point(tri[1]) - point(tri[0]), point(tri[2]) - point(tri[0]));
+    if (dot(ng, normal(tri[0]) + normal(tri[1]) + normal(tri[2])) < 0.0) std::swap(tri[1], tri[2]);
+  }
+
+  json terms = json::array();
+  for (const SineTerm& t : hf.terms)
+    terms.push_back({{"k", to_json(to_blender(t.k))}, {"phase", t.phase}, {"weight", t.weight}});
+  const char* mode = "smooth";
+  switch (out.shading) {
+    case BlenderShading::kSmooth:
+      mode = "smooth";
+      break;
+    case BlenderShading::kBumpDisplacement:
+      mode = "bump-displacement";
+      break;
+    case BlenderShading::kBumpNode:
+      mode = "bump-node";
+      break;
+    case BlenderShading::kMesh:
+      mode = "mesh";
+      break;
+  }
+  const json job = {
+      {"format", "penumbra-blender-job"},
+      {"version", 1},
+      {"camera", camera_json(scene.camera)},
+      {"render", {{"samples", scene.camera.spp}, {"seed", scene.camera.seed % 2147483647u}}},
+      {"light",
+       {{"type", "sun"},
+        {"direction", to_json(to_blender(normalize(scene.light.direction)))},
+        {"strength", scene.light.irradiance}}},
+      {"mesh",
+       {{"positions", kBlenderPositionsFile},
+        {"normals", kBlenderNormalsFile},
+        {"triangles", kBlenderTrianglesFile},
+        {"vertex_count", mesh.vertex_count()},
+        {"triangle_count", mesh.triangle_count()}}},
+      {"material", {{"albedo", scene.material.albedo}}},
+      {"height",
+       {{"amplitude", has_height ? amplitude : 0.0},
+        {"combine", hf.combine == HeightCombine::kSum ? "sum" : "product"},
+        {"terms", terms}}},
+      {"shading",
+       {{"mode", mode},
+        {"shading_offset",
+         method == TerminatorMethod::kShadingOffset ? scene.terminator.method.shading_offset : 0.0},
+        {"geometry_offset", 0.0}}}};
+  out.job_json = job.dump(2) + "\n";
+  return out;
+}
+
+}  // namespace penumbra

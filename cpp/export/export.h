@@ -1,0 +1,85 @@
+// Exporters: the same scene for POV-Ray (SDL) and Blender Cycles (a JSON job
+// read by the fixed script harness/blender_render.py). Nothing from the scene
+// file is pasted into source text: SDL is assembled from numbers the exporter
+// formats itself and from fixed keywords; the scene's name only appears in a
+// comment, reduced to a safe character set.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/grid_mesh.h"
+#include "scene/scene.h"
+
+namespace penumbra {
+
+// The scene uses something the target renderer cannot express (a method it
+// does not implement, a point light, a glossy lobe...). Bad input.
+class ExportError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// ---- POV-Ray 3.7 ----------------------------------------------------------
+
+// POV-Ray renders supersample_x * supersample_y samples per pixel as an
+// image that many times larger, without anti-aliasing, at the evaluator's
+// stratum centres; the driver box-filters it back to width x height.
+struct PovrayExport {
+  std::string sdl;            // a self-contained .pov file
+  int width = 0, height = 0;  // final image, pixels
+  int supersample_x = 1, supersample_y = 1;
+  bool single_thread = false;  // isosurfaces: +WT1 keeps them deterministic
+  // Arguments after the executable, for input and output file names that the
+  // caller chose (plain names, POV-Ray runs in their folder).
+  std::vector<std::string> arguments(const std::string& input, const std::string& output,
+                                     int threads) const;
+};
+
+// POV-Ray has no shadow-terminator method: only `none` is accepted. Distant
+// lights only: POV-Ray's fade_power 2 is 2/(1+(d/D)^2), not 1/d^2.
+PovrayExport export_povray(const Scene& scene);
+
+// ---- Blender 3.4 Cycles ---------------------------------------------------
+
+// What the fixed script is asked to build (see harness/blender_render.py).
+enum class BlenderShading {
+  kSmooth,            // base mesh, no height
+  kBumpDisplacement,  // raw bump through the material's Displacement socket
+  kBumpNode,          // Bump node into the BSDF normal: Cycles' chiang2019
+  kMesh,              // the mesh is already displaced (ground truth)
+};
+
+struct BlenderExport {
+  std::string job_json;  // the job file's text
+  TriangleMesh mesh;     // in Blender coordinates, written beside the job
+  BlenderShading shading = BlenderShading::kSmooth;
+};
+
+// Methods Blender provides for each representation: smooth and displacement
+// take `none` or `shading-offset`; bump takes `none`, `chiang2019` (Bump
+// node) and `shading-offset` (object setting, on raw bump). Geometry offset
+// is always 0: the meshes are fine grids of the analytic surface.
+BlenderExport export_blender(const Scene& scene);
+// File names the job refers to (fixed: never derived from scene values).
+inline constexpr const char* kBlenderJobFile = "job.json";
+inline constexpr const char* kBlenderPositionsFile = "positions.f32";
+inline constexpr const char* kBlenderNormalsFile = "normals.f32";
+inline constexpr const char* kBlenderTrianglesFile = "triangles.u32";
+
+// POV-Ray/Penumbra coordinates (left-handed, y up) to Blender's
+// (right-handed, z up): swap y and z.
+inline Vec3 to_blender(const Vec3& p) {
+  return {p.x, p.z, p.y};
+}
+
+// Which methods each external renderer offers, for reports: "povray",
+// "blender". Empty when the renderer cannot render the representation.
+std::vector<TerminatorMethod> methods_offered(const std::string& renderer,
+                                              Representation representation);
+
+// A scene name reduced to [A-Za-z0-9 _.+-], at most 80 characters, for comments.
+std::string comment_safe(const std::string& text);
+
+}  // namespace penumbra

@@ -1,0 +1,33 @@
+// Running external renderers: PATH lookup, a wall-clock timeout, stdout and
+// stderr captured in a log file.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace penumbra {
+
+// Absolute path of `name` (a bare command name looked up in PATH, or a path
+// containing '/'), if it names an executable file.
+std::optional<std::string> find_executable(const std::string& name);
+
+struct ProcessResult {
+  int exit_code = -1;      // valid when neither timed out nor signalled
+  bool timed_out = false;  // killed after the timeout
+  int signal = 0;          // terminating signal, 0 if it exited
+  double seconds = 0.0;    // wall time
+  bool ok() const { return !timed_out && signal == 0 && exit_code == 0; }
+};
+
+// Runs `argv` (argv[0] an executable path) in folder `cwd` with stdin from
+// /dev/null and stdout + stderr appended to `log_path`. After `timeout_s`
+// seconds the process gets SIGTERM, then SIGKILL two seconds later. It stays
+// in our process group, so Ctrl-C on the terminal reaches it too.
+ProcessResult run_process(const std::vector<std::string>& argv, const std::string& cwd,
+                          const std::string& log_path, double timeout_s);
+
+// The last `lines` lines of a text file ("" if unreadable).
+std::string tail_lines(const std::string& path, int lines);
+
+}  // namespace penumbra

@@ -1,0 +1,68 @@
+// One entry point for the three renderers. Every renderer returns the same
+// kind of image: linear float R G B A (radiance in W m^-2 sr^-1, alpha =
+// coverage), the scene camera's size and orientation, plus the analysis
+// channels of the evaluator's geometry pass for the same camera (the pixels
+// align, so theta and deviation are those of the same base-surface points).
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "render/evaluator.h"
+#include "scene/scene.h"
+
+namespace penumbra {
+
+enum class RendererKind { kEvaluator, kPovray, kBlender };
+
+const char* to_string(RendererKind r);
+std::optional<RendererKind> renderer_from_id(const std::string& id);
+const std::vector<RendererKind>& all_renderers();
+// The Debian package that provides an external renderer.
+const char* debian_package(RendererKind r);
+
+// An external renderer is missing, failed, or timed out. what() says which,
+// names the log and quotes its last lines.
+class RendererError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct RenderSettings {
+  double timeout_s = 600.0;  // per external render, wall clock
+  int threads = 0;           // per render; 0: all cores
+  // Executable to run instead of `povray` / `blender` from PATH (tests point
+  // these at fakes; users at a self-built renderer). Env: PENUMBRA_POVRAY,
+  // PENUMBRA_BLENDER.
+  std::string executable;
+  // Blender: the fixed script; default <source>/harness/blender_render.py or
+  // PENUMBRA_BLENDER_SCRIPT.
+  std::string blender_script;
+  // Stdout and stderr of the external renderer go here (required for external
+  // renderers); the work folder is created beside it and removed on success.
+  std::string log_path;
+  RenderOptions progress;  // evaluator progress
+};
+
+struct RendererRun {
+  Image image;
+  RenderStats stats;              // the evaluator's, for the evaluator
+  double seconds = 0.0;           // wall time of the external process (or the evaluator)
+  double geometry_seconds = 0.0;  // the evaluator's geometry pass, external renderers
+};
+
+// Renders `scene` with `renderer`. Throws ExportError (the scene cannot be
+// expressed: bad input) or RendererError (the renderer failed).
+RendererRun render_with(RendererKind renderer, const Scene& scene, const RenderSettings& settings);
+
+// "POV-Ray 3.7.0.10" / "Blender 3.4.1" / "penumbra 0.2.0": the first line
+// the renderer prints for --version; part of cache keys.
+std::string renderer_version(RendererKind renderer, const RenderSettings& settings);
+
+// Mean over each nx x ny block of pixels: the box filter that turns a
+// supersampled render into the final image.
+Image box_downsample(const Image& image, int nx, int ny);
+
+}  // namespace penumbra

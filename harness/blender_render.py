@@ -1,0 +1,463 @@
+"""Render one Penumbra Blender job with Cycles (CPU) into a linear OpenEXR.
+
+Usage (Blender 3.4):
+
+    blender -b --factory-startup -noaudio --python-exit-code 1 \\
+        --python harness/blender_render.py -- JOB.json OUTPUT.exr [--threads N]
+
+JOB.json ("penumbra-blender-job" version 1, see SCHEMA) gives a camera, a sun,
+a triangle mesh in three raw little-endian files beside it (float32 positions,
+float32 unit vertex normals, uint32 triangles), a Diffuse albedo, a sum or
+product of sines h(P), and a shading mode: "smooth", "bump-displacement",
+"bump-node" or "mesh".
+
+The job is data only: it is validated strictly (unknown keys, wrong types and
+out-of-range values are errors naming the JSON path) and only its numbers and
+fixed enum strings are used.  Nothing from the job is ever executed or
+evaluated, and no string from it becomes Python code or a Blender name.
+
+The render is direct light only, unclamped, undenoised, box-filtered one pixel
+wide, with a fixed seed.  The EXR holds scene-linear premultiplied RGBA (alpha
+= coverage, first row = image top); it is written to a temporary name and
+renamed into place only on success.  On failure one line starting with
+"blender_render.py: " goes to stderr and the exit status is 1.
+"""
+
+import json
+import math
+import os
+import sys
+import time
+
+import bpy
+import numpy as np
+from mathutils import Matrix, Vector
+
+PROG = "blender_render.py"
+MAX_TERMS = 32
+INT32 = 2**31 - 1
+
+
+class JobError(Exception):
+    """Invalid job, input data or Blender; the message names the cause."""
+
+
+# --------------------------------------------------------------- validation
+
+POSITIVE = ("num", 0.0, None, True)
+UNIT = ("num", 0.0, 1.0)
+CAMERA = {"projection": ("enum", "orthographic", "perspective"),
+          "matrix_world": ("matrix",), "width": ("int", 1, 65536),
+          "height": ("int", 1, 65536)}
+SCHEMA = {
+    "format": ("enum", "penumbra-blender-job"),
+    "version": ("int", 1, 1),
+    "camera": ("switch", "projection", {
+        "orthographic": dict(CAMERA, ortho_scale=POSITIVE,
+                             **{"sensor_width?": POSITIVE}),
+        "perspective": dict(CAMERA, sensor_width=POSITIVE, lens=POSITIVE)}),
+    "render": {"samples": ("int", 1, 1 << 24), "seed": ("int", 0, INT32)},
+    "light": {"type": ("enum", "sun"), "direction": ("unit",),
+              "strength": ("num", 0.0, None)},
+    "mesh": {"positions": ("file",), "normals": ("file",),
+             "triangles": ("file",), "vertex_count": ("int", 3, INT32),
+             "triangle_count": ("int", 1, INT32 // 3)},
+    "material": {"albedo": UNIT},
+    "height": {"amplitude": ("num", 0.0, None),
+               "combine": ("enum", "sum", "product"),
+               "terms": ("list", MAX_TERMS,
+                         {"k": ("vec", 3), "phase": ("num",),
+                          "weight": ("num",)})},
+    "shading": {"mode": ("enum", "smooth", "bump-displacement",
+                         "bump-node", "mesh"),
+                "shading_offset": UNIT, "geometry_offset": UNIT},
+}
+
+
+def _is_num(v):
+    return (isinstance(v, (int, float)) and not isinstance(v, bool)
+            and math.isfinite(v))
+
+
+def _vec(v, path, n):
+    if not (isinstance(v, list) and len(v) == n and all(map(_is_num, v))):
+        raise JobError(f"{path}: expected an array of {n} numbers")
+    return v
+
+
+def check(v, spec, path=""):
+    """Check v against a SCHEMA entry; raises JobError naming the path."""
+    if isinstance(spec, dict):
+        if not isinstance(v, dict):
+            raise JobError(f"{path or '/'}: expected an object")
+        names = {k.rstrip("?"): k for k in spec}
+        for key in v:
+            if key not in names:
+                raise JobError(f"{path}/{key}: unknown key")
+        for name, key in names.items():
+            if name in v:
+                check(v[name], spec[key], f"{path}/{name}")
+            elif not key.endswith("?"):
+                raise JobError(f"{path}/{name}: missing key")
+        return
+    kind, args = spec[0], spec[1:]
+    if kind == "switch":  # an object whose keys depend on v[key]
+        key, cases = args
+        if not isinstance(v, dict) or key not in v:
+            raise JobError(f"{path}: expected an object with \"{key}\"")
+        check(v[key], ("enum", *cases), f"{path}/{key}")
+        check(v, cases[v[key]], path)
+    elif kind == "num":
+        lo, hi, positive = (args + (None, None, False))[:3]
+        if lo is not None and hi is not None:
+            what = f"a number in [{lo:g}, {hi:g}]"
+        elif positive:
+            what = "a positive number"
+        else:
+            what = "a number" if lo is None else f"a number >= {lo:g}"
+        if (not _is_num(v) or (positive and v <= lo)
+                or (lo is not None and v < lo) or (hi is not None and v > hi)):
+            raise JobError(f"{path}: expected {what}, "
+                           f"got {json.dumps(v)[:60]}")
+    elif kind == "int":
+        if (not isinstance(v, int) or isinstance(v, bool)
+                or not args[0] <= v <= args[1]):
+            raise JobError(f"{path}: expected an integer in [{args[0]}, "
+                           f"{args[1]}], got {json.dumps(v)[:60]}")
+    elif kind == "enum":
+        if not isinstance(v, str) or v not in args:
+            raise JobError(f"{path}: expected one of "
+                           f"{', '.join(map(json.dumps, args))}")
+    elif kind == "vec":
+        _vec(v, path, args[0])
+    elif kind == "unit":
+        if abs(math.sqrt(sum(x * x for x in _vec(v, path, 3))) - 1) > 1e-3:
+            raise JobError(f"{path}: expected a unit vector")
+    elif kind == "file":
+        if (not isinstance(v, str) or v in ("", ".", "..")
+                or any(c in v for c in "/\\\0")):
+            raise JobError(f"{path}: expected a plain file name "
+                           "(no '/', '\\' or '..')")
+    elif kind == "list":
+        if not isinstance(v, list) or len(v) > args[0]:
+            raise JobError(f"{path}: expected an array of at most "
+                           f"{args[0]} items")
+        for i, item in enumerate(v):
+            check(item, args[1], f"{path}/{i}")
+    elif kind == "matrix":
+        if not isinstance(v, list) or len(v) != 4:
+            raise JobError(f"{path}: expected 4 rows of 4 numbers")
+        m = Matrix([_vec(r, f"{path}/{i}", 4) for i, r in enumerate(v)])
+        rot = m.to_3x3()
+        err = rot @ rot.transposed() - Matrix.Identity(3)
+        if (list(m[3]) != [0, 0, 0, 1] or rot.determinant() <= 0
+                or max(abs(x) for row in err for x in row) > 1e-4):
+            raise JobError(f"{path}: expected a rigid transform (orthonormal "
+                           "right-handed rotation, last row [0,0,0,1])")
+
+
+# ------------------------------------------------------------------- scene
+
+def configure(owner, what, **settings):
+    """Set properties, failing clearly if this Blender lacks one."""
+    for key, value in settings.items():
+        if not hasattr(owner, key):
+            raise JobError(f"Blender {bpy.app.version_string} has no "
+                           f"{what}.{key}")
+        setattr(owner, key, value)
+
+
+def read_raw(folder, name, dtype, count, path):
+    fn = os.path.join(folder, name)
+    size = np.dtype(dtype).itemsize * count
+    try:
+        actual = os.path.getsize(fn)
+    except OSError as e:
+        raise JobError(f"{path}: cannot read {fn}: {e.strerror}") from None
+    if actual != size:
+        raise JobError(f"{path}: {fn} has {actual} bytes, expected {size}")
+    return np.fromfile(fn, dtype=dtype, count=count)
+
+
+def build_mesh(job, folder):
+    jm = job["mesh"]
+    n, m = jm["vertex_count"], jm["triangle_count"]
+    pos = read_raw(folder, jm["positions"], "<f4", 3 * n, "/mesh/positions")
+    nrm = read_raw(folder, jm["normals"], "<f4", 3 * n, "/mesh/normals")
+    tri = read_raw(folder, jm["triangles"], "<u4", 3 * m, "/mesh/triangles")
+    if not (np.isfinite(pos).all() and np.isfinite(nrm).all()):
+        raise JobError("/mesh: positions or normals hold NaN or infinity")
+    nrm = nrm.reshape(n, 3)
+    if np.abs(np.linalg.norm(nrm.astype(np.float64), axis=1) - 1).max() > 1e-3:
+        raise JobError("/mesh/normals: expected unit vectors")
+    if tri.max() >= n:
+        raise JobError(f"/mesh/triangles: index {int(tri.max())} out of "
+                       f"range (vertex_count {n})")
+    t3 = tri.reshape(m, 3)
+    if ((t3[:, 0] == t3[:, 1]) | (t3[:, 1] == t3[:, 2])
+            | (t3[:, 0] == t3[:, 2])).any():
+        raise JobError("/mesh/triangles: a triangle repeats a vertex")
+
+    me = bpy.data.meshes.new("penumbra_mesh")
+    me.vertices.add(n)
+    me.vertices.foreach_set("co", pos)
+    me.loops.add(3 * m)
+    me.loops.foreach_set("vertex_index", tri.astype(np.int32))
+    me.polygons.add(m)
+    me.polygons.foreach_set("loop_start",
+                            np.arange(0, 3 * m, 3, dtype=np.int32))
+    me.polygons.foreach_set("loop_total", np.full(m, 3, dtype=np.int32))
+    me.polygons.foreach_set("use_smooth", np.ones(m, dtype=bool))
+    me.update(calc_edges=True)
+    if len(me.vertices) != n or len(me.polygons) != m:
+        raise JobError("/mesh: Blender changed the mesh while building it")
+    # Custom split normals: Cycles then shades with these vertex normals.
+    configure(me, "Mesh", use_auto_smooth=True, auto_smooth_angle=math.pi)
+    me.normals_split_custom_set_from_vertices(nrm)
+    ob = bpy.data.objects.new("penumbra_object", me)
+    sh = job["shading"]
+    configure(ob.cycles, "Object.cycles",
+              shadow_terminator_offset=sh["shading_offset"],
+              shadow_terminator_geometry_offset=sh["geometry_offset"])
+    return ob
+
+
+def height_socket(nt, hgt):
+    """Build h(P) from world-space Position with Math nodes; return output."""
+    nodes, links = nt.nodes, nt.links
+    product = hgt["combine"] == "product"
+    if not hgt["terms"]:
+        val = nodes.new("ShaderNodeValue")
+        val.outputs[0].default_value = 1.0 if product else 0.0
+        return val.outputs[0]
+    position = nodes.new("ShaderNodeNewGeometry").outputs["Position"]
+
+    def math_node(op, a, b=None):
+        node = nodes.new("ShaderNodeMath")
+        node.operation = op
+        for socket, x in zip(node.inputs, (a, b)):
+            if isinstance(x, float):
+                socket.default_value = x
+            elif x is not None:
+                links.new(x, socket)
+        return node.outputs[0]
+
+    acc = None
+    for t in hgt["terms"]:
+        dot = nodes.new("ShaderNodeVectorMath")
+        dot.operation = "DOT_PRODUCT"
+        links.new(position, dot.inputs[0])
+        dot.inputs[1].default_value = [2 * math.pi * k for k in t["k"]]
+        arg = math_node("ADD", dot.outputs["Value"], float(t["phase"]))
+        term = math_node("SINE", arg)
+        if not product:
+            term = math_node("MULTIPLY", term, float(t["weight"]))
+        acc = term if acc is None else math_node(
+            "MULTIPLY" if product else "ADD", acc, term)
+    return acc
+
+
+def build_material(job, ob):
+    mat = bpy.data.materials.new("penumbra_material")
+    mat.use_nodes = True
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    out.target = "CYCLES"
+    bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    a = job["material"]["albedo"]
+    bsdf.inputs["Color"].default_value = (a, a, a, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.0
+    nt.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    configure(mat.cycles, "Material.cycles", displacement_method="BUMP")
+    mode, amp = job["shading"]["mode"], job["height"]["amplitude"]
+    if mode == "bump-displacement":
+        disp = nt.nodes.new("ShaderNodeDisplacement")
+        disp.space = "OBJECT"  # the object transform is the identity
+        nt.links.new(height_socket(nt, job["height"]), disp.inputs["Height"])
+        disp.inputs["Midlevel"].default_value = 0.0
+        disp.inputs["Scale"].default_value = amp
+        nt.links.new(disp.outputs["Displacement"],
+                     out.inputs["Displacement"])
+    elif mode == "bump-node":
+        bump = nt.nodes.new("ShaderNodeBump")
+        bump.invert = False
+        bump.inputs["Strength"].default_value = 1.0
+        bump.inputs["Distance"].default_value = amp
+        nt.links.new(height_socket(nt, job["height"]), bump.inputs["Height"])
+        nt.links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+    ob.data.materials.append(mat)
+
+
+def build_scene(job, folder, threads):
+    scene = bpy.context.scene
+    for o in list(bpy.data.objects):
+        bpy.data.objects.remove(o, do_unlink=True)
+
+    scene.world = bpy.data.worlds.new("penumbra_world")  # no nodes: black
+    scene.world.use_nodes = False
+    scene.world.color = (0.0, 0.0, 0.0)
+
+    cam, r = job["camera"], scene.render
+    configure(r, "RenderSettings", engine="CYCLES", film_transparent=True,
+              resolution_x=cam["width"], resolution_y=cam["height"],
+              resolution_percentage=100, pixel_aspect_x=1.0,
+              pixel_aspect_y=1.0, use_border=False, use_motion_blur=False,
+              use_compositing=False, use_sequencer=False,
+              dither_intensity=0.0, use_file_extension=False,
+              threads_mode="FIXED" if threads else "AUTO")
+    if threads:
+        r.threads = threads
+    for attr in dir(r):  # no stamp in pixels or header
+        if attr.startswith("use_stamp"):
+            setattr(r, attr, False)
+    configure(scene.cycles, "Scene.cycles", device="CPU",
+              feature_set="SUPPORTED", samples=job["render"]["samples"],
+              seed=job["render"]["seed"], use_animated_seed=False,
+              use_adaptive_sampling=False, use_denoising=False,
+              sample_clamp_direct=0.0, sample_clamp_indirect=0.0,
+              blur_glossy=0.0, pixel_filter_type="BOX", filter_width=1.0,
+              max_bounces=0, diffuse_bounces=0, glossy_bounces=0,
+              transmission_bounces=0, volume_bounces=0,
+              transparent_max_bounces=0, min_light_bounces=0,
+              min_transparent_bounces=0, caustics_reflective=False,
+              caustics_refractive=False, light_sampling_threshold=0.0,
+              sample_offset=0, time_limit=0.0, film_exposure=1.0,
+              use_fast_gi=False, use_layer_samples="IGNORE")
+    scene.view_layers[0].samples = 0
+    configure(r.image_settings, "ImageFormatSettings",
+              file_format="OPEN_EXR", color_mode="RGBA", color_depth="32",
+              exr_codec="ZIP", use_zbuffer=False, use_preview=False,
+              color_management="FOLLOW_SCENE")
+    scene.display_settings.display_device = "sRGB"
+    configure(scene.view_settings, "ColorManagedViewSettings",
+              view_transform="Standard", look="None", exposure=0.0,
+              gamma=1.0, use_curve_mapping=False)
+
+    cd = bpy.data.cameras.new("penumbra_camera")
+    if cam["projection"] == "orthographic":  # ortho_scale: larger side
+        configure(cd, "Camera", type="ORTHO", ortho_scale=cam["ortho_scale"],
+                  sensor_fit="AUTO")
+    else:  # horizontal field of view from sensor width and focal length
+        configure(cd, "Camera", type="PERSP", lens_unit="MILLIMETERS",
+                  sensor_width=cam["sensor_width"], lens=cam["lens"],
+                  sensor_fit="HORIZONTAL")
+    configure(cd, "Camera", shift_x=0.0, shift_y=0.0, clip_start=1e-4,
+              clip_end=1e4)
+    cd.dof.use_dof = False
+    co = bpy.data.objects.new("penumbra_camera", cd)
+    co.matrix_world = Matrix(cam["matrix_world"])
+    scene.camera = co
+
+    lj = job["light"]
+    ld = bpy.data.lights.new("penumbra_sun", type="SUN")
+    configure(ld, "SunLight", energy=lj["strength"], angle=0.0,
+              color=(1.0, 1.0, 1.0), use_shadow=True)
+    configure(ld.cycles, "Light.cycles", cast_shadow=True)
+    lo = bpy.data.objects.new("penumbra_sun", ld)
+    d = Vector(lj["direction"]).normalized()
+    lo.rotation_mode = "QUATERNION"
+    lo.rotation_quaternion = d.to_track_quat("Z", "Y")  # local +Z -> d
+    if (lo.rotation_quaternion.to_matrix().col[2] - d).length > 1e-5:
+        raise JobError("internal: sun orientation check failed")
+
+    ob = build_mesh(job, folder)
+    build_material(job, ob)
+    for o in (co, lo, ob):
+        scene.collection.objects.link(o)
+    return ob
+
+
+# -------------------------------------------------------------------- main
+
+def write_exr(scene, raw, tmp):
+    """Save the render result without Cycles' timing metadata.
+
+    Cycles stamps render and sync times into the EXR header, so identical
+    renders would differ in bytes; the pixels are copied (bit-exact) into a
+    plain float image, which is saved with the same settings.
+    """
+    bpy.data.images["Render Result"].save_render(raw, scene=scene)
+    src = bpy.data.images.load(raw)
+    w, h = src.size
+    if (w, h) != (scene.render.resolution_x, scene.render.resolution_y):
+        raise JobError(f"render result is {w}x{h}, expected "
+                       f"{scene.render.resolution_x}x"
+                       f"{scene.render.resolution_y}")
+    px = np.empty(w * h * 4, dtype=np.float32)
+    src.pixels.foreach_get(px)
+    dst = bpy.data.images.new("penumbra_result", w, h, alpha=True,
+                              float_buffer=True)
+    dst.alpha_mode = "PREMUL"
+    dst.pixels.foreach_set(px)
+    dst.save_render(tmp, scene=scene)
+    if not os.path.isfile(tmp):
+        raise JobError(f"{tmp}: EXR was not written")
+
+
+def parse_args(argv):
+    args = argv[argv.index("--") + 1:] if "--" in argv else []
+    threads = 0
+    if len(args) == 4 and args[2] == "--threads":
+        threads = int(args[3]) if args[3].isdigit() else -1
+        if not 1 <= threads <= 1024:
+            raise JobError(f"--threads: expected an integer in [1, 1024], "
+                           f"got {args[3]!r}")
+        args = args[:2]
+    if len(args) != 2:
+        raise JobError("usage: blender -b --factory-startup -noaudio "
+                       "--python-exit-code 1 --python blender_render.py -- "
+                       "JOB.json OUTPUT.exr [--threads N]")
+    return args[0], args[1], threads
+
+
+def main():
+    job_path, out_path, threads = parse_args(sys.argv)
+    try:
+        with open(job_path, "rb") as f:
+            job = json.loads(f.read().decode("utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as e:
+        raise JobError(f"{job_path}: cannot read JSON job: {e}") from None
+    out_path = os.path.abspath(out_path)
+    if not os.path.isdir(os.path.dirname(out_path)):
+        raise JobError(f"{out_path}: output folder does not exist")
+    t0 = time.monotonic()
+    try:
+        check(job, SCHEMA)
+        ob = build_scene(job, os.path.dirname(os.path.abspath(job_path)),
+                         threads)
+    except JobError as e:
+        raise JobError(f"{job_path}: {e}") from None
+    t1 = time.monotonic()
+    tmp = f"{out_path}.tmp-{os.getpid()}.exr"
+    raw = f"{out_path}.raw-{os.getpid()}.exr"
+    scene = bpy.context.scene
+    try:
+        result = bpy.ops.render.render(write_still=False)
+        t2 = time.monotonic()
+        if "FINISHED" not in result:
+            raise JobError(f"render failed ({', '.join(sorted(result))})")
+        write_exr(scene, raw, tmp)
+        os.replace(tmp, out_path)
+    finally:
+        for name in (raw, tmp):
+            if os.path.exists(name):
+                os.remove(name)
+    print(f"{PROG}: {len(ob.data.vertices)} vertices, "
+          f"{len(ob.data.polygons)} triangles, mode "
+          f"{job['shading']['mode']}, {scene.cycles.samples} samples, "
+          f"{scene.render.resolution_x}x{scene.render.resolution_y}, "
+          f"{scene.render.threads} threads, setup {t1 - t0:.2f} s, "
+          f"render {t2 - t1:.2f} s -> {out_path}", flush=True)
+
+
+if __name__ == "__main__":
+    try:
+        main()
+    except (JobError, OSError) as e:
+        print(f"{PROG}: {e}", file=sys.stderr, flush=True)
+        sys.exit(1)
+    except Exception as e:  # noqa: BLE001 - any failure must be one line
+        print(f"{PROG}: internal error: {type(e).__name__}: {e}",
+              file=sys.stderr, flush=True)
+        sys.exit(1)
