@@ -4,14 +4,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
-packages=(
-  cmake ninja-build g++ pkg-config
-  libopenimageio-dev openimageio-tools   # EXR/PNG I/O; oiiotool for inspecting results
-  nlohmann-json3-dev                     # scene files
-  libembree-dev libtbb-dev               # displaced-mesh tracing, parallelism
-  libcli11-dev libfmt-dev                # command line, formatting
-  libgtest-dev libgmock-dev libbenchmark-dev
-)
+mapfile -t packages < <(sed -e 's/#.*//' "$root/harness/debian-packages.txt" | tr ' ' '\n' | grep -v '^$')
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

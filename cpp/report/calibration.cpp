@@ -30,8 +30,9 @@ struct Spec {
 };
 
 std::string key(const std::string& shape, Representation r, const std::string& method,
-                RendererKind renderer) {
-  return fmt::format("{}-{}-{}-{}", shape, to_string(r), method, to_string(renderer));
+                RendererKind renderer, int scale = 1) {
+  return fmt::format("{}-{}-{}-{}{}", shape, to_string(r), method, to_string(renderer),
+                     scale == 1 ? "" : fmt::format("-x{}", scale));
 }
 
 CalibrationCheck at_most(std::string name, double value, double bound) {
@@ -39,6 +40,24 @@ CalibrationCheck at_most(std::string name, double value, double bound) {
 }
 CalibrationCheck at_least(std::string name, double value, double bound) {
   return {std::move(name), value, bound, true, std::isfinite(value) && value >= bound};
+}
+
+// What a one-pixel forward difference does to the steepest sine term: a
+// difference over a step of d radians of phase scales the slope by
+// sin(d/2)/(d/2) and shifts it by d/2.
+std::string footprint_explanation(const Scene& scene) {
+  const Camera& c = scene.camera;
+  if (c.projection != Projection::kOrthographic) return "";
+  const double footprint = length(c.right) / c.width;
+  double k = 0.0;
+  for (const SineTerm& t : scene.height.function.terms) k = std::max(k, length(t.k));
+  const double d = 2.0 * kPi * k * footprint;
+  if (!(d > 0.0)) return "";
+  return fmt::format(
+      "Pixel footprint {:.4g} scene units = {:.3g} rad of phase of the steepest term ({:.3g} "
+      "cycles/unit): a one-pixel forward difference scales its slope by {:.3f} and shifts it "
+      "by half a pixel.",
+      footprint, d, k, std::sin(0.5 * d) / (0.5 * d));
 }
 
 }  // namespace
@@ -65,6 +84,7 @@ json CalibrationResult::to_json() const {
                             {"renderer", r.renderer},
                             {"file", r.file},
                             {"seconds", r.seconds},
+                            {"evaluator_seconds", r.evaluator_seconds},
                             {"error", r.error.empty() ? json() : json(r.error)}});
   for (const CalibrationRow& row : rows) {
     json checks = json::array();
@@ -109,6 +129,7 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
     Representation representation;
     const char* method;
     RendererKind renderer;
+    int scale = 1;  // image size multiplier, same camera extents
   } plan[] = {
       {Representation::kSmooth, "none", RendererKind::kEvaluator},
       {Representation::kSmooth, "none", RendererKind::kPovray},
@@ -121,6 +142,12 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
       {Representation::kDisplacement, "none", RendererKind::kEvaluator},
       {Representation::kDisplacement, "none", RendererKind::kPovray},
       {Representation::kDisplacement, "none", RendererKind::kBlender},
+      // Cycles' bump differentiates over the pixel footprint: the same view
+      // at 2x and 4x the pixels shows how its residual follows the footprint.
+      {Representation::kBump, "none", RendererKind::kEvaluator, 2},
+      {Representation::kBump, "none", RendererKind::kBlender, 2},
+      {Representation::kBump, "none", RendererKind::kEvaluator, 4},
+      {Representation::kBump, "none", RendererKind::kBlender, 4},
   };
   for (const char* shape : {"cylinder", "sphere"}) {
     const std::string file =
@@ -132,10 +159,15 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
       all.push_back({"/representation", to_string(p.representation)});
       all.push_back({"/terminator/method", p.method});
       if (p.renderer == RendererKind::kBlender) all.push_back({"/camera/spp", options.blender_spp});
+      if (p.scale != 1) {
+        const json& camera = base.at("camera");
+        all.push_back({"/camera/width", camera.value("width", 256) * p.scale});
+        all.push_back({"/camera/height", camera.value("height", 256) * p.scale});
+      }
       const std::string origin = file + " (calibration case)";
       apply_overrides(document, all, origin);
       specs.push_back({shape, p.representation, p.method, p.renderer,
-                       key(shape, p.representation, p.method, p.renderer),
+                       key(shape, p.representation, p.method, p.renderer, p.scale),
                        scene_from_json(document, origin)});
     }
   }
@@ -161,6 +193,8 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
       fs::remove(settings.log_path, ignored);  // a log per attempt, not appended forever
       RendererRun run = render_with(spec.renderer, spec.scene, settings);
       r.seconds = run.seconds;
+      r.evaluator_seconds = spec.renderer == RendererKind::kEvaluator ? run.seconds
+                                                                      : run.geometry_seconds;
       write_exr(run.image, r.file,
                 {{"penumbra:version", kPenumbraVersion},
                  {"penumbra:renderer", r.renderer},
@@ -185,24 +219,25 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
   for (std::size_t i = 0; i < specs.size(); ++i) index[specs[i].label] = i;
   auto compare = [&](const std::string& shape, Representation rep, const std::string& test_method,
                      RendererKind test, const std::string& ref_method, RendererKind ref,
-                     const std::string& note) -> CalibrationRow& {
+                     const std::string& note, int scale = 1) -> CalibrationRow& {
     CalibrationRow row;
     row.shape = shape;
     row.representation = to_string(rep);
     row.test = fmt::format("{}:{}", to_string(test), test_method);
     row.reference = fmt::format("{}:{}", to_string(ref), ref_method);
     row.note = note;
-    const std::size_t ti = index.at(key(shape, rep, test_method, test));
-    const std::size_t ri = index.at(key(shape, rep, ref_method, ref));
+    const std::size_t ti = index.at(key(shape, rep, test_method, test, scale));
+    const std::size_t ri = index.at(key(shape, rep, ref_method, ref, scale));
+    if (scale != 1) row.representation += fmt::format(" x{}", scale);
     for (std::size_t i : {ti, ri})
       if (!result.renders[i].error.empty())
         row.missing +=
             fmt::format("{} failed: {}; ", specs[i].label, result.renders[i].error.substr(0, 200));
     if (row.missing.empty()) {
-      const double scale = radiance_scale(specs[ri].scene);
+      const double radiance = radiance_scale(specs[ri].scene);
       const ProfileOptions po;
-      row.profile = compare_profiles(terminator_profile(images[ti], scale, po),
-                                     terminator_profile(images[ri], scale, po), po);
+      row.profile = compare_profiles(terminator_profile(images[ti], radiance, po),
+                                     terminator_profile(images[ri], radiance, po), po);
       row.image = compare_images(images[ti], images[ri]);
     }
     result.rows.push_back(std::move(row));
@@ -241,12 +276,20 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
         row.checks.push_back(
             at_most("profile RMSE (fraction of albedo*E/pi)", row.profile.rmse_overall, 0.01));
     }
+    const std::string footprint_note =
+        footprint_explanation(specs[index.at(key(shape, Representation::kBump, "none", B))].scene);
     compare(shape, Representation::kBump, "none", B, "none", E,
             "no bound: Cycles 3.4 differentiates h over the pixel footprint (ray "
-            "differentials), not analytically");
+            "differentials), not analytically. " + footprint_note);
     compare(shape, Representation::kBump, "chiang2019", B, "chiang2019", E,
-            "no bound: Cycles' own chiang2019 (Bump node, Ng := Ni) on a footprint-differenced "
-            "normal");
+            "no bound: Cycles' own chiang2019 (Bump node, Ng := Ni) on the same "
+            "footprint-differenced normal");
+    for (int scale : {2, 4})
+      compare(shape, Representation::kBump, "none", B, "none", E,
+              fmt::format("no bound: the same view at {}x the pixels, so 1/{} of the footprint; "
+                          "the residual should shrink with it",
+                          scale, scale),
+              scale);
     for (const auto& [t, r] : {std::pair{P, E}, std::pair{B, E}, std::pair{B, P}}) {
       CalibrationRow& row = compare(shape, Representation::kDisplacement, "none", t, "none", r,
                                     "true displacement in both");
@@ -278,10 +321,16 @@ std::string calibration_table(const CalibrationResult& result) {
   s += "\nRMSE/pk, maxerr/pk: image errors over pixels fully covered in both, divided by the "
        "reference's peak radiance.\nprof.RMSE, term.RMSE: terminator-profile RMSE overall and "
        "over 60-100 degrees, as a fraction of albedo*E/pi.\n";
-  s += "\nwall time per render (s):\n";
+  s += fmt::format("\n{:<44} {:>10} {:>12} {:>9}\n", "wall time per render",
+                   "seconds", "evaluator s", "speed-up");
   for (const CalibrationRender& r : result.renders)
-    s += r.error.empty() ? fmt::format("  {:<44} {:>8.2f}\n", r.label, r.seconds)
-                         : fmt::format("  {:<44} FAILED\n", r.label);
+    s += !r.error.empty() ? fmt::format("  {:<42} FAILED\n", r.label)
+         : r.renderer == "evaluator"
+             ? fmt::format("  {:<42} {:>10.3f}\n", r.label, r.seconds)
+             : fmt::format("  {:<42} {:>10.3f} {:>12.3f} {:>8.0f}x\n", r.label, r.seconds,
+                           r.evaluator_seconds, r.seconds / r.evaluator_seconds);
+  s += "(speed-up: the external renderer's wall time over the evaluator's on the same scene and "
+       "sample count)\n";
   return s;
 }
 
@@ -323,10 +372,18 @@ void write_calibration_reports(const CalibrationResult& result, const std::strin
                       r.image.rmse, r.profile.rmse_overall, r.profile.rmse_terminator,
                       checks.empty() ? "reported" : checks, r.note);
   }
-  md += "\n## Wall time per render\n\n| render | renderer | seconds |\n|---|---|---|\n";
-  for (const CalibrationRender& r : result.renders)
-    md += fmt::format("| {} | {} | {} |\n", r.label, r.renderer,
-                      r.error.empty() ? fmt::format("{:.2f}", r.seconds) : "failed");
+  md += "\n## Wall time per render\n\nSpeed-up: the renderer's wall time (process start to "
+        "exit) over the evaluator's on the same scene and sample count.\n\n"
+        "| render | renderer | seconds | evaluator seconds | speed-up |\n|---|---|---|---|---|\n";
+  for (const CalibrationRender& r : result.renders) {
+    if (!r.error.empty())
+      md += fmt::format("| {} | {} | failed | | |\n", r.label, r.renderer);
+    else if (r.renderer == "evaluator")
+      md += fmt::format("| {} | {} | {:.3f} | | |\n", r.label, r.renderer, r.seconds);
+    else
+      md += fmt::format("| {} | {} | {:.3f} | {:.3f} | {:.0f}x |\n", r.label, r.renderer,
+                        r.seconds, r.evaluator_seconds, r.seconds / r.evaluator_seconds);
+  }
   md +=
       "\nPOV-Ray offers only the `none` row (it has no shadow-terminator method); Cycles 3.4 "
       "offers `none`, `chiang2019` (its Bump node) and `shading-offset`.\n";

@@ -45,6 +45,9 @@ struct CalibrationRow {
 struct CalibrationRender {
   std::string label, renderer, file;
   double seconds = 0.0;  // wall time of that renderer
+  // The evaluator on the same scene and sample count (for external renderers
+  // its geometry pass is exactly that render).
+  double evaluator_seconds = 0.0;
   std::string error;     // empty on success
 };
 
