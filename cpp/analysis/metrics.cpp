@@ -26,6 +26,39 @@ bool usable(const Profile& a, std::size_t k, std::uint64_t min_count) {
   return k < a.count.size() && a.count[k] >= min_count;
 }
 
+// OpenImageIO's ImageBufAlgo has no SSIM, hence this one.
+double ssim_in_mask(const Image& test, const Image& reference, const int trgb[3],
+                    const int rrgb[3], int ta, int ra, double min_coverage, double peak) {
+  const int w = test.width, h = test.height, radius = 5;
+  double kernel[2 * 5 + 1];
+  for (int i = -radius; i <= radius; ++i) kernel[i + radius] = std::exp(-0.5 * i * i / (1.5 * 1.5));
+  const double c1 = std::pow(0.01 * peak, 2), c2 = std::pow(0.03 * peak, 2);
+  auto inside = [&](int x, int y) {
+    return test.at(x, y, ta) >= min_coverage && reference.at(x, y, ra) >= min_coverage;
+  };
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      if (!inside(x, y)) continue;
+      double sw = 0, mx = 0, my = 0, sxx = 0, syy = 0, sxy = 0;
+      for (int dy = -radius; dy <= radius; ++dy)
+        for (int dx = -radius; dx <= radius; ++dx) {
+          const int u = x + dx, v = y + dy;
+          if (u < 0 || v < 0 || u >= w || v >= h || !inside(u, v)) continue;
+          const double k = kernel[dx + radius] * kernel[dy + radius];
+          const double a = radiance(test, u, v, trgb), b = radiance(reference, u, v, rrgb);
+          sw += k, mx += k * a, my += k * b, sxx += k * a * a, syy += k * b * b, sxy += k * a * b;
+        }
+      mx /= sw, my /= sw;
+      const double vx = std::max(0.0, sxx / sw - mx * mx), vy = std::max(0.0, syy / sw - my * my);
+      const double cxy = sxy / sw - mx * my;
+      sum += ((2 * mx * my + c1) * (2 * cxy + c2)) / ((mx * mx + my * my + c1) * (vx + vy + c2));
+      ++n;
+    }
+  return n ? sum / double(n) : kNaN;
+}
+
 }  // namespace
 
 double radiance_scale(const Scene& scene) {
@@ -173,6 +206,7 @@ ImageMetrics compare_images(const Image& test, const Image& reference, double mi
       ++m.pixels;
     }
   m.mask_iou = either ? double(both) / double(either) : 1.0;
+  m.ssim = m.pixels ? ssim_in_mask(test, reference, trgb, rrgb, ta, ra, min_coverage, m.peak) : kNaN;
   if (m.pixels) {
     m.rmse = std::sqrt(sum_sq / double(m.pixels));
     m.mean_error = sum / double(m.pixels);

@@ -78,6 +78,10 @@ struct ImageMetrics {
   double mean_error = 0.0;      // mean(test - reference), same pixels
   double reference_mean = 0.0;  // mean reference radiance over those pixels
   double peak = 0.0;            // largest reference radiance over those pixels
+  // Mean SSIM over the same pixels (Wang et al. 2004: 11x11 Gaussian window,
+  // sigma 1.5, K1 = 0.01, K2 = 0.03, dynamic range = reference peak; window
+  // weights renormalised over covered pixels so the background does not count).
+  double ssim = 0.0;
   std::size_t pixels = 0;       // pixels fully covered in both
   std::size_t nonfinite = 0;    // NaN or Inf values in either image (a failure)
 };

@@ -33,6 +33,7 @@ nlohmann::json image_metrics_json(const ImageMetrics& m) {
           {"mask_iou", number(m.mask_iou)},
           {"rmse", number(m.rmse)},
           {"max_error", number(m.max_error)},
+          {"ssim", number(m.ssim)},
           {"mean_error", number(m.mean_error)},
           {"reference_mean", number(m.reference_mean)},
           {"peak", number(m.peak)},

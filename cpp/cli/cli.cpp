@@ -1,9 +1,12 @@
 #include "cli/cli.h"
 
+#include <signal.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -23,7 +26,9 @@
 #include "render/evaluator.h"
 #include "render/image_io.h"
 #include "renderers/renderers.h"
+#include "analysis/contour.h"
 #include "report/calibration.h"
+#include "report/study.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {
@@ -349,6 +354,128 @@ int command_calibrate(const CalibrationOptions& options, bool quiet, std::ostrea
   return kExitOk;
 }
 
+std::atomic<bool> g_interrupted{false};
+extern "C" void on_sigint(int) { g_interrupted.store(true); }
+
+std::string duration_text(double s) {
+  if (!std::isfinite(s) || s < 0) return "?";
+  const long t = std::lround(s);
+  return t >= 60 ? fmt::format("{}m{:02d}s", t / 60, t % 60) : fmt::format("{}s", t);
+}
+
+struct RunArgs {
+  std::string study, output;
+  int jobs = 0;
+  double timeout = 600.0;
+  long max_renders = -1;
+  bool no_figures = false, quiet = false;
+};
+
+int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
+  const Study study = load_study(a.study);
+  StudyOptions o;
+  o.output_dir = a.output.empty() ? "results/" + study.name : a.output;
+  o.jobs = a.jobs > 0 ? a.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  o.timeout_s = a.timeout;
+  o.max_new_renders = a.max_renders;
+  o.figures = !a.no_figures;
+  o.interrupted = &g_interrupted;
+  const bool tty = ::isatty(STDERR_FILENO);
+  std::mutex mutex;
+  if (!a.quiet && tty) {
+    o.progress = [&](std::size_t done, std::size_t total, double eta) {
+      std::lock_guard<std::mutex> lock(mutex);
+      const int width = 30;
+      const int fill = static_cast<int>(width * double(done) / double(std::max<std::size_t>(total, 1)));
+      err << fmt::format("\r[{}{}] {}/{} renders, ETA {}   ", std::string(fill, '#'),
+                         std::string(width - fill, '.'), done, total, duration_text(eta))
+          << std::flush;
+    };
+    o.log = [&](const std::string& line) {
+      if (line.find("FAILED") != std::string::npos || line.find("renders:") != std::string::npos) {
+        std::lock_guard<std::mutex> lock(mutex);
+        err << "\r" << line << "\n" << std::flush;
+      }
+    };
+  } else if (!a.quiet) {
+    o.log = [&](const std::string& line) {
+      std::lock_guard<std::mutex> lock(mutex);
+      err << "penumbra run: " << line << "\n" << std::flush;
+    };
+  }
+  g_interrupted.store(false);
+  struct sigaction action {}, previous {};
+  action.sa_handler = on_sigint;
+  sigemptyset(&action.sa_mask);
+  ::sigaction(SIGINT, &action, &previous);
+  StudyRunStats stats;
+  try {
+    stats = run_study(study, o);
+  } catch (...) {
+    ::sigaction(SIGINT, &previous, nullptr);
+    throw;
+  }
+  ::sigaction(SIGINT, &previous, nullptr);
+  if (!a.quiet && tty) err << "\n";
+  out << fmt::format(
+      "study {}: {} renders ({} rendered now, {} from the cache, {} failed, {} not started) in "
+      "{:.1f} s\n",
+      study.name, stats.renders, stats.rendered, stats.cached, stats.failed, stats.not_started,
+      stats.seconds);
+  for (const std::string& f : stats.failures) out << "  failed: " << f << "\n";
+  if (stats.not_started > 0) {
+    out << fmt::format("stopped before the end; run the same command again to resume (finished "
+                       "renders are cached in {}/cache)\n",
+                       o.output_dir);
+    return g_interrupted.load() ? 130 : kExitFailure;
+  }
+  out << fmt::format("wrote {0}/report.json, {0}/metrics.csv{1}\n", o.output_dir,
+                     stats.report_html.empty() ? "" : ", figures/ and report.html");
+  if (!stats.report_html.empty()) out << "report: " << stats.report_html << "\n";
+  return stats.failed > 0 ? kExitFailure : kExitOk;
+}
+
+int command_contour(const std::vector<std::string>& ids, double step, const std::string& output,
+                    std::ostream& out) {
+  std::vector<MethodSettings> methods;
+  for (const std::string& id : ids) {
+    const auto m = method_from_id(id);
+    if (!m) throw UsageError(fmt::format("--method: unknown method \"{}\" (see penumbra methods)", id));
+    methods.push_back({*m, 0.0});
+  }
+  std::error_code ec;
+  fs::create_directories(output, ec);
+  if (ec || !fs::is_directory(output))
+    throw OutputError(fmt::format("{}: cannot create the output folder", output));
+  const ContourGrid grid = make_contour_grid(methods, step);
+  json methods_json = json::array();
+  std::string csv = "method,light_deg,deviation_deg,G\n";
+  for (std::size_t k = 0; k < methods.size(); ++k) {
+    methods_json.push_back({{"id", ids[k]}, {"G", grid.g[k]}});
+    for (std::size_t i = 0; i < grid.deviation_deg.size(); ++i)
+      for (std::size_t j = 0; j < grid.light_deg.size(); ++j)
+        csv += fmt::format("{},{},{},{}\n", ids[k], grid.light_deg[j], grid.deviation_deg[i],
+                           grid.g[k][i][j]);
+  }
+  const json doc = {{"format", "penumbra-contour"},
+                    {"version", 1},
+                    {"geometry", "Ng = z, wi = (sin light, 0, cos light), Ns = (sin deviation, 0, "
+                                 "cos deviation), wo = Ng; angles in degrees; G dimensionless"},
+                    {"light_deg", grid.light_deg},
+                    {"deviation_deg", grid.deviation_deg},
+                    {"methods", methods_json}};
+  const fs::path dir(output);
+  write_text_file((dir / "contour.json").string(), doc.dump(1) + "\n");
+  write_text_file((dir / "contour.csv").string(), csv);
+  run_plot_script({"contour", fs::absolute(dir / "contour.json").string(),
+                   fs::absolute(dir).string()},
+                  (dir / "contour.log").string());
+  out << fmt::format("wrote {0}/contour.json, {0}/contour.csv and contour plots (PNG, SVG, PDF) "
+                     "in {0}\n",
+                     output);
+  return kExitOk;
+}
+
 double peak_rss_mib() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
@@ -488,6 +615,33 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   calibrate_cmd->add_option("--set", cal.sets, "override a value of both base scenes");
   calibrate_cmd->add_flag("-q,--quiet", cal_quiet, "no per-render lines");
 
+  RunArgs run_args;
+  CLI::App* run_cmd = app.add_subcommand(
+      "run", "run a study: renders (cached, resumable), metrics, report.json/csv/html, figures");
+  run_cmd->add_option("study", run_args.study, "study JSON file")->required();
+  run_cmd->add_option("-o,--output", run_args.output, "output folder (default results/NAME)");
+  run_cmd->add_option("--jobs", run_args.jobs, "renders in parallel (default: cores)")
+      ->check(CLI::Range(1, 256));
+  run_cmd->add_option("--timeout", run_args.timeout, "seconds per external render")
+      ->check(CLI::PositiveNumber);
+  run_cmd->add_option("--max-renders", run_args.max_renders,
+                      "start at most this many new renders, then stop (resume later)")
+      ->check(CLI::NonNegativeNumber);
+  run_cmd->add_flag("--no-figures", run_args.no_figures, "skip matplotlib figures and report.html");
+  run_cmd->add_flag("-q,--quiet", run_args.quiet, "no progress");
+
+  std::vector<std::string> contour_methods;
+  std::string contour_output = "results/contour";
+  double contour_step = 1.0;
+  CLI::App* contour_cmd = app.add_subcommand(
+      "contour", "contour plots of G over light angle x normal deviation (Chiang Fig. 5)");
+  contour_cmd->add_option("--method", contour_methods, "method id (repeatable, in plot order)")
+      ->required();
+  contour_cmd->add_option("-o,--output", contour_output, "output folder")->capture_default_str();
+  contour_cmd->add_option("--step", contour_step, "grid step in degrees")
+      ->check(CLI::Range(0.05, 10.0))
+      ->capture_default_str();
+
   int bench_size = 512, bench_spp = 16;
   CLI::App* bench = app.add_subcommand("bench", "print evaluator throughput figures");
   bench->add_option("--size", bench_size, "image size in pixels")->check(CLI::Range(16, 4096));
@@ -511,6 +665,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     if (*export_cmd) return command_export(x, out);
     if (*compare_cmd) return command_compare(c, out);
     if (*calibrate_cmd) return command_calibrate(cal, cal_quiet, out, err);
+    if (*run_cmd) return command_run(run_args, out, err);
+    if (*contour_cmd) return command_contour(contour_methods, contour_step, contour_output, out);
     if (*bench) return command_bench(bench_size, bench_spp, out);
   } catch (const InputError& e) {
     err << "penumbra: error: " << e.what() << "\n";

@@ -88,6 +88,14 @@ void write_preview_png(const Image& image, const std::string& path) {
   write_buffer(encoded, path);
 }
 
+void write_png_rgb8(const std::string& path, int width, int height,
+                    const std::vector<unsigned char>& rgb) {
+  OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+  OIIO::ImageBuf buffer(spec);
+  buffer.set_pixels(OIIO::ROI::All(), OIIO::TypeDesc::UINT8, rgb.data());
+  write_buffer(buffer, path);
+}
+
 void write_binary_file(const std::string& path, const void* data, std::size_t bytes) {
   const std::string temporary = temporary_name(path);
   {

@@ -26,6 +26,9 @@ void write_exr(const Image& image, const std::string& path,
                const std::vector<std::pair<std::string, std::string>>& metadata = {});
 // 8-bit sRGB PNG of R, G, B, A for a person to look at (values clamped to [0,1]).
 void write_preview_png(const Image& image, const std::string& path);
+// An 8-bit RGB PNG of display values (no colour conversion), row-major from the top.
+void write_png_rgb8(const std::string& path, int width, int height,
+                    const std::vector<unsigned char>& rgb);
 // Any file, through the same temporary name and rename.
 void write_binary_file(const std::string& path, const void* data, std::size_t bytes);
 void write_text_file(const std::string& path, const std::string& text);

@@ -1,0 +1,690 @@
+#include "report/study.h"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "analysis/metrics.h"
+#include "analysis/metrics_json.h"
+#include "export/export.h"
+#include "render/image_io.h"
+#include "renderers/parallel.h"
+#include "renderers/process.h"
+#include "scene/scene_json.h"
+
+namespace penumbra {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// ---- study file -------------------------------------------------------------
+
+std::string child(const std::string& pointer, const std::string& key) { return pointer + "/" + key; }
+
+void reject_unknown(const json& object, std::initializer_list<const char*> known,
+                    const std::string& file, const std::string& pointer) {
+  for (const auto& [key, value] : object.items()) {
+    bool ok = false;
+    for (const char* k : known) ok = ok || key == k;
+    if (!ok) {
+      std::string names;
+      for (const char* k : known) names += (names.empty() ? "" : ", ") + std::string(k);
+      throw InputError(file, child(pointer, key), "unknown key (expected one of: " + names + ")");
+    }
+  }
+}
+
+const json& require(const json& object, const char* key, const std::string& file,
+                    const std::string& pointer) {
+  if (!object.contains(key)) throw InputError(file, child(pointer, key), "missing required key");
+  return object.at(key);
+}
+
+std::string method_label(const std::string& id, const json& parameters) {
+  if (!parameters.is_object() || parameters.empty()) return id;
+  std::string s = id + "(";
+  bool first = true;
+  for (const auto& [k, v] : parameters.items()) {
+    s += (first ? "" : ",") + k + "=" + v.dump();
+    first = false;
+  }
+  return s + ")";
+}
+
+}  // namespace
+
+Study load_study(const std::string& path) {
+  const json doc = read_json_file(path);
+  const std::string& f = path;
+  if (!doc.is_object()) throw InputError(f, "", "expected a JSON object");
+  reject_unknown(doc, {"version", "name", "scenes", "set", "axes", "methods", "renderers",
+                       "blender_spp", "plots"},
+                 f, "");
+  const json& version = require(doc, "version", f, "");
+  if (!version.is_number_integer() || version.get<int>() != kStudyFormatVersion)
+    throw InputError(f, "/version", fmt::format("expected {}", kStudyFormatVersion));
+  Study s;
+  s.file = path;
+  s.name = fs::path(path).stem().string();
+  if (doc.contains("name")) {
+    if (!doc["name"].is_string()) throw InputError(f, "/name", "expected a string");
+    s.name = doc["name"].get<std::string>();
+  }
+  const json& scenes = require(doc, "scenes", f, "");
+  if (!scenes.is_array() || scenes.empty())
+    throw InputError(f, "/scenes", "expected a non-empty array of scene file paths");
+  const fs::path base = fs::path(path).parent_path();
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    if (!scenes[i].is_string())
+      throw InputError(f, fmt::format("/scenes/{}", i), "expected a path (string)");
+    const fs::path p = base / scenes[i].get<std::string>();
+    if (!fs::is_regular_file(p))
+      throw InputError(f, fmt::format("/scenes/{}", i),
+                       fmt::format("no such scene file: {}", p.string()));
+    s.scenes.push_back(p.lexically_normal().string());
+  }
+  if (doc.contains("set")) {
+    if (!doc["set"].is_object())
+      throw InputError(f, "/set", "expected an object of JSON pointer -> value");
+    s.set = doc["set"];
+  }
+  if (doc.contains("axes")) {
+    const json& axes = doc["axes"];
+    if (!axes.is_array()) throw InputError(f, "/axes", "expected an array");
+    for (std::size_t i = 0; i < axes.size(); ++i) {
+      const std::string p = fmt::format("/axes/{}", i);
+      if (!axes[i].is_object()) throw InputError(f, p, "expected an object");
+      reject_unknown(axes[i], {"pointer", "label", "values"}, f, p);
+      StudyAxis axis;
+      const json& pointer = require(axes[i], "pointer", f, p);
+      if (!pointer.is_string() || pointer.get<std::string>().rfind("/", 0) != 0)
+        throw InputError(f, p + "/pointer", "expected a JSON pointer such as \"/height/amplitude\"");
+      axis.pointer = pointer.get<std::string>();
+      axis.label = axis.pointer;
+      if (axes[i].contains("label")) {
+        if (!axes[i]["label"].is_string()) throw InputError(f, p + "/label", "expected a string");
+        axis.label = axes[i]["label"].get<std::string>();
+      }
+      const json& values = require(axes[i], "values", f, p);
+      if (!values.is_array() || values.empty())
+        throw InputError(f, p + "/values", "expected a non-empty array of values");
+      axis.values = values.get<std::vector<json>>();
+      s.axes.push_back(std::move(axis));
+    }
+  }
+  if (doc.contains("methods")) {
+    const json& methods = doc["methods"];
+    if (!methods.is_array() || methods.empty())
+      throw InputError(f, "/methods", "expected a non-empty array of method ids");
+    for (std::size_t i = 0; i < methods.size(); ++i) {
+      const std::string p = fmt::format("/methods/{}", i);
+      StudyMethod m;
+      if (methods[i].is_string()) {
+        m.id = methods[i].get<std::string>();
+      } else if (methods[i].is_object()) {
+        reject_unknown(methods[i], {"id", "parameters"}, f, p);
+        const json& id = require(methods[i], "id", f, p);
+        if (!id.is_string()) throw InputError(f, p + "/id", "expected a method id");
+        m.id = id.get<std::string>();
+        if (methods[i].contains("parameters")) m.parameters = methods[i]["parameters"];
+      } else {
+        throw InputError(f, p, "expected a method id or {\"id\": ..., \"parameters\": {...}}");
+      }
+      if (!method_from_id(m.id)) {
+        std::string ids;
+        for (const MethodInfo& info : all_methods()) ids += (ids.empty() ? "" : ", ") + std::string(info.id);
+        throw InputError(f, p, fmt::format("unknown method \"{}\" (valid: {})", m.id, ids));
+      }
+      m.label = method_label(m.id, m.parameters);
+      s.methods.push_back(std::move(m));
+    }
+  } else {
+    for (const MethodInfo& info : all_methods()) s.methods.push_back({std::string(info.id), json(), std::string(info.id)});
+  }
+  if (doc.contains("renderers")) {
+    const json& renderers = doc["renderers"];
+    if (!renderers.is_array() || renderers.empty())
+      throw InputError(f, "/renderers", "expected a non-empty array of renderer ids");
+    for (std::size_t i = 0; i < renderers.size(); ++i) {
+      const auto r = renderers[i].is_string() ? renderer_from_id(renderers[i].get<std::string>())
+                                              : std::nullopt;
+      if (!r)
+        throw InputError(f, fmt::format("/renderers/{}", i),
+                         "expected \"evaluator\", \"povray\" or \"blender\"");
+      s.renderers.push_back(*r);
+    }
+    if (std::find(s.renderers.begin(), s.renderers.end(), RendererKind::kEvaluator) ==
+        s.renderers.end())
+      throw InputError(f, "/renderers",
+                       "must include \"evaluator\": it provides the geometry and the reference");
+  } else {
+    s.renderers = all_renderers();
+  }
+  if (doc.contains("blender_spp")) {
+    const json& b = doc["blender_spp"];
+    if (!b.is_number_integer() || b.get<int>() < 1 || b.get<int>() > 65536)
+      throw InputError(f, "/blender_spp", "expected an integer in [1, 65536]");
+    s.blender_spp = b.get<int>();
+  }
+  if (doc.contains("plots")) {
+    const json& plots = doc["plots"];
+    if (!plots.is_array()) throw InputError(f, "/plots", "expected an array");
+    for (std::size_t i = 0; i < plots.size(); ++i) {
+      const std::string p = fmt::format("/plots/{}", i);
+      if (!plots[i].is_object()) throw InputError(f, p, "expected an object");
+      reject_unknown(plots[i], {"metric", "x", "y", "kind", "renderer"}, f, p);
+      StudyPlot plot;
+      const json& metric = require(plots[i], "metric", f, p);
+      static const std::set<std::string> metrics{
+          "profile.rmse_terminator", "profile.rmse_overall", "profile.max_error_terminator",
+          "profile.max_step", "profile.position_error_deg", "profile.width_deg",
+          "profile.lit_bias", "image.rmse", "image.ssim", "image.max_error"};
+      if (!metric.is_string() || !metrics.count(metric.get<std::string>())) {
+        std::string names;
+        for (const std::string& m : metrics) names += (names.empty() ? "" : ", ") + m;
+        throw InputError(f, p + "/metric", "expected one of " + names);
+      }
+      plot.metric = metric.get<std::string>();
+      auto axis_index = [&](const char* key) {
+        const json& v = require(plots[i], key, f, p);
+        for (std::size_t a = 0; a < s.axes.size(); ++a)
+          if (v.is_string() && v.get<std::string>() == s.axes[a].pointer) return static_cast<int>(a);
+        throw InputError(f, child(p, key), "expected the pointer of one of the study's axes");
+      };
+      plot.x = axis_index("x");
+      plot.y = axis_index("y");
+      if (plots[i].contains("kind")) {
+        const json& k = plots[i]["kind"];
+        if (!k.is_string() || (k != "contour" && k != "heatmap"))
+          throw InputError(f, p + "/kind", "expected \"contour\" or \"heatmap\"");
+        plot.kind = k.get<std::string>();
+      }
+      if (plots[i].contains("renderer")) {
+        const json& r = plots[i]["renderer"];
+        if (!r.is_string() || !renderer_from_id(r.get<std::string>()))
+          throw InputError(f, p + "/renderer", "expected \"evaluator\", \"povray\" or \"blender\"");
+        plot.renderer = r.get<std::string>();
+      }
+      s.plots.push_back(plot);
+    }
+  }
+  return s;
+}
+
+std::string render_key(const json& canonical_scene, const std::string& renderer,
+                       const std::string& renderer_version) {
+  const std::string text = canonical_scene.dump() + "\n" + renderer + "\n" + renderer_version +
+                           "\n" + kPenumbraVersion;
+  auto fnv = [&](std::uint64_t h) {
+    for (unsigned char c : text) h = (h ^ c) * 0x100000001b3ull;
+    return h;
+  };
+  return fmt::format("{:016x}{:016x}", fnv(0xcbf29ce484222325ull), fnv(0x84222325cbf29ce4ull));
+}
+
+namespace {
+
+// ---- expansion ----------------------------------------------------------------
+
+struct Job {
+  std::size_t variant = 0;
+  RendererKind renderer = RendererKind::kEvaluator;
+  Representation representation = Representation::kBump;
+  std::string method;  // label
+  json scene_json;     // canonical
+  Scene scene;
+  std::string key, label;
+};
+
+struct Variant {
+  std::string id, scene, label;
+  std::vector<json> axis_values;
+  std::vector<std::size_t> jobs;
+};
+
+// Labels carry method parameters ("shading-offset(s=0.3)"): keep file names plain.
+std::string file_safe(const std::string& label) {
+  std::string out;
+  for (char c : label)
+    out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.') ? c : '_';
+  return out;
+}
+
+std::string value_text(const json& v) {
+  if (v.is_number_float()) return fmt::format("{:g}", v.get<double>());
+  return v.dump();
+}
+
+std::string python_executable(const std::string& preferred) {
+  if (!preferred.empty()) return preferred;
+  if (const char* env = std::getenv("PENUMBRA_PYTHON")) return env;
+  // Debian's interpreter, where python3-matplotlib lives, even when a
+  // different python3 comes first in PATH.
+  if (find_executable("/usr/bin/python3")) return "/usr/bin/python3";
+  return "python3";
+}
+
+// Signed difference test - reference in units of albedo*E/pi, on a diverging
+// map saturating at +-0.25: red brighter, blue darker, white equal; grey
+// where either image has no object.
+void write_difference_png(const Image& test, const Image& reference, double scale,
+                          const std::string& path) {
+  std::vector<unsigned char> rgb(std::size_t(test.width) * test.height * 3);
+  const int a1 = test.channel_index("A"), a2 = reference.channel_index("A");
+  const int r1 = test.channel_index("R"), r2 = reference.channel_index("R");
+  for (int y = 0; y < test.height; ++y)
+    for (int x = 0; x < test.width; ++x) {
+      unsigned char* p = &rgb[(std::size_t(y) * test.width + x) * 3];
+      if (test.at(x, y, a1) < 0.5f || reference.at(x, y, a2) < 0.5f) {
+        p[0] = p[1] = p[2] = 96;
+        continue;
+      }
+      const double d = (test.at(x, y, r1) - reference.at(x, y, r2)) / scale;
+      const double v = std::clamp(d / 0.25, -1.0, 1.0);
+      const auto c = [](double t) { return static_cast<unsigned char>(std::lround(255.0 * t)); };
+      if (v >= 0)
+        p[0] = 255, p[1] = c(1 - v), p[2] = c(1 - v);
+      else
+        p[0] = c(1 + v), p[1] = c(1 + v), p[2] = 255;
+    }
+  write_png_rgb8(path, test.width, test.height, rgb);
+}
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+std::string csv_number(const json& v) {
+  if (v.is_null()) return "";
+  if (v.is_number_float()) return fmt::format("{}", v.get<double>());
+  return v.dump();
+}
+
+}  // namespace
+
+void run_plot_script(const std::vector<std::string>& arguments, const std::string& log_path,
+                     const std::string& python, double timeout_s) {
+  std::error_code ignored;
+  fs::remove(log_path, ignored);
+  const std::string name = python_executable(python);
+  const auto exe = find_executable(name);
+  if (!exe)
+    throw RendererError(fmt::format(
+        "{} not found: install python3 and python3-matplotlib (apt-get install python3-matplotlib)",
+        name));
+  std::vector<std::string> argv{*exe, std::string(PENUMBRA_SOURCE_DIR) + "/harness/report.py"};
+  argv.insert(argv.end(), arguments.begin(), arguments.end());
+  fs::path dir = fs::path(log_path).parent_path();
+  const ProcessResult p =
+      run_process(argv, dir.empty() ? "." : dir.string(), log_path, timeout_s);
+  if (!p.ok())
+    throw RendererError(fmt::format(
+        "harness/report.py failed ({}); log {}:\n{}",
+        p.timed_out ? std::string("timed out") : "exit " + std::to_string(p.exit_code), log_path,
+        tail_lines(log_path, 12)));
+}
+
+StudyRunStats run_study(const Study& study, const StudyOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const fs::path out(options.output_dir);
+  for (const char* sub : {"cache", "images"}) {
+    std::error_code ec;
+    fs::create_directories(out / sub, ec);
+    if (ec) throw OutputError(fmt::format("{}: cannot create: {}", (out / sub).string(), ec.message()));
+  }
+
+  // Renderer versions first: a missing renderer fails its renders, not the study.
+  std::map<RendererKind, std::string> versions, unavailable;
+  for (RendererKind r : study.renderers) {
+    try {
+      versions[r] = renderer_version(r, {});
+    } catch (const std::exception& e) {
+      unavailable[r] = e.what();
+    }
+  }
+
+  // Expand: scenes x axes, then per renderer the ground truth and the methods.
+  std::vector<Variant> variants;
+  std::vector<Job> jobs;
+  std::vector<Override> base_set;
+  for (const auto& [pointer, value] : study.set.items()) base_set.push_back({pointer, value});
+  std::size_t combos = 1;
+  for (const StudyAxis& a : study.axes) combos *= a.values.size();
+  for (const std::string& scene_file : study.scenes) {
+    const json base = read_json_file(scene_file);
+    const std::string scene_name = fs::path(scene_file).stem().string();
+    for (std::size_t c = 0; c < combos; ++c) {
+      Variant v;
+      v.id = fmt::format("v{:03d}", variants.size());
+      v.scene = scene_name;
+      v.label = scene_name;
+      std::vector<Override> overrides = base_set;
+      std::size_t rest = c;
+      for (const StudyAxis& a : study.axes) {
+        const json& value = a.values[rest % a.values.size()];
+        rest /= a.values.size();
+        overrides.push_back({a.pointer, value});
+        v.axis_values.push_back(value);
+        v.label += fmt::format(", {}={}", a.label, value_text(value));
+      }
+      const std::string origin = fmt::format("{} (study {}, variant {})", scene_file, study.file, v.id);
+      for (RendererKind r : study.renderers) {
+        auto add = [&](Representation rep, const StudyMethod* m) {
+          json doc = base;
+          std::vector<Override> all = overrides;
+          all.push_back({"/representation", to_string(rep)});
+          all.push_back({"/terminator/method", m ? m->id : "none"});
+          if (m && m->parameters.is_object()) all.push_back({"/terminator/parameters", m->parameters});
+          if (r == RendererKind::kBlender) all.push_back({"/camera/spp", study.blender_spp});
+          apply_overrides(doc, all, origin);
+          Job job;
+          job.variant = variants.size();
+          job.renderer = r;
+          job.representation = rep;
+          job.method = m ? m->label : "none";
+          job.scene = scene_from_json(doc, origin);
+          doc.erase("name");  // a name is not content
+          job.scene_json = doc;
+          job.label = fmt::format("{}-{}-{}-{}", v.id, to_string(r), to_string(rep), job.method);
+          job.key = render_key(doc, to_string(r),
+                               versions.count(r) ? versions[r] : std::string("unavailable"));
+          v.jobs.push_back(jobs.size());
+          jobs.push_back(std::move(job));
+        };
+        add(Representation::kDisplacement, nullptr);
+        const auto offered = methods_offered(to_string(r), Representation::kBump);
+        for (const StudyMethod& m : study.methods)
+          if (std::find(offered.begin(), offered.end(), *method_from_id(m.id)) != offered.end())
+            add(Representation::kBump, &m);
+      }
+      variants.push_back(std::move(v));
+    }
+  }
+
+  // Render what the cache lacks.
+  StudyRunStats stats;
+  stats.renders = jobs.size();
+  std::vector<std::string> errors(jobs.size());
+  std::vector<char> done(jobs.size(), 0), attempted(jobs.size(), 0);
+  std::vector<std::size_t> todo;
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    if (fs::exists(out / "cache" / (jobs[i].key + ".exr"))) {
+      done[i] = 1;
+      ++stats.cached;
+    } else {
+      todo.push_back(i);
+    }
+  }
+  std::mutex mutex;
+  std::size_t finished = 0;
+  long started_new = 0;
+  double busy_seconds = 0.0;
+  const int threads =
+      std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / std::max(1, options.jobs));
+  if (options.log)
+    options.log(fmt::format("{} renders: {} cached, {} to do, {} in parallel", jobs.size(),
+                            stats.cached, todo.size(), options.jobs));
+  run_parallel(options.jobs, todo.size(), [&](std::size_t t) {
+    const std::size_t i = todo[t];
+    const Job& job = jobs[i];
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if ((options.interrupted && options.interrupted->load()) ||
+          (options.max_new_renders >= 0 && started_new >= options.max_new_renders))
+        return;
+      ++started_new;
+      attempted[i] = 1;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    std::string error;
+    if (unavailable.count(job.renderer)) {
+      error = unavailable[job.renderer];
+    } else {
+      RenderSettings settings;
+      settings.timeout_s = options.timeout_s;
+      settings.threads = threads;
+      settings.log_path = (out / "cache" / (job.key + ".log")).string();
+      try {
+        std::error_code ignored;
+        fs::remove(settings.log_path, ignored);
+        const RendererRun run = render_with(job.renderer, job.scene, settings);
+        write_exr(run.image, (out / "cache" / (job.key + ".exr")).string(),
+                  {{"penumbra:version", kPenumbraVersion},
+                   {"penumbra:renderer", to_string(job.renderer)},
+                   {"penumbra:renderer_version", versions[job.renderer]},
+                   {"penumbra:scene", job.scene_json.dump()},
+                   {"penumbra:method", job.method},
+                   {"penumbra:representation", to_string(job.representation)},
+                   {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
+        if (job.renderer == RendererKind::kEvaluator) fs::remove(settings.log_path, ignored);
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+    }
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::lock_guard<std::mutex> lock(mutex);
+    ++finished;
+    busy_seconds += seconds;
+    if (error.empty()) {
+      done[i] = 1;
+      ++stats.rendered;
+    } else {
+      errors[i] = error;
+      ++stats.failed;
+      stats.failures.push_back(job.label + ": " + error.substr(0, error.find('\n')));
+    }
+    const double per = busy_seconds / double(finished);
+    const double eta = per * double(todo.size() - finished) / std::max(1, options.jobs);
+    if (options.progress) options.progress(stats.cached + finished, jobs.size(), eta);
+    if (options.log)
+      options.log(fmt::format("[{}/{}] {} {} ({:.1f} s){}", stats.cached + finished, jobs.size(),
+                              error.empty() ? "rendered" : "FAILED", job.label, seconds,
+                              error.empty() ? "" : ": " + error.substr(0, error.find('\n'))));
+  });
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (!done[i] && !attempted[i]) ++stats.not_started;
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (stats.not_started > 0) return stats;  // interrupted: no report from a partial study
+
+  // Images, profiles and comparisons, in job order (deterministic).
+  std::vector<Image> images(jobs.size());
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (done[i]) images[i] = read_image((out / "cache" / (jobs[i].key + ".exr")).string());
+  auto find_job = [&](std::size_t v, RendererKind r, Representation rep,
+                      const std::string& method) -> long {
+    for (std::size_t i : variants[v].jobs)
+      if (jobs[i].renderer == r && jobs[i].representation == rep && jobs[i].method == method)
+        return static_cast<long>(i);
+    return -1;
+  };
+  const ProfileOptions po;
+  json variants_json = json::array(), comparisons = json::array();
+  std::string csv = "study,variant,scene";
+  for (const StudyAxis& a : study.axes) csv += "," + csv_field(a.pointer);
+  csv += ",renderer,method,reference,profile_rmse_terminator,profile_rmse_overall,"
+         "profile_max_error_terminator,profile_max_step,reference_max_step,position_deg,"
+         "reference_position_deg,position_error_deg,width_deg,reference_width_deg,lit_bias,"
+         "common_bins,image_mask_iou,image_rmse,image_ssim,image_max_error,image_mean_error,"
+         "image_pixels,image_nonfinite\n";
+  std::size_t nonfinite_total = 0;
+  for (std::size_t v = 0; v < variants.size(); ++v) {
+    const Variant& var = variants[v];
+    json renders = json::array();
+    for (std::size_t i : var.jobs) {
+      const Job& job = jobs[i];
+      if (!done[i]) continue;
+      const double scale = radiance_scale(job.scene);
+      const std::string stem = file_safe(job.label);
+      const std::string image_rel = "images/" + stem + ".png";
+      write_preview_png(images[i], (out / image_rel).string());
+      json difference;
+      const long ground = find_job(v, job.renderer, Representation::kDisplacement, "none");
+      if (job.representation == Representation::kBump && ground >= 0 && done[ground]) {
+        const std::string diff_rel = "images/" + stem + "-diff.png";
+        write_difference_png(images[i], images[ground], scale, (out / diff_rel).string());
+        difference = diff_rel;
+      }
+      renders.push_back({{"renderer", to_string(job.renderer)},
+                         {"representation", to_string(job.representation)},
+                         {"method", job.method},
+                         {"image", image_rel},
+                         {"difference", difference},
+                         {"exr", "cache/" + job.key + ".exr"},
+                         {"profile", profile_json(terminator_profile(images[i], scale, po))}});
+      if (job.representation != Representation::kBump) continue;
+      // Against the same renderer's ground truth, and the evaluator's.
+      std::vector<std::pair<RendererKind, long>> refs{{job.renderer, ground}};
+      if (job.renderer != RendererKind::kEvaluator)
+        refs.push_back({RendererKind::kEvaluator,
+                        find_job(v, RendererKind::kEvaluator, Representation::kDisplacement, "none")});
+      for (const auto& [ref_renderer, ref] : refs) {
+        if (ref < 0 || !done[ref]) continue;
+        const ProfileMetrics pm = compare_profiles(terminator_profile(images[i], scale, po),
+                                                   terminator_profile(images[ref], scale, po), po);
+        const ImageMetrics im = compare_images(images[i], images[ref]);
+        nonfinite_total += im.nonfinite;
+        const std::string reference = std::string(to_string(ref_renderer)) + ":displacement";
+        const json pj = profile_metrics_json(pm), ij = image_metrics_json(im);
+        comparisons.push_back({{"variant", var.id},
+                               {"scene", var.scene},
+                               {"axis_values", var.axis_values},
+                               {"renderer", to_string(job.renderer)},
+                               {"method", job.method},
+                               {"reference", reference},
+                               {"profile", pj},
+                               {"image", ij}});
+        csv += fmt::format("{},{},{}", csv_field(study.name), var.id, csv_field(var.scene));
+        for (const json& value : var.axis_values) csv += "," + csv_field(value.dump());
+        csv += fmt::format(",{},{},{}", to_string(job.renderer), csv_field(job.method), reference);
+        for (const char* k : {"rmse_terminator", "rmse_overall", "max_error_terminator",
+                              "max_step", "reference_max_step", "position_deg",
+                              "reference_position_deg", "position_error_deg", "width_deg",
+                              "reference_width_deg", "lit_bias", "common_bins"})
+          csv += "," + csv_number(pj.at(k));
+        for (const char* k : {"mask_iou", "rmse", "ssim", "max_error", "mean_error", "pixels",
+                              "nonfinite"})
+          csv += "," + csv_number(ij.at(k));
+        csv += "\n";
+      }
+    }
+    variants_json.push_back({{"id", var.id},
+                             {"scene", var.scene},
+                             {"label", var.label},
+                             {"axis_values", var.axis_values},
+                             {"renders", renders}});
+  }
+
+  // Headline: evaluator methods against the evaluator's ground truth, by the
+  // terminator-region profile RMSE, per base scene and overall.
+  auto rank = [&](const std::string& scene) {
+    std::map<std::string, std::pair<double, int>> sums;
+    for (const json& c : comparisons) {
+      if (c["renderer"] != "evaluator" || c["reference"] != "evaluator:displacement") continue;
+      if (!scene.empty() && c["scene"] != scene) continue;
+      const json& value = c["profile"]["rmse_terminator"];
+      if (!value.is_number()) continue;
+      auto& [sum, n] = sums[c["method"].get<std::string>()];
+      sum += value.get<double>(), ++n;
+    }
+    std::vector<std::pair<double, std::string>> order;
+    for (const auto& [m, sn] : sums) order.push_back({sn.first / sn.second, m});
+    std::sort(order.begin(), order.end());
+    json list = json::array();
+    for (const auto& [mean, m] : order) list.push_back({{"method", m}, {"mean", mean}, {"count", sums[m].second}});
+    return list;
+  };
+  json per_scene = json::array();
+  std::vector<std::string> scene_names;
+  for (const Variant& v : variants)
+    if (std::find(scene_names.begin(), scene_names.end(), v.scene) == scene_names.end())
+      scene_names.push_back(v.scene);
+  for (const std::string& s : scene_names) per_scene.push_back({{"scene", s}, {"methods", rank(s)}});
+
+  json renderers = json::array(), missing = json::array(), failures = json::array();
+  for (RendererKind r : study.renderers) {
+    json offered = json::array();
+    const auto methods = methods_offered(to_string(r), Representation::kBump);
+    for (const StudyMethod& m : study.methods) {
+      if (std::find(methods.begin(), methods.end(), *method_from_id(m.id)) != methods.end())
+        offered.push_back(m.label);
+      else
+        missing.push_back(
+            {{"renderer", to_string(r)},
+             {"method", m.label},
+             {"why", r == RendererKind::kPovray
+                         ? "POV-Ray has no shadow-terminator method (raw bump only)"
+                         : "Blender Cycles 3.4 offers only none, chiang2019 (Bump node) and "
+                           "shading-offset"}});
+    }
+    const char* note = r == RendererKind::kEvaluator
+                           ? "reference evaluator: analytic shapes, exact displaced normals"
+                       : r == RendererKind::kPovray
+                           ? "POV-Ray 3.7: bump via normal{function}, ground truth via isosurface"
+                           : "Blender 3.4 Cycles: bump via ray-differential finite differences, "
+                             "ground truth via a displaced mesh";
+    renderers.push_back({{"id", to_string(r)},
+                         {"version", versions.count(r) ? json(versions[r]) : json()},
+                         {"methods", offered},
+                         {"note", note}});
+  }
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (!done[i]) failures.push_back({{"render", jobs[i].label}, {"error", errors[i]}});
+  json axes = json::array();
+  for (const StudyAxis& a : study.axes)
+    axes.push_back({{"pointer", a.pointer}, {"label", a.label}, {"values", a.values}});
+  json plots = json::array();
+  for (const StudyPlot& p : study.plots)
+    plots.push_back({{"metric", p.metric}, {"x", p.x}, {"y", p.y}, {"kind", p.kind}, {"renderer", p.renderer}});
+  const json report = {
+      {"format", "penumbra-report"},
+      {"version", kReportFormatVersion},
+      {"penumbra", kPenumbraVersion},
+      {"study", {{"name", study.name}, {"file", study.file}}},
+      {"units",
+       {{"profile", "fraction of albedo*E/pi"},
+        {"angles", "degrees"},
+        {"image", "W m^-2 sr^-1"},
+        {"theta", "angle between wi and the base (undisplaced) surface normal"},
+        {"terminator_region_deg", {kTerminatorBegin, kTerminatorEnd}},
+        {"lit_region_deg", {0.0, kLitEnd}},
+        {"dark_level", kDarkLevel}}},
+      {"axes", axes},
+      {"renderers", renderers},
+      {"variants", variants_json},
+      {"comparisons", comparisons},
+      {"ranking",
+       {{"metric", "profile.rmse_terminator"},
+        {"reference", "evaluator:displacement"},
+        {"renderer", "evaluator"},
+        {"per_scene", per_scene},
+        {"overall", rank("")}}},
+      {"missing", missing},
+      {"failures", failures},
+      {"nonfinite_pixels", nonfinite_total},
+      {"plots", plots}};
+  write_text_file((out / "report.json").string(), report.dump(1) + "\n");
+  write_text_file((out / "metrics.csv").string(), csv);
+
+  if (options.figures) {
+    run_plot_script({"report", fs::absolute(out).string()}, (out / "report.log").string(),
+                    options.python, options.timeout_s);
+    stats.report_html = (out / "report.html").string();
+  }
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return stats;
+}
+
+}  // namespace penumbra
