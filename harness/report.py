@@ -13,6 +13,7 @@ Prints every written file, one a line. Exit status 0 ok; 2 bad input
 (missing file, malformed JSON, wrong format or version, a path outside OUT),
 one line on stderr: "report.py: <file>: <what>"; 1 an output error.
 Nothing from the JSON is executed; every string from it is HTML-escaped.
+The same input gives the same bytes (no dates or versions in the files).
 
 report.json ("format": "penumbra-report", "version": 1; any number may be
 null): penumbra, study{name,file}, units{}, axes[{pointer,label,values}],
@@ -23,7 +24,7 @@ renderer,method,reference,profile{rmse_terminator,...},image{rmse,ssim,...}}],
 ranking{metric,reference,renderer,per_scene[{scene,methods[{method,mean,
 count}]}],overall[...]}, missing[{renderer,method,why}],
 failures[{render,error}], plots[{metric,x,y,kind,renderer}]. image and
-difference are paths relative to OUT (PNG).
+difference are PNG paths relative to OUT.
 
 contour JSON ("format": "penumbra-contour", "version": 1): light_deg[],
 deviation_deg[], methods[{id, G[deviation][light]}] (null: undefined).
@@ -45,25 +46,23 @@ from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 plt.rcParams.update({'svg.hashsalt': 'penumbra', 'font.size': 10,
                      'axes.titlesize': 11, 'legend.fontsize': 8})
-META = {'png': {'Software': None},
-        'svg': {'Date': None, 'Creator': None},
+META = {'png': {'Software': None}, 'svg': {'Date': None, 'Creator': None},
         'pdf': {'CreationDate': None, 'Creator': None, 'Producer': None}}
-REF = 'evaluator'
-PROFILE_UNIT = 'fraction of albedo·E/π'
+REF = 'evaluator'                 # the renderer whose displacement is truth
+FRACTION = 'fraction of albedo·E/π'
 L_LABEL = 'L / (albedo·E/π)'
-THETA_LABEL = 'θ: angle between light and base normal (degrees)'
-METRICS = {  # metric -> (name, unit)
-    'profile.rmse_terminator': ('terminator-region profile RMSE', PROFILE_UNIT),
-    'profile.rmse_overall': ('profile RMSE, all bins', PROFILE_UNIT),
-    'profile.max_error_terminator': ('max terminator-region error',
-                                     PROFILE_UNIT),
-    'profile.max_step': ('largest profile step', PROFILE_UNIT),
+METRICS = {                       # metric -> (name, unit)
+    'profile.rmse_terminator': ('terminator-region profile RMSE', FRACTION),
+    'profile.rmse_overall': ('profile RMSE, all bins', FRACTION),
+    'profile.max_error_terminator': ('max terminator error', FRACTION),
+    'profile.max_step': ('largest profile step', FRACTION),
     'profile.position_error_deg': ('terminator position error', 'degrees'),
     'profile.width_deg': ('terminator width', 'degrees'),
-    'profile.lit_bias': ('lit-region bias', PROFILE_UNIT),
+    'profile.lit_bias': ('lit-region bias', FRACTION),
     'image.rmse': ('image RMSE', 'W m⁻² sr⁻¹'),
     'image.ssim': ('image SSIM', 'unitless'),
     'image.mask_iou': ('silhouette IoU', 'unitless')}
+GROUND_TRUTH = 'ground truth (displacement)'
 
 
 class BadInput(Exception):
@@ -86,6 +85,15 @@ def num(x):
 def farray(xs):
     return np.array([num(v) for v in (xs if isinstance(xs, list) else [])],
                     dtype=float)
+
+
+def obj(x):
+    return x if isinstance(x, dict) else {}
+
+
+def objs(x):
+    """The objects of a JSON array (anything else: none)."""
+    return [e for e in x if isinstance(e, dict)] if isinstance(x, list) else []
 
 
 def stem(s):
@@ -113,8 +121,9 @@ def load_json(path, fmt_name):
         raise BadInput(path, f'cannot read: {e}')
     except json.JSONDecodeError as e:
         raise BadInput(path, f'malformed JSON: {e}')
-    if not isinstance(data, dict) or data.get('format') != fmt_name:
-        raise BadInput(path, f'expected "format": "{fmt_name}"')
+    if obj(data).get('format') != fmt_name:
+        raise BadInput(path, f'expected an object with "format": '
+                       f'"{fmt_name}"')
     if data.get('version') != 1:
         raise BadInput(path, f'unsupported version {data.get("version")!r} '
                        '(expected 1)')
@@ -122,128 +131,128 @@ def load_json(path, fmt_name):
 
 
 def save(fig, outdir, name, written):
-    """Write fig as outdir/name.{png,svg,pdf}, deterministically."""
+    """Write fig as outdir/name.{png,svg,pdf}; returns the PNG's path."""
     for ext, meta in META.items():
         path = os.path.join(outdir, f'{name}.{ext}')
         fig.savefig(path, dpi=150 if ext == 'png' else 72, metadata=meta,
                     bbox_inches='tight', pad_inches=0.05)
         written.append(path)
     plt.close(fig)
-    return os.path.join(outdir, f'{name}.png')
+    return written[-3]
 
 
 def method_colors(names):
-    """A stable colour per method; 'none' is grey."""
+    """A stable colour per method, in order of first appearance; 'none' is
+    grey."""
     palette = [c for i, c in enumerate(plt.get_cmap('tab10').colors)
                if i != 7] + list(plt.get_cmap('Dark2').colors)
-    colors, k = {}, 0
+    colors = {'none': (0.5, 0.5, 0.5)}
     for m in names:
-        if m not in colors:
-            colors[m] = (0.5, 0.5, 0.5) if m == 'none' else \
-                palette[k % len(palette)]
-            k += m != 'none'
+        colors.setdefault(m, palette[(len(colors) - 1) % len(palette)])
     return colors
+
+
+def contour_lines(ax, X, Y, z, levels, label_fmt):
+    """Labelled black contour lines at the levels inside z's range."""
+    inner = [v for v in levels if z.count() and z.min() < v < z.max()]
+    if inner:
+        cs = ax.contour(X, Y, z, levels=inner, colors='k', linewidths=0.6)
+        ax.clabel(cs, fontsize=7, fmt=label_fmt)
 
 
 # ---------------------------------------------------------------- report ---
 
-def inside(out, rel, where):
-    """The path of a file named in the JSON, checked to lie inside OUT.
-
-    where is (file, context) for the error message."""
+def inside(out, rel, src, ctx):
+    """The path of a file named in the JSON, checked to lie inside OUT."""
     if not isinstance(rel, str) or not rel:
-        raise BadInput(where[0], f'{where[1]}: expected a relative path, '
-                       f'got {rel!r}')
-    parts = re.split(r'[\\/]', rel)
-    if os.path.isabs(rel) or re.match(r'^[A-Za-z]:', rel) or '..' in parts:
-        raise BadInput(where[0], f'{where[1]}: path {rel!r} must be relative '
-                       'and inside the output folder (no absolute path, '
-                       'no "..")')
+        raise BadInput(src, f'{ctx}: expected a relative path, got {rel!r}')
+    if os.path.isabs(rel) or re.match(r'^[A-Za-z]:', rel) or \
+            '..' in re.split(r'[\\/]', rel):
+        raise BadInput(src, f'{ctx}: path {rel!r} must be relative and '
+                       'inside the output folder (no absolute path, no "..")')
     path = os.path.join(out, rel)
     if not os.path.realpath(path).startswith(os.path.realpath(out) + os.sep):
-        raise BadInput(where[0], f'{where[1]}: path {rel!r} leaves the '
-                       'output folder')
+        raise BadInput(src, f'{ctx}: path {rel!r} leaves the output folder')
     return path
 
 
-def data_uri(path, where):
+def data_uri(path, src, ctx):
     try:
         with open(path, 'rb') as f:
             data = f.read()
     except OSError as e:
-        raise BadInput(where[0], f'{where[1]}: {path}: {e.strerror or e}')
+        raise BadInput(src, f'{ctx}: {path}: {e.strerror or e}')
     if not data.startswith(b'\x89PNG\r\n\x1a\n'):
-        raise BadInput(where[0], f'{where[1]}: {path}: not a PNG file')
+        raise BadInput(src, f'{ctx}: {path}: not a PNG file')
     return 'data:image/png;base64,' + base64.b64encode(data).decode('ascii')
 
 
 def profile_xy(p):
-    """(theta bin centres, values with empty bins as nan) or None."""
-    if not isinstance(p, dict):
+    """(theta bin centres, values) of the bins that hold samples, or None."""
+    b, v = num(obj(p).get('bin_degrees')), farray(obj(p).get('value'))
+    c = farray(obj(p).get('count'))
+    ok = np.isfinite(v) & ((c > 0) if c.size == v.size else True)
+    if not (b > 0 and ok.any()):
         return None
-    b, v = num(p.get('bin_degrees')), farray(p.get('value'))
-    if not (b > 0) or v.size == 0:
-        return None
-    c = farray(p.get('count'))
-    if c.size == v.size:
-        v[~(c > 0)] = math.nan
-    return (np.arange(v.size) + 0.5) * b, v
+    return ((np.arange(v.size) + 0.5) * b)[ok], v[ok]
 
 
 def get_metric(comp, metric):
-    node = comp
+    """comp's value at a dotted path such as 'profile.rmse_terminator'."""
     for key in metric.split('.'):
-        node = node.get(key) if isinstance(node, dict) else None
-    return num(node)
+        comp = obj(comp).get(key)
+    return num(comp)
+
+
+def column(r):
+    """The image-grid column of a render."""
+    rep, meth = str(r.get('representation')), str(r.get('method'))
+    return GROUND_TRUTH if rep == 'displacement' else (
+        meth if rep == 'bump' else f'{meth} ({rep})')
 
 
 def fig_ranking(rk, colors, figdir, written):
-    overall = [e for e in rk.get('overall') or [] if isinstance(e, dict)]
-    scenes = [s for s in rk.get('per_scene') or [] if isinstance(s, dict)]
+    overall, scenes = objs(rk.get('overall')), objs(rk.get('per_scene'))
     if not overall and not scenes:
         return None
-    methods = list(dict.fromkeys(
-        [str(e.get('method')) for e in overall] +
-        [str(e.get('method')) for s in scenes for e in s.get('methods', [])]))
-    n = len(methods)
-    fig, axs = plt.subplots(1, 2, figsize=(11, 1.2 + 0.35 * max(
-        n, len(scenes) * n * 0.6)), layout='constrained', squeeze=False)
-    ax = axs[0][0]
-    y = np.arange(len(overall))
+    methods = list(dict.fromkeys(str(e.get('method')) for e in overall + [
+        e for s in scenes for e in objs(s.get('methods'))]))
+    n = max(len(methods), 1)
+    fig, (ax, ag) = plt.subplots(1, 2, figsize=(11, 1.2 + 0.35 * max(
+        n, len(scenes) * n * 0.6)), layout='constrained')
     vals = [num(e.get('mean')) for e in overall]
+    y = np.arange(len(overall))
     ax.barh(y, np.nan_to_num(vals), color=[colors[str(e.get('method'))]
                                            for e in overall])
     for yi, v in zip(y, vals):
-        ax.text(v if math.isfinite(v) else 0, yi, ' ' + fmt(v), va='center',
-                fontsize=8)
+        ax.text(np.nan_to_num(v), yi, ' ' + fmt(v), va='center', fontsize=8)
     ax.set_yticks(y, [str(e.get('method')) for e in overall])
-    ax.invert_yaxis()
-    ax.set_xlabel(f'terminator-region profile RMSE ({PROFILE_UNIT})')
-    ax.set_title(f'overall ranking (mean over variants), reference '
+    ax.set_title(f'overall (mean over variants), reference '
                  f'{rk.get("reference", "?")}')
     ax.margins(x=0.15)
-    ax = axs[0][1]
-    h = 0.8 / max(n, 1)
+    h = 0.8 / n
     for j, m in enumerate(methods):
-        ys, xs = [], []
-        for i, s in enumerate(scenes):
-            for e in s.get('methods', []):
+        bars = [(i + (j - (n - 1) / 2) * h, num(e.get('mean')))
+                for i, s in enumerate(scenes) for e in objs(s.get('methods'))
                 if str(e.get('method')) == m and math.isfinite(
-                        num(e.get('mean'))):
-                    ys.append(i + (j - (n - 1) / 2) * h)
-                    xs.append(num(e.get('mean')))
-        ax.barh(ys, xs, height=h, color=colors[m], label=m)
-    ax.set_yticks(range(len(scenes)), [str(s.get('scene')) for s in scenes])
-    ax.invert_yaxis()
-    ax.set_xlabel(f'terminator-region profile RMSE ({PROFILE_UNIT})')
-    ax.set_title('per scene')
+                    num(e.get('mean')))]
+        ag.barh([b[0] for b in bars], [b[1] for b in bars], height=h,
+                color=colors[m], label=m)
+    ag.set_yticks(range(len(scenes)), [str(s.get('scene')) for s in scenes])
+    ag.set_title('per scene')
     if methods:
-        ax.legend(title='method', loc='lower right')
+        ag.legend(title='method', loc='lower right')
+    for a in (ax, ag):
+        a.invert_yaxis()
+        a.set_xlabel(metric_label(rk.get('metric',
+                                         'profile.rmse_terminator')))
     return save(fig, figdir, 'ranking', written)
 
 
-def fig_profiles(var, colors, figdir, written):
-    renders = [r for r in var.get('renders') or [] if isinstance(r, dict)]
+def fig_profiles(var, colors, region, figdir, written):
+    """L(theta) of every render of a variant, and its error vs the truth;
+    empty bins are bridged (dots mark the bins when they are sparse)."""
+    renders = objs(var.get('renders'))
     gt = next((profile_xy(r.get('profile')) for r in renders
                if r.get('renderer') == REF and
                r.get('representation') == 'displacement'), None)
@@ -251,43 +260,40 @@ def fig_profiles(var, colors, figdir, written):
     dashes = [(0, (5, 2)), (0, (2, 1.5)), (0, (6, 2, 1, 2)), (0, (1, 1))]
     fig, (ax, ad) = plt.subplots(2, 1, figsize=(9.5, 7), sharex=True,
                                  height_ratios=[3, 2], layout='constrained')
-    used = []
+    finite = []
     for r in renders:
         xy = profile_xy(r.get('profile'))
         if xy is None:
             continue
-        rend, rep = str(r.get('renderer')), str(r.get('representation'))
-        meth = str(r.get('method'))
-        is_gt = rep == 'displacement'
-        lab = 'displacement (ground truth)' if is_gt else (
-            meth if rep == 'bump' else f'{meth} ({rep})')
+        rend, meth, lab = str(r.get('renderer')), str(r.get('method')), \
+            column(r)
+        is_gt = lab == GROUND_TRUTH
         if rend == REF:
             style = dict(color='k', lw=2.8, zorder=5) if is_gt else dict(
-                color=colors.get(meth, 'C0'), lw=1.4)
+                color=colors[meth], lw=1.4)
         else:
-            style = dict(color='0.35' if is_gt else colors.get(meth, 'C0'),
-                         lw=1.2, ls=dashes[others.index(rend) % 4])
+            style = dict(color='0.35' if is_gt else colors[meth], lw=1.2,
+                         ls=dashes[others.index(rend) % len(dashes)])
             lab = f'{rend}: {lab}'
+        span = (xy[0][-1] - xy[0][0]) / num(r['profile']['bin_degrees'])
+        if xy[0].size < 0.6 * span:  # sparse: mark the bins
+            style.update(marker='.', ms=4)
         ax.plot(*xy, label=lab, **style)
-        used.append(xy)
+        finite.append(xy[0])
         if gt is not None and not (is_gt and rend == REF):
-            ok = np.isfinite(gt[1])
-            ref = np.interp(xy[0], gt[0][ok], gt[1][ok], left=math.nan,
-                            right=math.nan) if ok.any() else xy[1] * math.nan
+            ref = np.interp(xy[0], *gt, left=math.nan, right=math.nan)
             ad.plot(xy[0], xy[1] - ref, label=lab, **style)
     for a in (ax, ad):
-        a.axvspan(60, 100, color='0.9', zorder=0,
-                  label='terminator region 60–100°' if a is ax else None)
+        a.axvspan(*region, color='0.9', zorder=0, label='terminator region '
+                  f'{region[0]:g}–{region[1]:g}°' if a is ax else None)
         a.grid(alpha=0.3)
     ad.axhline(0, color='k', lw=0.8)
-    finite = [x[np.isfinite(v)] for x, v in used if np.isfinite(v).any()]
-    if finite:
-        b = used[0][0][0]
-        ad.set_xlim(max(0, min(f.min() for f in finite) - b),
-                    min(180, max(f.max() for f in finite) + b))
+    if finite:  # clip to the bins that hold samples
+        finite = np.concatenate(finite)
+        ad.set_xlim(max(0, finite.min() - 1), min(180, finite.max() + 1))
     ax.set_ylabel(L_LABEL)
     ad.set_ylabel(f'Δ{L_LABEL}: method − truth')
-    ad.set_xlabel(THETA_LABEL)
+    ad.set_xlabel('θ: angle between light and base normal (degrees)')
     ax.set_title(f'terminator profiles: {var.get("label", var.get("id"))}',
                  wrap=True)
     ad.set_title(f'difference from the {REF} displacement ground truth'
@@ -297,10 +303,10 @@ def fig_profiles(var, colors, figdir, written):
 
 
 def axis_text(v, i):
+    """A tick label: numbers as they are, vectors as '#i: (x, y, z)'."""
     if isinstance(v, list):
         return f'#{i}: (' + ', '.join(fmt(t) for t in v) + ')'
-    return fmt(v, digits=4) if isinstance(num(v), float) and \
-        math.isfinite(num(v)) else str(v)
+    return fmt(v, digits=4) if math.isfinite(num(v)) else str(v)
 
 
 def axis_index(values, v):
@@ -314,27 +320,23 @@ def axis_index(values, v):
     return next((i for i, a in enumerate(values) if same(a, v)), None)
 
 
-def contour_lines(ax, X, Y, z, levels, label_fmt):
-    """Labelled black contour lines at the levels inside z's range."""
-    inner = [v for v in levels if z.count() and z.min() < v < z.max()]
-    if inner:
-        cs = ax.contour(X, Y, z, levels=inner, colors='k', linewidths=0.6)
-        ax.clabel(cs, fontsize=7, fmt=label_fmt)
-
-
 def geometric(v):
     """Whether positive values are more evenly spaced on a log scale."""
     v = np.sort(np.asarray(v, dtype=float))
     if v.size < 3 or v[0] <= 0:
         return False
+
     def cv(d):
         return np.std(d) / np.mean(d) if np.mean(d) > 0 else math.inf
     return cv(np.diff(np.log(v))) < cv(np.diff(v))
 
 
-def draw_grid(ax, grid, xs, ys, xlab, ylab, kind, norm, title):
-    """One panel: contour when kind == 'contour', else annotated heatmap."""
-    cmap = plt.get_cmap('viridis')
+def draw_grid(ax, grid, xs, ys, labels, kind, lim, title):
+    """One panel: contour when kind == 'contour', else annotated heatmap;
+    colours span lim = (vmin, vmax)."""
+    cmap, norm = plt.get_cmap('viridis'), plt.Normalize(*lim)  # own norm:
+    # one shared by several figures breaks matplotlib 3.6 at close
+    xt, yt = ([axis_text(v, i) for i, v in enumerate(a)] for a in (xs, ys))
     if kind == 'contour':
         X, Y = np.meshgrid([num(v) for v in xs], [num(v) for v in ys])
         z = np.ma.masked_invalid(grid)
@@ -343,97 +345,89 @@ def draw_grid(ax, grid, xs, ys, xlab, ylab, kind, norm, title):
         contour_lines(ax, X, Y, z, levels, '%.3g')
         ax.plot(X.ravel(), Y.ravel(), 'o', color='w', ms=3.5, mec='k',
                 mew=0.6, label='study samples')
+        ax.legend(loc='upper right', fontsize=7)
         for v, set_scale in ((xs, ax.set_xscale), (ys, ax.set_yscale)):
             if geometric([num(t) for t in v]):
                 set_scale('log')
         ax.minorticks_off()
-        ax.set_xticks([num(v) for v in xs], [axis_text(v, i)
-                                               for i, v in enumerate(xs)],
-                      rotation=45, ha='right')
-        ax.set_yticks([num(v) for v in ys], [axis_text(v, i)
-                                               for i, v in enumerate(ys)])
-        ax.legend(loc='upper right', fontsize=7)
+        ax.set_xticks(X[0], xt, rotation=45, ha='right')
+        ax.set_yticks(Y[:, 0], yt)
     else:
         im = ax.imshow(grid, origin='lower', cmap=cmap, norm=norm,
                        aspect='auto')
         for (i, j), v in np.ndenumerate(grid):
             lum = np.dot(cmap(norm(v))[:3], [0.299, 0.587, 0.114])
             ax.text(j, i, fmt(v), ha='center', va='center', fontsize=8,
-                    color='k' if (lum > 0.5 or not math.isfinite(v)) else 'w')
-        ax.set_xticks(range(len(xs)), [axis_text(v, i)
-                                       for i, v in enumerate(xs)],
-                      rotation=30, ha='right')
-        ax.set_yticks(range(len(ys)), [axis_text(v, i)
-                                       for i, v in enumerate(ys)])
-    ax.set_xlabel(xlab)
-    ax.set_ylabel(ylab)
-    ax.set_title(title)
+                    color='w' if lum < 0.5 and math.isfinite(v) else 'k')
+        ax.set_xticks(range(len(xs)), xt, rotation=30, ha='right')
+        ax.set_yticks(range(len(ys)), yt)
+    ax.set(xlabel=labels[0], ylabel=labels[1], title=title)
     return im
 
 
 def fig_plots(k, plot, doc, src, figdir, written):
-    """Small multiples (one panel per method) for each scene of a plot."""
-    axes = doc.get('axes') or []
+    """Per scene, the metric over axes[x] x axes[y] (mean over the other
+    axes): small multiples plot-<k>-<scene>.* and one file per method."""
+    axes = objs(doc.get('axes'))
     x, y = plot.get('x'), plot.get('y')
-    if not all(isinstance(i, int) and 0 <= i < len(axes) for i in (x, y)) \
-            or x == y:
+    if x == y or not all(type(i) is int and 0 <= i < len(axes)
+                         for i in (x, y)):
         raise BadInput(src, f'plots[{k}]: x and y must be two different '
                        f'indices into axes (0..{len(axes) - 1}), got {x!r}, '
                        f'{y!r}')
     metric, rend = str(plot.get('metric')), str(plot.get('renderer', REF))
-    xs, ys = axes[x].get('values') or [], axes[y].get('values') or []
-    variants = {v.get('id'): v for v in doc.get('variants') or []
-                if isinstance(v, dict)}
+    xs, ys = axes[x]['values'], axes[y]['values']
+    variants = {v.get('id'): v for v in objs(doc.get('variants'))}
     cells = {}  # (scene, method) -> [sum grid, count grid]
-    for c in doc.get('comparisons') or []:
-        if not isinstance(c, dict) or c.get('renderer') != rend or \
-                c.get('reference') != f'{rend}:displacement':
-            continue
-        var, val = variants.get(c.get('variant')), get_metric(c, metric)
-        av = var.get('axis_values') if var else None
-        if not isinstance(av, list) or len(av) != len(axes) or \
-                not math.isfinite(val):
+    for c in objs(doc.get('comparisons')):
+        var, val = obj(variants.get(c.get('variant'))), get_metric(c, metric)
+        av = var.get('axis_values')
+        if c.get('renderer') != rend or not math.isfinite(val) or \
+                c.get('reference') != f'{rend}:displacement' or \
+                not isinstance(av, list) or len(av) != len(axes):
             continue
         i, j = axis_index(ys, av[y]), axis_index(xs, av[x])
-        if i is None or j is None:
-            continue
-        key = (str(c.get('scene', var.get('scene'))), str(c.get('method')))
-        acc = cells.setdefault(key, [np.zeros((len(ys), len(xs))),
-                                     np.zeros((len(ys), len(xs)))])
-        acc[0][i, j] += val
-        acc[1][i, j] += 1
+        if i is not None and j is not None:
+            key = (str(c.get('scene', var.get('scene'))),
+                   str(c.get('method')))
+            acc = cells.setdefault(key, np.zeros((2, len(ys), len(xs))))
+            acc[:, i, j] += (val, 1)
     numeric = all(len(v) >= 2 and all(math.isfinite(num(t)) for t in v)
                   for v in (xs, ys))
-    ox = np.argsort([num(v) for v in xs]) if numeric else np.arange(len(xs))
-    oy = np.argsort([num(v) for v in ys]) if numeric else np.arange(len(ys))
+    ox, oy = (np.argsort([num(t) for t in v]) if numeric
+              else np.arange(len(v)) for v in (xs, ys))
     xs, ys = [xs[i] for i in ox], [ys[i] for i in oy]
+    labels = [str(axes[i].get('label', axes[i].get('pointer')))
+              for i in (x, y)]
     out = []
     for scene in dict.fromkeys(s for s, _ in cells):
-        grids = {}
-        for (s, m), (tot, cnt) in cells.items():
-            if s == scene:
-                with np.errstate(invalid='ignore', divide='ignore'):
-                    grids[m] = (tot / cnt)[np.ix_(oy, ox)]
+        with np.errstate(invalid='ignore', divide='ignore'):
+            grids = {m: (a[0] / a[1])[np.ix_(oy, ox)]
+                     for (s, m), a in cells.items() if s == scene}
         allv = np.concatenate([g[np.isfinite(g)] for g in grids.values()])
-        lo, hi = (allv.min(), allv.max()) if allv.size else (0, 1)
-        norm = plt.Normalize(lo, hi if hi > lo else lo + 1e-9)
+        lo, hi = allv.min(), allv.max()
+        pad = 0 if hi > lo else max(abs(lo) * 0.05, 1e-6)  # constant data
+        lim = (lo - pad, hi + pad)
         kind = 'contour' if plot.get('kind', 'contour') == 'contour' and \
-            numeric and all(np.isfinite(g).sum() >= 4 for g in grids.values()) \
-            else 'heatmap'
-        labels = (str(axes[x].get('label', axes[x].get('pointer'))),
-                  str(axes[y].get('label', axes[y].get('pointer'))))
+            numeric and all(np.isfinite(g).sum() >= 4
+                            for g in grids.values()) else 'heatmap'
         note = f'{rend} vs {rend}:displacement, {scene}'
-        n = len(grids)
-        fig, axs = plt.subplots(1, n, figsize=(4.2 * n + 1, 4.2),
-                                layout='constrained', squeeze=False)
-        for a, (m, g) in zip(axs[0], grids.items()):
-            im = draw_grid(a, g, xs, ys, *labels, kind, norm, m)
+        cols = min(len(grids), 3)
+        rows = -(-len(grids) // cols)
+        fig, axs = plt.subplots(rows, cols, squeeze=False,
+                                figsize=(4.2 * cols + 1, 4.2 * rows + 0.4),
+                                layout='constrained')
+        for a in axs.flat[len(grids):]:
+            a.set_visible(False)
+        for a, (m, g) in zip(axs.flat, grids.items()):
+            im = draw_grid(a, g, xs, ys, labels, kind, lim, m)
             f1, a1 = plt.subplots(figsize=(5.4, 4.4), layout='constrained')
-            im1 = draw_grid(a1, g, xs, ys, *labels, kind, norm, f'{m}: {note}')
-            f1.colorbar(im1, ax=a1, label=metric_label(metric))
+            f1.colorbar(draw_grid(a1, g, xs, ys, labels, kind, lim,
+                                  f'{m}: {note}'),
+                        ax=a1, label=metric_label(metric))
             save(f1, figdir, f'plot-{k}-{stem(scene)}-{stem(metric)}-'
                  f'{stem(m)}', written)
-        fig.colorbar(im, ax=axs[0].tolist(), label=metric_label(metric))
+        fig.colorbar(im, ax=axs.ravel().tolist(), label=metric_label(metric))
         fig.suptitle(f'{metric_label(metric)}: {note} (mean over other axes)')
         out.append((scene, save(fig, figdir, f'plot-{k}-{stem(scene)}',
                                 written)))
@@ -441,26 +435,28 @@ def fig_plots(k, plot, doc, src, figdir, written):
 
 
 CSS = """body{font:15px/1.45 system-ui,sans-serif;max-width:1400px;
-margin:1em auto;padding:0 1em;color:#222}h1,h2,h3{font-weight:600}
-h2{border-bottom:2px solid #ddd;margin-top:2em}table{border-collapse:collapse;
-margin:.5em 0 1em}td,th{border:1px solid #ccc;padding:3px 7px;
-vertical-align:top}th{background:#f3f3f3}td.n{text-align:right;
-font-variant-numeric:tabular-nums}.na{color:#999}img{max-width:100%}
-.fail td{color:#b00}.grid img{width:190px;image-rendering:pixelated}
-figure{margin:0}figcaption{font-size:12px;color:#555}footer{margin-top:3em;
-border-top:1px solid #ddd;font-size:13px;color:#555}nav a{margin-right:1em}"""
+margin:1em auto;padding:0 1em;color:#222}h2{border-bottom:2px solid #ddd;
+margin-top:2em}table{border-collapse:collapse;margin:.5em 0 1em}
+td,th{border:1px solid #ccc;padding:3px 7px;vertical-align:top}
+th{background:#f3f3f3}td.n{text-align:right;font-variant-numeric:
+tabular-nums}.na{color:#999}img{max-width:100%}.fail td,.fail{color:#b00}
+.grid img{width:160px;max-width:none;image-rendering:pixelated}
+.scroll{overflow-x:auto}figure{margin:0}
+figcaption{font-size:12px;color:#555}footer{margin-top:3em;border-top:1px
+solid #ddd;font-size:13px;color:#555}nav a{margin-right:1em}"""
 
 
 def table(head, rows, cls=''):
-    """An HTML table; cells are (text, numeric) pairs, text already escaped."""
-    h = ''.join(f'<th>{esc(c)}</th>' for c in head)
-
-    def td(t, n):
-        c = ' '.join(['n'] * n + ['na'] * (t == 'n/a'))
-        return f'<td class="{c}">{t}</td>' if c else f'<td>{t}</td>'
-    body = ''.join(f'\n<tr{cls}>' + ''.join(td(t, n) for t, n in r) +
-                   '</tr>' for r in rows)
-    return f'<table><tr>{h}</tr>{body}</table>'
+    """An HTML table of raw strings (escaped here) and numbers formatted by
+    fmt (right-aligned); a number given as (value, scale) is scaled."""
+    def td(c):
+        if isinstance(c, str) or type(c) is int:
+            return f'<td{" class=n" * (type(c) is int)}>{esc(c)}</td>'
+        t = fmt(*c) if isinstance(c, tuple) else fmt(c)
+        return f'<td class="n{" na" * (t == "n/a")}">{t}</td>'
+    return ('<table><tr>' + ''.join(f'<th>{esc(c)}</th>' for c in head) +
+            '</tr>' + ''.join(f'\n<tr{cls}>' + ''.join(map(td, r)) + '</tr>'
+                              for r in rows) + '</table>')
 
 
 def img(uri, alt, cap=''):
@@ -468,94 +464,99 @@ def img(uri, alt, cap=''):
     return f'<figure><img src="{uri}" alt="{esc(alt)}">{c}</figure>'
 
 
-def variant_html(var, out, comps, missing, fig, renderers):
-    vid, renders = str(var.get('id')), var.get('renders') or []
-    where = (os.path.join(out, 'report.json'), f'variant {vid}')
+def image_grid(var, uris, missing, renderers):
+    """Rows: renderers (image row, then difference row); columns: ground
+    truth, then methods (Chiang 2019, Fig. 4)."""
+    renders = objs(var.get('renders'))
+    cols = list(dict.fromkeys([GROUND_TRUTH] + [column(r) for r in renders]))
+    at = {(str(r.get('renderer')), column(r)): r for r in renders}
 
-    def col(r):
-        rep = str(r.get('representation'))
-        return 'ground truth (displacement)' if rep == 'displacement' else (
-            str(r.get('method')) if rep == 'bump' else
-            f'{r.get("method")} ({rep})')
-    renders = [r for r in renders if isinstance(r, dict)]
-    cols = list(dict.fromkeys(['ground truth (displacement)'] +
-                              [col(r) for r in renders]))
-    rows = list(dict.fromkeys(renderers + [str(r.get('renderer'))
-                                           for r in renders]))
-    at = {(str(r.get('renderer')), col(r)): r for r in renders}
+    def cell(rel, alt, cap):
+        return '<td>' + (img(uris[rel], alt, cap) if rel is not None
+                         else '') + '</td>'
     grid = '<tr><th>renderer</th>' + ''.join(f'<th>{esc(c)}</th>'
                                              for c in cols) + '</tr>'
-    for rend in rows:
-        if not any((rend, c) in at for c in cols):
+    for rend in dict.fromkeys(renderers + [k[0] for k in at]):
+        rs = [at.get((rend, c)) for c in cols]
+        if not any(rs):
             continue
-        line, diff = f'<tr><th>{esc(rend)}</th>', '<tr><th>difference</th>'
-        for c in cols:
-            r = at.get((rend, c))
-            if r is None:
-                why = missing.get((rend, c), 'not rendered')
-                line += f'<td class="na">{esc(why)}</td>'
-                diff += '<td></td>'
-                continue
-            if isinstance(r.get('image'), str):
-                line += '<td>' + img(data_uri(inside(
-                    out, r['image'], where), where), f'{rend} {c}',
-                    f'{rend} / {c}') + '</td>'
-            else:
-                line += '<td class="na">no image</td>'
-            d = r.get('difference')
-            diff += '<td>' + (img(data_uri(inside(out, d, where), where),
-                                  f'{rend} {c} difference',
-                                  f'{c} − displacement ({rend})')
-                              if isinstance(d, str) else '') + '</td>'
-        grid += line + '</tr>'
-        if any(isinstance(at.get((rend, c), {}).get('difference'), str)
-               for c in cols):
-            grid += diff + '</tr>'
-    pct = [('profile.rmse_terminator', 100), ('profile.rmse_overall', 100),
-           ('profile.max_error_terminator', 100), ('profile.max_step', 100),
-           ('profile.position_error_deg', 1), ('profile.width_deg', 1),
-           ('profile.lit_bias', 100), ('image.rmse', 1), ('image.ssim', 1)]
-    rows = [[(esc(c.get('renderer')), False), (esc(c.get('method')), False),
-             (esc(c.get('reference')), False)] +
-            [(fmt(get_metric(c, m), s), True) for m, s in pct] for c in comps]
+        grid += f'\n<tr><th>{esc(rend)}</th>' + ''.join(
+            cell(r.get('image'), f'{rend} {c}', f'{rend} / {c}') if r else
+            f'<td class="na">{esc(missing.get((rend, c), "not rendered"))}'
+            '</td>' for c, r in zip(cols, rs)) + '</tr>'
+        if any(r and r.get('difference') is not None for r in rs):
+            grid += '\n<tr><th>difference</th>' + ''.join(
+                cell(r.get('difference'), f'{rend} {c} difference',
+                     f'{c} − displacement ({rend})') if r else '<td></td>'
+                for c, r in zip(cols, rs)) + '</tr>'
+    return f'<div class="scroll"><table class="grid">{grid}</table></div>'
+
+
+def variant_html(var, uris, comps, missing, fig, renderers):
+    vid = str(var.get('id'))
+    metrics = [('profile.rmse_terminator', 100), ('profile.rmse_overall', 100),
+               ('profile.max_error_terminator', 100),
+               ('profile.max_step', 100), ('profile.position_error_deg', 1),
+               ('profile.width_deg', 1), ('profile.lit_bias', 100),
+               ('image.rmse', 1), ('image.ssim', 1)]
+    rows = [[str(c.get('renderer')), str(c.get('method')),
+             str(c.get('reference'))] +
+            [(get_metric(c, m), s) for m, s in metrics] for c in comps]
     head = ['renderer', 'method', 'reference', 'terminator RMSE (%)',
             'overall RMSE (%)', 'max error (%)', 'max step (%)',
             'position error (deg)', 'width (deg)', 'lit bias (%)',
             'image RMSE (W m⁻² sr⁻¹)', 'SSIM']
     return (f'<h2 id="v-{esc(stem(vid))}">{esc(vid)}: '
-            f'{esc(var.get("label", ""))}</h2><h3>Images</h3>'
-            f'<table class="grid">{grid}</table><h3>Terminator profiles</h3>'
-            + img(data_uri(fig, where), f'profiles {vid}') +
-            '<h3>Metrics</h3>' + (table(head, rows) if rows else
-                                  '<p class="na">no comparisons</p>'))
+            f'{esc(var.get("label", ""))}</h2>\n<h3>Images</h3>\n' +
+            image_grid(var, uris, missing, renderers) +
+            '\n<p class="note">Difference images: method minus the same '
+            "renderer's displacement ground truth; red brighter, blue "
+            'darker, white equal, saturating at ±0.25 albedo·E/π; grey '
+            'where either image has no object.</p>' +
+            '\n<h3>Terminator profiles</h3>\n' +
+            img(data_uri(fig, fig, 'figure'), f'profiles {vid}',
+                f'figures/profiles-{stem(vid)}.{{png,svg,pdf}}') +
+            '\n<h3>Metrics</h3>\n' + (table(head, rows) if rows else
+                                      '<p class="na">no comparisons</p>'))
 
 
 def run_report(out):
-    doc = load_json(os.path.join(out, 'report.json'), 'penumbra-report')
-    where = os.path.join(out, 'report.json')
+    src = os.path.join(out, 'report.json')
+    doc = load_json(src, 'penumbra-report')
     for key in ('axes', 'renderers', 'variants', 'comparisons', 'missing',
                 'failures', 'plots'):
         if not isinstance(doc.get(key, []), list):
-            raise BadInput(where, f'"{key}" must be an array')
+            raise BadInput(src, f'"{key}" must be an array')
     for i, a in enumerate(doc.get('axes', [])):
-        if not isinstance(a, dict) or not isinstance(a.get('values'), list):
-            raise BadInput(where, f'axes[{i}]: expected an object with '
-                           '"values": [...]')
-    if not isinstance(doc.get('ranking', {}), dict):
-        raise BadInput(where, '"ranking" must be an object')
+        if not isinstance(obj(a).get('values'), list):
+            raise BadInput(src, f'axes[{i}]: expected {{"values": [...]}}')
+    rends, rk = objs(doc.get('renderers')), obj(doc.get('ranking'))
+    variants, comps = objs(doc.get('variants')), objs(doc.get('comparisons'))
+    uris = {}  # the images named in the JSON, checked before any drawing
+    for v in variants:
+        for r in objs(v.get('renders')):
+            for key in ('image', 'difference'):
+                ctx = f'variant {v.get("id")}: {key}'
+                if r.get(key) is not None:
+                    path = inside(out, r[key], src, ctx)
+                    uris[r[key]] = data_uri(path, src, ctx)
+    units = obj(doc.get('units'))
+    terminator, lit = ([float(t) for t in r] if isinstance(r, list) and len(
+        r) == 2 and all(math.isfinite(num(t)) for t in r) else d for r, d in (
+        (units.get('terminator_region_deg'), [60.0, 100.0]),
+        (units.get('lit_region_deg'), [0.0, 60.0])))
     figdir, written = os.path.join(out, 'figures'), []
     os.makedirs(figdir, exist_ok=True)
-    rends = [r for r in doc.get('renderers', []) if isinstance(r, dict)]
-    rk = doc.get('ranking') or {}
-    variants = [v for v in doc.get('variants', []) if isinstance(v, dict)]
-    comps = [c for c in doc.get('comparisons', []) if isinstance(c, dict)]
+    groups = [('overall', objs(rk.get('overall')))] + [
+        (f'scene {s.get("scene")}', objs(s.get('methods')))
+        for s in objs(rk.get('per_scene'))]
     colors = method_colors(
         [str(m) for r in rends for m in r.get('methods') or []] +
-        [str(e.get('method')) for e in rk.get('overall') or []
-         if isinstance(e, dict)] +
-        [str(r.get('method')) for v in variants for r in v.get('renders')
-         or [] if isinstance(r, dict)] + [str(c.get('method')) for c in comps])
-    study = doc.get('study') if isinstance(doc.get('study'), dict) else {}
+        [str(e.get('method')) for _, g in groups for e in g] +
+        [str(r.get('method')) for v in variants
+         for r in objs(v.get('renders'))] +
+        [str(c.get('method')) for c in comps])
+    study = obj(doc.get('study'))
     title = f'Penumbra report: {study.get("name", "study")}'
     nav = ''.join(f'<a href="#v-{esc(stem(v.get("id")))}">{esc(v.get("id"))}'
                   '</a>' for v in variants)
@@ -567,95 +568,97 @@ def run_report(out):
              f'{esc(doc.get("penumbra", "?"))}.</p><nav><a href="#headline">'
              f'Headline</a><a href="#renderers">Renderers</a>{nav}'
              '<a href="#plots">Sweeps</a></nav>',
-             '<h2 id="headline">Headline</h2>']
-    parts.append(f'<p>Metric {esc(rk.get("metric", "?"))} of renderer '
-                 f'{esc(rk.get("renderer", "?"))} against '
-                 f'{esc(rk.get("reference", "?"))}; lower is better.</p>')
-    groups = [('overall', rk.get('overall') or [])] + [
-        (f'scene {s.get("scene")}', s.get('methods') or [])
-        for s in rk.get('per_scene') or [] if isinstance(s, dict)]
-    for name, entries in groups:
-        rows = [[(esc(e.get('method')), False),
-                 (fmt(e.get('mean'), 100, 3), True),
-                 (str(i + 1), True), (esc(e.get('count', '')), True)]
-                for i, e in enumerate(x for x in entries if isinstance(x, dict))]
-        parts.append(f'<h3>{esc(name)}</h3>' + table(
-            ['method', 'mean terminator-region RMSE (%)', 'rank', 'count'],
-            rows))
+             '<h2 id="headline">Headline</h2>',
+             f'<p>Ranking by {esc(rk.get("metric", "?"))} of renderer '
+             f'{esc(rk.get("renderer", "?"))} against '
+             f'{esc(rk.get("reference", "?"))}; lower is better.</p>']
+    name, unit = METRICS.get(rk.get('metric'), (rk.get('metric'), ''))
+    scale = 100 if unit == FRACTION else 1
+    for group, entries in groups:
+        if entries:
+            parts.append(f'<h3>{esc(group)}</h3>' + table(
+                ['method', f'mean {name} ({"%" if scale == 100 else unit})',
+                 'rank', 'count'],
+                [[str(e.get('method')), (e.get('mean'), scale),
+                  i + 1 if math.isfinite(num(e.get('mean'))) else None,
+                  e.get('count')] for i, e in enumerate(entries)]))
     fig = fig_ranking(rk, colors, figdir, written)
     if fig:
-        parts.append(img(data_uri(fig, (fig, 'figure')), 'ranking',
+        parts.append(img(data_uri(fig, fig, 'figure'), 'ranking',
                          'figures/ranking.{png,svg,pdf}'))
-    rows = [[(esc(r.get('id')), False), (esc(r.get('version', '')), False),
-             (esc(', '.join(map(str, r.get('methods') or []))), False),
-             (esc(r.get('note', '')), False)] for r in rends]
     parts.append('<h2 id="renderers">Renderers</h2>' + table(
-        ['renderer', 'version', 'methods', 'note'], rows))
-    miss = [m for m in doc.get('missing', []) if isinstance(m, dict)]
+        ['renderer', 'version', 'methods', 'note'],
+        [[str(r.get('id')), str(r.get('version', '')),
+          ', '.join(map(str, r.get('methods') or [])),
+          str(r.get('note', ''))] for r in rends]))
+    miss = objs(doc.get('missing'))
     if miss:
         parts.append('<h3>Rows a renderer cannot provide</h3>' + table(
             ['renderer', 'method', 'why'],
-            [[(esc(m.get(k, '')), False) for k in ('renderer', 'method',
-                                                   'why')] for m in miss]))
-    fails = [f for f in doc.get('failures', []) if isinstance(f, dict)]
+            [[str(m.get(k, '')) for k in ('renderer', 'method', 'why')]
+             for m in miss]))
+    fails = objs(doc.get('failures'))
     if fails:
-        parts.append('<h3 style="color:#b00">Failures</h3>' + table(
-            ['render', 'error'], [[(esc(f.get('render', '')), False),
-                                   (esc(f.get('error', '')), False)]
-                                  for f in fails], ' class="fail"'))
+        parts.append('<h3 class="fail">Failures</h3>' + table(
+            ['render', 'error'], [[str(f.get('render', '')),
+                                   str(f.get('error', ''))] for f in fails],
+            ' class="fail"'))
     missing = {(str(m.get('renderer')), str(m.get('method'))):
                str(m.get('why', '')) for m in miss}
     for v in variants:
-        fig = fig_profiles(v, colors, figdir, written)
+        fig = fig_profiles(v, colors, terminator, figdir, written)
         parts.append(variant_html(
-            v, out, [c for c in comps if c.get('variant') == v.get('id')],
+            v, uris, [c for c in comps if c.get('variant') == v.get('id')],
             missing, fig, [str(r.get('id')) for r in rends]))
     parts.append('<h2 id="plots">Sweeps</h2>')
     for k, plot in enumerate(doc.get('plots', [])):
         if not isinstance(plot, dict):
-            raise BadInput(where, f'plots[{k}] must be an object')
-        metric, rend, figs = fig_plots(k, plot, doc, where, figdir, written)
+            raise BadInput(src, f'plots[{k}] must be an object')
+        metric, rend, figs = fig_plots(k, plot, doc, src, figdir, written)
         parts.append(f'<h3>{esc(metric_label(metric))}, {esc(rend)}</h3>')
-        parts += [img(data_uri(f, (f, 'figure')), f'plot {k} {s}',
-                      f'scene {s}: figures/{os.path.basename(f)[:-4]}'
+        parts += [img(data_uri(f, f, 'figure'), f'plot {k} {s}',
+                      f'scene {s}: {os.path.relpath(f, out)[:-4]}'
                       '.{png,svg,pdf}') for s, f in figs] or [
             '<p class="na">no finite values for this plot</p>']
     parts.append(
         '<footer><p>Profile values are fractions of albedo·E/π (a smooth '
         'Lambertian surface gives cos θ). θ is the angle between the light '
         'direction and the base-surface normal, in degrees; the terminator '
-        'region is 60–100°, the lit region θ &lt; 60°. RMSE and bias in the '
-        'tables are in percent of albedo·E/π; image metrics are in the '
-        'image unit (' + esc((doc.get('units') or {}).get(
-            'image', 'W m^-2 sr^-1')) + '). Figures are in '
-        'figures/ as PNG, SVG and PDF.</p></footer></body></html>\n')
+        f'region is {terminator[0]:g}–{terminator[1]:g}°, the lit region '
+        f'{lit[0]:g}–{lit[1]:g}°. Profile RMSE, errors, '
+        'steps and bias in the tables are in percent of albedo·E/π; image '
+        'metrics are in the image unit (' +
+        esc(units.get('image', 'W m^-2 sr^-1')) +
+        '). Every figure is also in figures/ as PNG, SVG and PDF.</p>'
+        '</footer></body></html>\n')
     path = os.path.join(out, 'report.html')
-    with open(path, 'w', encoding='utf-8') as f:
+    with open(path + '.tmp', 'w', encoding='utf-8') as f:
         f.write('\n'.join(parts))
+    os.replace(path + '.tmp', path)
     return written + [path]
 
 
 # --------------------------------------------------------------- contour ---
 
 def contour_panel(ax, L, D, G, title, diff=None):
-    """G (or a difference when diff is its symmetric limit) over (L, D)."""
+    """G, or a difference when diff is given (its symmetric limit)."""
     if diff is None:
         levels, cmap, lines = np.linspace(0, 1, 11), 'viridis', None
     else:
-        levels, cmap = np.linspace(-diff, diff, 21), 'RdBu'
+        levels = MaxNLocator(20, symmetric=True).tick_values(-diff, diff)
+        cmap = 'RdBu'
         lines = MaxNLocator(8, symmetric=True).tick_values(-diff, diff)
     z = np.ma.masked_invalid(G)
-    extend = 'neither' if diff is not None or not z.count() or (
-        z.min() >= 0 and z.max() <= 1) else 'both'
     if z.count():
+        extend = 'both' if diff is None and (z.min() < 0 or z.max() > 1) \
+            else 'neither'
         im = ax.contourf(L, D, z, levels=levels, cmap=cmap, extend=extend)
         contour_lines(ax, L, D, z, levels if lines is None else lines,
                       '%.2g')
     else:
         ax.text(0.5, 0.5, 'undefined everywhere', transform=ax.transAxes,
                 ha='center')
-        ax.set_xlim(L[0], L[-1])
-        ax.set_ylim(D[0], D[-1])
+        ax.set(xlim=(L[0], L[-1]), ylim=(D[0], D[-1]))
         im = plt.cm.ScalarMappable(plt.Normalize(levels[0], levels[-1]),
                                    cmap)
     lo, hi = max(L[0], D[0]), min(L[-1], D[-1])
@@ -664,9 +667,8 @@ def contour_panel(ax, L, D, G, title, diff=None):
             path_effects=[patheffects.withStroke(linewidth=2.6,
                                                  foreground='k')])
     ax.legend(loc='upper left', fontsize=7)
-    ax.set_xlabel('light angle from Ng (degrees)')
-    ax.set_ylabel('shading-normal deviation towards the light (degrees)')
-    ax.set_title(title)
+    ax.set(xlabel='light angle from Ng (degrees)', title=title,
+           ylabel='shading-normal deviation towards the light (degrees)')
     return im
 
 
@@ -674,41 +676,37 @@ def run_contour(path, outdir):
     doc = load_json(path, 'penumbra-contour')
     L, D = farray(doc.get('light_deg')), farray(doc.get('deviation_deg'))
     for name, a in (('light_deg', L), ('deviation_deg', D)):
-        if a.size < 2 or not np.all(np.isfinite(a)) or np.any(np.diff(a) <= 0):
-            raise BadInput(path, f'"{name}" must be >= 2 increasing numbers')
-    methods = doc.get('methods')
-    if not isinstance(methods, list) or not methods:
-        raise BadInput(path, '"methods" must be a non-empty array')
+        if a.size < 2 or not np.all(np.diff(a) > 0):
+            raise BadInput(path, f'"{name}": expected >= 2 increasing numbers')
+    if not isinstance(doc.get('methods'), list) or not doc['methods']:
+        raise BadInput(path, '"methods": expected a non-empty array')
     G = {}
-    for i, m in enumerate(methods):
-        g = m.get('G') if isinstance(m, dict) else None
-        if not isinstance(m, dict) or not isinstance(m.get('id'), str) or \
+    for i, m in enumerate(doc['methods']):
+        g = obj(m).get('G')
+        if not isinstance(obj(m).get('id'), str) or m['id'] in G or \
                 not isinstance(g, list) or len(g) != D.size or \
                 any(not isinstance(r, list) or len(r) != L.size for r in g):
-            raise BadInput(path, f'methods[{i}]: expected {{"id": string, '
-                           f'"G": {D.size} rows of {L.size} numbers}}')
+            raise BadInput(path, f'methods[{i}]: expected {{"id": a new '
+                           f'string, "G": {D.size} rows of {L.size} numbers}}')
         G[m['id']] = np.array([farray(r) for r in g])
     os.makedirs(outdir, exist_ok=True)
-    written = []
+    written, ids = [], list(G)
 
-    def diff_limit(d):
-        m = np.nanmax(np.abs(d)) if np.isfinite(d).any() else 0
-        return float(m) if m > 0 else 1e-3
-
-    def diff_title(a, b):
-        return f'G[{a}] − G[{b}]\npositive: {a} lets more light through'
+    def diff_panel(ax, fig, a, b):
+        d = G[a] - G[b]
+        lim = np.nanmax(np.abs(d)) if np.isfinite(d).any() else 0
+        im = contour_panel(ax, L, D, d, f'G[{a}] − G[{b}]\npositive: {a} '
+                           'lets more light through', float(lim) or 1e-3)
+        fig.colorbar(im, ax=ax, label=f'G[{a}] − G[{b}]')
     for m, g in G.items():
         fig, ax = plt.subplots(figsize=(5.6, 4.6), layout='constrained')
         im = contour_panel(ax, L, D, g, f'terminator factor G: {m}')
         fig.colorbar(im, ax=ax, label='G (fraction of light let through)')
         save(fig, outdir, f'contour-{stem(m)}', written)
-    ids = list(G)
     for i, a in enumerate(ids):
         for b in ids[i + 1:]:
-            d = G[a] - G[b]
             fig, ax = plt.subplots(figsize=(5.6, 4.8), layout='constrained')
-            im = contour_panel(ax, L, D, d, diff_title(a, b), diff_limit(d))
-            fig.colorbar(im, ax=ax, label=f'G[{a}] − G[{b}]')
+            diff_panel(ax, fig, a, b)
             save(fig, outdir, f'contour-diff-{stem(a)}-{stem(b)}', written)
     n = len(ids) + (len(ids) >= 2)
     fig, axs = plt.subplots(1, n, figsize=(4.3 * n + 1, 4.6),
@@ -717,24 +715,20 @@ def run_contour(path, outdir):
         im = contour_panel(ax, L, D, G[m], m)
     fig.colorbar(im, ax=axs[0][:len(ids)].tolist(), label='G')
     if len(ids) >= 2:
-        d = G[ids[0]] - G[ids[1]]
-        im = contour_panel(axs[0][-1], L, D, d, diff_title(*ids[:2]),
-                           diff_limit(d))
-        fig.colorbar(im, ax=axs[0][-1], label='difference of G')
+        diff_panel(axs[0][-1], fig, ids[0], ids[1])
     save(fig, outdir, 'contour', written)
     return written
 
 
 def main(argv):
-    usage = ('usage: report.py report OUT | '
-             'report.py contour CONTOUR.json OUTDIR')
     try:
         if len(argv) == 2 and argv[0] == 'report':
             written = run_report(argv[1])
         elif len(argv) == 3 and argv[0] == 'contour':
             written = run_contour(argv[1], argv[2])
         else:
-            print(usage, file=sys.stderr)
+            print('usage: report.py report OUT | '
+                  'report.py contour CONTOUR.json OUTDIR', file=sys.stderr)
             return 2
     except BadInput as e:
         print(f'report.py: {e}', file=sys.stderr)

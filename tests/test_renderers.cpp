@@ -89,8 +89,7 @@ TEST_F(Renderers, PovraySdlIsInertWhateverTheSceneName) {
       continue;
     }
     if (line.rfind("#", 0) == 0) {
-      EXPECT_TRUE(line.rfind("#version 3.7;", 0) == 0 ||
-                  line.rfind("#declare Penumbra_H", 0) == 0)
+      EXPECT_TRUE(line.rfind("#version 3.7;", 0) == 0 || line.rfind("#declare Penumbra_H", 0) == 0)
           << line;
     }
   }

@@ -27,8 +27,8 @@ bool usable(const Profile& a, std::size_t k, std::uint64_t min_count) {
 }
 
 // OpenImageIO's ImageBufAlgo has no SSIM, hence this one.
-double ssim_in_mask(const Image& test, const Image& reference, const int trgb[3],
-                    const int rrgb[3], int ta, int ra, double min_coverage, double peak) {
+double ssim_in_mask(const Image& test, const Image& reference, const int trgb[3], const int rrgb[3],
+                    int ta, int ra, double min_coverage, double peak) {
   const int w = test.width, h = test.height, radius = 5;
   double kernel[2 * 5 + 1];
   for (int i = -radius; i <= radius; ++i) kernel[i + radius] = std::exp(-0.5 * i * i / (1.5 * 1.5));
@@ -206,7 +206,8 @@ ImageMetrics compare_images(const Image& test, const Image& reference, double mi
       ++m.pixels;
     }
   m.mask_iou = either ? double(both) / double(either) : 1.0;
-  m.ssim = m.pixels ? ssim_in_mask(test, reference, trgb, rrgb, ta, ra, min_coverage, m.peak) : kNaN;
+  m.ssim =
+      m.pixels ? ssim_in_mask(test, reference, trgb, rrgb, ta, ra, min_coverage, m.peak) : kNaN;
   if (m.pixels) {
     m.rmse = std::sqrt(sum_sq / double(m.pixels));
     m.mean_error = sum / double(m.pixels);

@@ -82,8 +82,8 @@ struct ImageMetrics {
   // sigma 1.5, K1 = 0.01, K2 = 0.03, dynamic range = reference peak; window
   // weights renormalised over covered pixels so the background does not count).
   double ssim = 0.0;
-  std::size_t pixels = 0;       // pixels fully covered in both
-  std::size_t nonfinite = 0;    // NaN or Inf values in either image (a failure)
+  std::size_t pixels = 0;     // pixels fully covered in both
+  std::size_t nonfinite = 0;  // NaN or Inf values in either image (a failure)
 };
 
 ImageMetrics compare_images(const Image& test, const Image& reference, double min_coverage = 0.999);

@@ -20,13 +20,13 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "analysis/contour.h"
 #include "analysis/metrics.h"
 #include "analysis/metrics_json.h"
 #include "export/export.h"
 #include "render/evaluator.h"
 #include "render/image_io.h"
 #include "renderers/renderers.h"
-#include "analysis/contour.h"
 #include "report/calibration.h"
 #include "report/study.h"
 #include "scene/scene_json.h"
@@ -355,7 +355,9 @@ int command_calibrate(const CalibrationOptions& options, bool quiet, std::ostrea
 }
 
 std::atomic<bool> g_interrupted{false};
-extern "C" void on_sigint(int) { g_interrupted.store(true); }
+extern "C" void on_sigint(int) {
+  g_interrupted.store(true);
+}
 
 std::string duration_text(double s) {
   if (!std::isfinite(s) || s < 0) return "?";
@@ -375,7 +377,8 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   const Study study = load_study(a.study);
   StudyOptions o;
   o.output_dir = a.output.empty() ? "results/" + study.name : a.output;
-  o.jobs = a.jobs > 0 ? a.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  o.jobs =
+      a.jobs > 0 ? a.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   o.timeout_s = a.timeout;
   o.max_new_renders = a.max_renders;
   o.figures = !a.no_figures;
@@ -386,7 +389,8 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
     o.progress = [&](std::size_t done, std::size_t total, double eta) {
       std::lock_guard<std::mutex> lock(mutex);
       const int width = 30;
-      const int fill = static_cast<int>(width * double(done) / double(std::max<std::size_t>(total, 1)));
+      const int fill =
+          static_cast<int>(width * double(done) / double(std::max<std::size_t>(total, 1)));
       err << fmt::format("\r[{}{}] {}/{} renders, ETA {}   ", std::string(fill, '#'),
                          std::string(width - fill, '.'), done, total, duration_text(eta))
           << std::flush;
@@ -404,7 +408,8 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
     };
   }
   g_interrupted.store(false);
-  struct sigaction action {}, previous {};
+  struct sigaction action {
+  }, previous{};
   action.sa_handler = on_sigint;
   sigemptyset(&action.sa_mask);
   ::sigaction(SIGINT, &action, &previous);
@@ -424,9 +429,10 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
       stats.seconds);
   for (const std::string& f : stats.failures) out << "  failed: " << f << "\n";
   if (stats.not_started > 0) {
-    out << fmt::format("stopped before the end; run the same command again to resume (finished "
-                       "renders are cached in {}/cache)\n",
-                       o.output_dir);
+    out << fmt::format(
+        "stopped before the end; run the same command again to resume (finished "
+        "renders are cached in {}/cache)\n",
+        o.output_dir);
     return g_interrupted.load() ? 130 : kExitFailure;
   }
   out << fmt::format("wrote {0}/report.json, {0}/metrics.csv{1}\n", o.output_dir,
@@ -440,7 +446,8 @@ int command_contour(const std::vector<std::string>& ids, double step, const std:
   std::vector<MethodSettings> methods;
   for (const std::string& id : ids) {
     const auto m = method_from_id(id);
-    if (!m) throw UsageError(fmt::format("--method: unknown method \"{}\" (see penumbra methods)", id));
+    if (!m)
+      throw UsageError(fmt::format("--method: unknown method \"{}\" (see penumbra methods)", id));
     methods.push_back({*m, 0.0});
   }
   std::error_code ec;
@@ -459,20 +466,22 @@ int command_contour(const std::vector<std::string>& ids, double step, const std:
   }
   const json doc = {{"format", "penumbra-contour"},
                     {"version", 1},
-                    {"geometry", "Ng = z, wi = (sin light, 0, cos light), Ns = (sin deviation, 0, "
-                                 "cos deviation), wo = Ng; angles in degrees; G dimensionless"},
+                    {"geometry",
+                     "Ng = z, wi = (sin light, 0, cos light), Ns = (sin deviation, 0, "
+                     "cos deviation), wo = Ng; angles in degrees; G dimensionless"},
                     {"light_deg", grid.light_deg},
                     {"deviation_deg", grid.deviation_deg},
                     {"methods", methods_json}};
   const fs::path dir(output);
   write_text_file((dir / "contour.json").string(), doc.dump(1) + "\n");
   write_text_file((dir / "contour.csv").string(), csv);
-  run_plot_script({"contour", fs::absolute(dir / "contour.json").string(),
-                   fs::absolute(dir).string()},
-                  (dir / "contour.log").string());
-  out << fmt::format("wrote {0}/contour.json, {0}/contour.csv and contour plots (PNG, SVG, PDF) "
-                     "in {0}\n",
-                     output);
+  run_plot_script(
+      {"contour", fs::absolute(dir / "contour.json").string(), fs::absolute(dir).string()},
+      (dir / "contour.log").string());
+  out << fmt::format(
+      "wrote {0}/contour.json, {0}/contour.csv and contour plots (PNG, SVG, PDF) "
+      "in {0}\n",
+      output);
   return kExitOk;
 }
 
@@ -624,8 +633,9 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       ->check(CLI::Range(1, 256));
   run_cmd->add_option("--timeout", run_args.timeout, "seconds per external render")
       ->check(CLI::PositiveNumber);
-  run_cmd->add_option("--max-renders", run_args.max_renders,
-                      "start at most this many new renders, then stop (resume later)")
+  run_cmd
+      ->add_option("--max-renders", run_args.max_renders,
+                   "start at most this many new renders, then stop (resume later)")
       ->check(CLI::NonNegativeNumber);
   run_cmd->add_flag("--no-figures", run_args.no_figures, "skip matplotlib figures and report.html");
   run_cmd->add_flag("-q,--quiet", run_args.quiet, "no progress");

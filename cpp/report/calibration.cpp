@@ -193,8 +193,8 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
       fs::remove(settings.log_path, ignored);  // a log per attempt, not appended forever
       RendererRun run = render_with(spec.renderer, spec.scene, settings);
       r.seconds = run.seconds;
-      r.evaluator_seconds = spec.renderer == RendererKind::kEvaluator ? run.seconds
-                                                                      : run.geometry_seconds;
+      r.evaluator_seconds =
+          spec.renderer == RendererKind::kEvaluator ? run.seconds : run.geometry_seconds;
       write_exr(run.image, r.file,
                 {{"penumbra:version", kPenumbraVersion},
                  {"penumbra:renderer", r.renderer},
@@ -280,7 +280,8 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
         footprint_explanation(specs[index.at(key(shape, Representation::kBump, "none", B))].scene);
     compare(shape, Representation::kBump, "none", B, "none", E,
             "no bound: Cycles 3.4 differentiates h over the pixel footprint (ray "
-            "differentials), not analytically. " + footprint_note);
+            "differentials), not analytically. " +
+                footprint_note);
     compare(shape, Representation::kBump, "chiang2019", B, "chiang2019", E,
             "no bound: Cycles' own chiang2019 (Bump node, Ng := Ni) on the same "
             "footprint-differenced normal");
@@ -321,8 +322,8 @@ std::string calibration_table(const CalibrationResult& result) {
   s += "\nRMSE/pk, maxerr/pk: image errors over pixels fully covered in both, divided by the "
        "reference's peak radiance.\nprof.RMSE, term.RMSE: terminator-profile RMSE overall and "
        "over 60-100 degrees, as a fraction of albedo*E/pi.\n";
-  s += fmt::format("\n{:<44} {:>10} {:>12} {:>9}\n", "wall time per render",
-                   "seconds", "evaluator s", "speed-up");
+  s += fmt::format("\n{:<44} {:>10} {:>12} {:>9}\n", "wall time per render", "seconds",
+                   "evaluator s", "speed-up");
   for (const CalibrationRender& r : result.renders)
     s += !r.error.empty() ? fmt::format("  {:<42} FAILED\n", r.label)
          : r.renderer == "evaluator"
@@ -372,17 +373,18 @@ void write_calibration_reports(const CalibrationResult& result, const std::strin
                       r.image.rmse, r.profile.rmse_overall, r.profile.rmse_terminator,
                       checks.empty() ? "reported" : checks, r.note);
   }
-  md += "\n## Wall time per render\n\nSpeed-up: the renderer's wall time (process start to "
-        "exit) over the evaluator's on the same scene and sample count.\n\n"
-        "| render | renderer | seconds | evaluator seconds | speed-up |\n|---|---|---|---|---|\n";
+  md +=
+      "\n## Wall time per render\n\nSpeed-up: the renderer's wall time (process start to "
+      "exit) over the evaluator's on the same scene and sample count.\n\n"
+      "| render | renderer | seconds | evaluator seconds | speed-up |\n|---|---|---|---|---|\n";
   for (const CalibrationRender& r : result.renders) {
     if (!r.error.empty())
       md += fmt::format("| {} | {} | failed | | |\n", r.label, r.renderer);
     else if (r.renderer == "evaluator")
       md += fmt::format("| {} | {} | {:.3f} | | |\n", r.label, r.renderer, r.seconds);
     else
-      md += fmt::format("| {} | {} | {:.3f} | {:.3f} | {:.0f}x |\n", r.label, r.renderer,
-                        r.seconds, r.evaluator_seconds, r.seconds / r.evaluator_seconds);
+      md += fmt::format("| {} | {} | {:.3f} | {:.3f} | {:.0f}x |\n", r.label, r.renderer, r.seconds,
+                        r.evaluator_seconds, r.seconds / r.evaluator_seconds);
   }
   md +=
       "\nPOV-Ray offers only the `none` row (it has no shadow-terminator method); Cycles 3.4 "

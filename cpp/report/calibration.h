@@ -48,7 +48,7 @@ struct CalibrationRender {
   // The evaluator on the same scene and sample count (for external renderers
   // its geometry pass is exactly that render).
   double evaluator_seconds = 0.0;
-  std::string error;     // empty on success
+  std::string error;  // empty on success
 };
 
 struct CalibrationResult {

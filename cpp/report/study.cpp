@@ -28,7 +28,9 @@ namespace {
 
 // ---- study file -------------------------------------------------------------
 
-std::string child(const std::string& pointer, const std::string& key) { return pointer + "/" + key; }
+std::string child(const std::string& pointer, const std::string& key) {
+  return pointer + "/" + key;
+}
 
 void reject_unknown(const json& object, std::initializer_list<const char*> known,
                     const std::string& file, const std::string& pointer) {
@@ -66,9 +68,10 @@ Study load_study(const std::string& path) {
   const json doc = read_json_file(path);
   const std::string& f = path;
   if (!doc.is_object()) throw InputError(f, "", "expected a JSON object");
-  reject_unknown(doc, {"version", "name", "scenes", "set", "axes", "methods", "renderers",
-                       "blender_spp", "plots"},
-                 f, "");
+  reject_unknown(
+      doc,
+      {"version", "name", "scenes", "set", "axes", "methods", "renderers", "blender_spp", "plots"},
+      f, "");
   const json& version = require(doc, "version", f, "");
   if (!version.is_number_integer() || version.get<int>() != kStudyFormatVersion)
     throw InputError(f, "/version", fmt::format("expected {}", kStudyFormatVersion));
@@ -107,7 +110,8 @@ Study load_study(const std::string& path) {
       StudyAxis axis;
       const json& pointer = require(axes[i], "pointer", f, p);
       if (!pointer.is_string() || pointer.get<std::string>().rfind("/", 0) != 0)
-        throw InputError(f, p + "/pointer", "expected a JSON pointer such as \"/height/amplitude\"");
+        throw InputError(f, p + "/pointer",
+                         "expected a JSON pointer such as \"/height/amplitude\"");
       axis.pointer = pointer.get<std::string>();
       axis.label = axis.pointer;
       if (axes[i].contains("label")) {
@@ -141,14 +145,16 @@ Study load_study(const std::string& path) {
       }
       if (!method_from_id(m.id)) {
         std::string ids;
-        for (const MethodInfo& info : all_methods()) ids += (ids.empty() ? "" : ", ") + std::string(info.id);
+        for (const MethodInfo& info : all_methods())
+          ids += (ids.empty() ? "" : ", ") + std::string(info.id);
         throw InputError(f, p, fmt::format("unknown method \"{}\" (valid: {})", m.id, ids));
       }
       m.label = method_label(m.id, m.parameters);
       s.methods.push_back(std::move(m));
     }
   } else {
-    for (const MethodInfo& info : all_methods()) s.methods.push_back({std::string(info.id), json(), std::string(info.id)});
+    for (const MethodInfo& info : all_methods())
+      s.methods.push_back({std::string(info.id), json(), std::string(info.id)});
   }
   if (doc.contains("renderers")) {
     const json& renderers = doc["renderers"];
@@ -184,10 +190,16 @@ Study load_study(const std::string& path) {
       reject_unknown(plots[i], {"metric", "x", "y", "kind", "renderer"}, f, p);
       StudyPlot plot;
       const json& metric = require(plots[i], "metric", f, p);
-      static const std::set<std::string> metrics{
-          "profile.rmse_terminator", "profile.rmse_overall", "profile.max_error_terminator",
-          "profile.max_step", "profile.position_error_deg", "profile.width_deg",
-          "profile.lit_bias", "image.rmse", "image.ssim", "image.max_error"};
+      static const std::set<std::string> metrics{"profile.rmse_terminator",
+                                                 "profile.rmse_overall",
+                                                 "profile.max_error_terminator",
+                                                 "profile.max_step",
+                                                 "profile.position_error_deg",
+                                                 "profile.width_deg",
+                                                 "profile.lit_bias",
+                                                 "image.rmse",
+                                                 "image.ssim",
+                                                 "image.max_error"};
       if (!metric.is_string() || !metrics.count(metric.get<std::string>())) {
         std::string names;
         for (const std::string& m : metrics) names += (names.empty() ? "" : ", ") + m;
@@ -197,7 +209,8 @@ Study load_study(const std::string& path) {
       auto axis_index = [&](const char* key) {
         const json& v = require(plots[i], key, f, p);
         for (std::size_t a = 0; a < s.axes.size(); ++a)
-          if (v.is_string() && v.get<std::string>() == s.axes[a].pointer) return static_cast<int>(a);
+          if (v.is_string() && v.get<std::string>() == s.axes[a].pointer)
+            return static_cast<int>(a);
         throw InputError(f, child(p, key), "expected the pointer of one of the study's axes");
       };
       plot.x = axis_index("x");
@@ -222,8 +235,8 @@ Study load_study(const std::string& path) {
 
 std::string render_key(const json& canonical_scene, const std::string& renderer,
                        const std::string& renderer_version) {
-  const std::string text = canonical_scene.dump() + "\n" + renderer + "\n" + renderer_version +
-                           "\n" + kPenumbraVersion;
+  const std::string text =
+      canonical_scene.dump() + "\n" + renderer + "\n" + renderer_version + "\n" + kPenumbraVersion;
   auto fnv = [&](std::uint64_t h) {
     for (unsigned char c : text) h = (h ^ c) * 0x100000001b3ull;
     return h;
@@ -255,7 +268,8 @@ struct Variant {
 std::string file_safe(const std::string& label) {
   std::string out;
   for (char c : label)
-    out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.') ? c : '_';
+    out +=
+        (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.') ? c : '_';
   return out;
 }
 
@@ -327,13 +341,12 @@ void run_plot_script(const std::vector<std::string>& arguments, const std::strin
   std::vector<std::string> argv{*exe, std::string(PENUMBRA_SOURCE_DIR) + "/harness/report.py"};
   argv.insert(argv.end(), arguments.begin(), arguments.end());
   fs::path dir = fs::path(log_path).parent_path();
-  const ProcessResult p =
-      run_process(argv, dir.empty() ? "." : dir.string(), log_path, timeout_s);
+  const ProcessResult p = run_process(argv, dir.empty() ? "." : dir.string(), log_path, timeout_s);
   if (!p.ok())
-    throw RendererError(fmt::format(
-        "harness/report.py failed ({}); log {}:\n{}",
-        p.timed_out ? std::string("timed out") : "exit " + std::to_string(p.exit_code), log_path,
-        tail_lines(log_path, 12)));
+    throw RendererError(
+        fmt::format("harness/report.py failed ({}); log {}:\n{}",
+                    p.timed_out ? std::string("timed out") : "exit " + std::to_string(p.exit_code),
+                    log_path, tail_lines(log_path, 12)));
 }
 
 StudyRunStats run_study(const Study& study, const StudyOptions& options) {
@@ -342,7 +355,8 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   for (const char* sub : {"cache", "images"}) {
     std::error_code ec;
     fs::create_directories(out / sub, ec);
-    if (ec) throw OutputError(fmt::format("{}: cannot create: {}", (out / sub).string(), ec.message()));
+    if (ec)
+      throw OutputError(fmt::format("{}: cannot create: {}", (out / sub).string(), ec.message()));
   }
 
   // Renderer versions first: a missing renderer fails its renders, not the study.
@@ -379,14 +393,16 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
         v.axis_values.push_back(value);
         v.label += fmt::format(", {}={}", a.label, value_text(value));
       }
-      const std::string origin = fmt::format("{} (study {}, variant {})", scene_file, study.file, v.id);
+      const std::string origin =
+          fmt::format("{} (study {}, variant {})", scene_file, study.file, v.id);
       for (RendererKind r : study.renderers) {
         auto add = [&](Representation rep, const StudyMethod* m) {
           json doc = base;
           std::vector<Override> all = overrides;
           all.push_back({"/representation", to_string(rep)});
           all.push_back({"/terminator/method", m ? m->id : "none"});
-          if (m && m->parameters.is_object()) all.push_back({"/terminator/parameters", m->parameters});
+          if (m && m->parameters.is_object())
+            all.push_back({"/terminator/parameters", m->parameters});
           if (r == RendererKind::kBlender) all.push_back({"/camera/spp", study.blender_spp});
           apply_overrides(doc, all, origin);
           Job job;
@@ -431,8 +447,8 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   std::size_t finished = 0;
   long started_new = 0;
   double busy_seconds = 0.0;
-  const int threads =
-      std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / std::max(1, options.jobs));
+  const int threads = std::max(
+      1, static_cast<int>(std::thread::hardware_concurrency()) / std::max(1, options.jobs));
   if (options.log)
     options.log(fmt::format("{} renders: {} cached, {} to do, {} in parallel", jobs.size(),
                             stats.cached, todo.size(), options.jobs));
@@ -514,11 +530,12 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   json variants_json = json::array(), comparisons = json::array();
   std::string csv = "study,variant,scene";
   for (const StudyAxis& a : study.axes) csv += "," + csv_field(a.pointer);
-  csv += ",renderer,method,reference,profile_rmse_terminator,profile_rmse_overall,"
-         "profile_max_error_terminator,profile_max_step,reference_max_step,position_deg,"
-         "reference_position_deg,position_error_deg,width_deg,reference_width_deg,lit_bias,"
-         "common_bins,image_mask_iou,image_rmse,image_ssim,image_max_error,image_mean_error,"
-         "image_pixels,image_nonfinite\n";
+  csv +=
+      ",renderer,method,reference,profile_rmse_terminator,profile_rmse_overall,"
+      "profile_max_error_terminator,profile_max_step,reference_max_step,position_deg,"
+      "reference_position_deg,position_error_deg,width_deg,reference_width_deg,lit_bias,"
+      "common_bins,image_mask_iou,image_rmse,image_ssim,image_max_error,image_mean_error,"
+      "image_pixels,image_nonfinite\n";
   std::size_t nonfinite_total = 0;
   for (std::size_t v = 0; v < variants.size(); ++v) {
     const Variant& var = variants[v];
@@ -548,8 +565,8 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
       // Against the same renderer's ground truth, and the evaluator's.
       std::vector<std::pair<RendererKind, long>> refs{{job.renderer, ground}};
       if (job.renderer != RendererKind::kEvaluator)
-        refs.push_back({RendererKind::kEvaluator,
-                        find_job(v, RendererKind::kEvaluator, Representation::kDisplacement, "none")});
+        refs.push_back({RendererKind::kEvaluator, find_job(v, RendererKind::kEvaluator,
+                                                           Representation::kDisplacement, "none")});
       for (const auto& [ref_renderer, ref] : refs) {
         if (ref < 0 || !done[ref]) continue;
         const ProfileMetrics pm = compare_profiles(terminator_profile(images[i], scale, po),
@@ -569,13 +586,13 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
         csv += fmt::format("{},{},{}", csv_field(study.name), var.id, csv_field(var.scene));
         for (const json& value : var.axis_values) csv += "," + csv_field(value.dump());
         csv += fmt::format(",{},{},{}", to_string(job.renderer), csv_field(job.method), reference);
-        for (const char* k : {"rmse_terminator", "rmse_overall", "max_error_terminator",
-                              "max_step", "reference_max_step", "position_deg",
-                              "reference_position_deg", "position_error_deg", "width_deg",
-                              "reference_width_deg", "lit_bias", "common_bins"})
+        for (const char* k :
+             {"rmse_terminator", "rmse_overall", "max_error_terminator", "max_step",
+              "reference_max_step", "position_deg", "reference_position_deg", "position_error_deg",
+              "width_deg", "reference_width_deg", "lit_bias", "common_bins"})
           csv += "," + csv_number(pj.at(k));
-        for (const char* k : {"mask_iou", "rmse", "ssim", "max_error", "mean_error", "pixels",
-                              "nonfinite"})
+        for (const char* k :
+             {"mask_iou", "rmse", "ssim", "max_error", "mean_error", "pixels", "nonfinite"})
           csv += "," + csv_number(ij.at(k));
         csv += "\n";
       }
@@ -603,7 +620,8 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     for (const auto& [m, sn] : sums) order.push_back({sn.first / sn.second, m});
     std::sort(order.begin(), order.end());
     json list = json::array();
-    for (const auto& [mean, m] : order) list.push_back({{"method", m}, {"mean", mean}, {"count", sums[m].second}});
+    for (const auto& [mean, m] : order)
+      list.push_back({{"method", m}, {"mean", mean}, {"count", sums[m].second}});
     return list;
   };
   json per_scene = json::array();
@@ -611,7 +629,8 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   for (const Variant& v : variants)
     if (std::find(scene_names.begin(), scene_names.end(), v.scene) == scene_names.end())
       scene_names.push_back(v.scene);
-  for (const std::string& s : scene_names) per_scene.push_back({{"scene", s}, {"methods", rank(s)}});
+  for (const std::string& s : scene_names)
+    per_scene.push_back({{"scene", s}, {"methods", rank(s)}});
 
   json renderers = json::array(), missing = json::array(), failures = json::array();
   for (RendererKind r : study.renderers) {
@@ -647,34 +666,34 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     axes.push_back({{"pointer", a.pointer}, {"label", a.label}, {"values", a.values}});
   json plots = json::array();
   for (const StudyPlot& p : study.plots)
-    plots.push_back({{"metric", p.metric}, {"x", p.x}, {"y", p.y}, {"kind", p.kind}, {"renderer", p.renderer}});
-  const json report = {
-      {"format", "penumbra-report"},
-      {"version", kReportFormatVersion},
-      {"penumbra", kPenumbraVersion},
-      {"study", {{"name", study.name}, {"file", study.file}}},
-      {"units",
-       {{"profile", "fraction of albedo*E/pi"},
-        {"angles", "degrees"},
-        {"image", "W m^-2 sr^-1"},
-        {"theta", "angle between wi and the base (undisplaced) surface normal"},
-        {"terminator_region_deg", {kTerminatorBegin, kTerminatorEnd}},
-        {"lit_region_deg", {0.0, kLitEnd}},
-        {"dark_level", kDarkLevel}}},
-      {"axes", axes},
-      {"renderers", renderers},
-      {"variants", variants_json},
-      {"comparisons", comparisons},
-      {"ranking",
-       {{"metric", "profile.rmse_terminator"},
-        {"reference", "evaluator:displacement"},
-        {"renderer", "evaluator"},
-        {"per_scene", per_scene},
-        {"overall", rank("")}}},
-      {"missing", missing},
-      {"failures", failures},
-      {"nonfinite_pixels", nonfinite_total},
-      {"plots", plots}};
+    plots.push_back(
+        {{"metric", p.metric}, {"x", p.x}, {"y", p.y}, {"kind", p.kind}, {"renderer", p.renderer}});
+  const json report = {{"format", "penumbra-report"},
+                       {"version", kReportFormatVersion},
+                       {"penumbra", kPenumbraVersion},
+                       {"study", {{"name", study.name}, {"file", study.file}}},
+                       {"units",
+                        {{"profile", "fraction of albedo*E/pi"},
+                         {"angles", "degrees"},
+                         {"image", "W m^-2 sr^-1"},
+                         {"theta", "angle between wi and the base (undisplaced) surface normal"},
+                         {"terminator_region_deg", {kTerminatorBegin, kTerminatorEnd}},
+                         {"lit_region_deg", {0.0, kLitEnd}},
+                         {"dark_level", kDarkLevel}}},
+                       {"axes", axes},
+                       {"renderers", renderers},
+                       {"variants", variants_json},
+                       {"comparisons", comparisons},
+                       {"ranking",
+                        {{"metric", "profile.rmse_terminator"},
+                         {"reference", "evaluator:displacement"},
+                         {"renderer", "evaluator"},
+                         {"per_scene", per_scene},
+                         {"overall", rank("")}}},
+                       {"missing", missing},
+                       {"failures", failures},
+                       {"nonfinite_pixels", nonfinite_total},
+                       {"plots", plots}};
   write_text_file((out / "report.json").string(), report.dump(1) + "\n");
   write_text_file((out / "metrics.csv").string(), csv);
 

@@ -44,7 +44,7 @@ struct StudyPlot {
 struct Study {
   std::string name;
   std::string file;
-  std::vector<std::string> scenes;  // paths, resolved against the study file's folder
+  std::vector<std::string> scenes;                // paths, resolved against the study file's folder
   nlohmann::json set = nlohmann::json::object();  // pointer -> value, for every scene
   std::vector<StudyAxis> axes;
   std::vector<StudyMethod> methods;
@@ -65,18 +65,18 @@ struct StudyOptions {
   // Resuming later finishes the rest. Tests use it to simulate an interrupt.
   long max_new_renders = -1;
   const std::atomic<bool>* interrupted = nullptr;  // set by a SIGINT handler
-  std::function<void(const std::string&)> log;      // progress lines
+  std::function<void(const std::string&)> log;     // progress lines
   std::function<void(std::size_t done, std::size_t total, double eta_s)> progress;
   bool figures = true;  // run harness/report.py (figures and report.html)
   std::string python;   // default: PENUMBRA_PYTHON, /usr/bin/python3, python3
 };
 
 struct StudyRunStats {
-  std::size_t renders = 0;      // in the study
-  std::size_t rendered = 0;     // rendered by this run
-  std::size_t cached = 0;       // reused from the cache
-  std::size_t failed = 0;       // failed in this run (kept out of the cache)
-  std::size_t not_started = 0;  // interrupted or --max-renders
+  std::size_t renders = 0;            // in the study
+  std::size_t rendered = 0;           // rendered by this run
+  std::size_t cached = 0;             // reused from the cache
+  std::size_t failed = 0;             // failed in this run (kept out of the cache)
+  std::size_t not_started = 0;        // interrupted or --max-renders
   std::vector<std::string> failures;  // "label: error"
   double seconds = 0.0;
   std::string report_html;  // path, when written

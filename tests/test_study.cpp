@@ -1,0 +1,331 @@
+// Metrics on synthetic profiles, the contour grid, studies (expansion,
+// cache, interruption and resume, reports) and the report in a real browser.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "analysis/contour.h"
+#include "analysis/metrics.h"
+#include "render/image_io.h"
+#include "renderers/process.h"
+#include "report/study.h"
+#include "scene/scene_json.h"
+
+namespace penumbra {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+const std::string kSource = PENUMBRA_SOURCE_DIR;
+
+Profile synthetic(const std::function<double(double)>& f) {
+  Profile p;
+  p.value.resize(180);
+  p.count.assign(180, 100);
+  for (std::size_t k = 0; k < 180; ++k) p.value[k] = f(p.centre(k));
+  return p;
+}
+double cosine(double deg) {
+  return std::max(0.0, std::cos(radians(deg)));
+}
+
+TEST(ProfileMetrics, CosineAgainstItselfHasNoErrorAndTheAnalyticPosition) {
+  const Profile p = synthetic(cosine);
+  const ProfileMetrics m = compare_profiles(p, p);
+  EXPECT_EQ(m.rmse_overall, 0.0);
+  EXPECT_EQ(m.rmse_terminator, 0.0);
+  EXPECT_EQ(m.max_error, 0.0);
+  EXPECT_EQ(m.lit_bias, 0.0);
+  EXPECT_EQ(m.position_error, 0.0);
+  // acos(0.05) = 87.134 degrees; linear interpolation between bin centres
+  // of a curve this smooth is within 0.01 degrees.
+  EXPECT_NEAR(m.position, degrees(std::acos(kDarkLevel)), 0.01);
+  // Width from 0.9 to 0.1 of L(60.5 deg): acos(0.1 c) - acos(0.9 c).
+  const double c = cosine(60.5);
+  EXPECT_NEAR(m.width, degrees(std::acos(0.1 * c)) - degrees(std::acos(0.9 * c)), 0.02);
+  // Largest step of a cosine in [60,100) with 1-degree bins: near 90 deg,
+  // sin(1 deg) = 0.01745.
+  EXPECT_NEAR(m.max_step, std::sin(radians(1.0)), 1e-4);
+}
+
+TEST(ProfileMetrics, KnownStepIsMeasuredExactly) {
+  const Profile ground = synthetic(cosine);
+  const Profile step = synthetic([](double t) { return t < 80.0 ? cosine(t) : 0.0; });
+  const ProfileMetrics m = compare_profiles(step, ground);
+  EXPECT_NEAR(m.max_step, cosine(79.5), 1e-12);   // the cliff at 80 degrees
+  EXPECT_NEAR(m.max_error, cosine(80.5), 1e-12);  // first dark bin
+  EXPECT_EQ(m.lit_bias, 0.0);                     // nothing changes below 60
+  // Crossing of 0.05 between the centres 79.5 (cos 79.5) and 80.5 (0).
+  const double expected = 79.5 + (cosine(79.5) - kDarkLevel) / cosine(79.5);
+  EXPECT_NEAR(m.position, expected, 1e-9);
+  // Terminator RMSE: sqrt(mean over 60.5..99.5 of the removed cosine^2).
+  double sum = 0.0;
+  for (int k = 80; k < 100; ++k) sum += std::pow(cosine(k + 0.5), 2);
+  EXPECT_NEAR(m.rmse_terminator, std::sqrt(sum / 40.0), 1e-12);
+}
+
+TEST(ProfileMetrics, ShiftedProfileHasThatPositionError) {
+  const Profile ground = synthetic(cosine);
+  const Profile shifted = synthetic([](double t) { return cosine(t - 5.0); });
+  const ProfileMetrics m = compare_profiles(shifted, ground);
+  EXPECT_NEAR(m.position_error, 5.0, 0.01);
+  EXPECT_GT(m.lit_bias, 0.0);  // shifted right: brighter everywhere it is lit
+}
+
+TEST(ImageMetrics, NaNAndInfAreCounted) {
+  Image a;
+  a.width = 2, a.height = 1;
+  a.channels = {"R", "G", "B", "A"};
+  a.pixels = {1, 1, 1, 1, 1, 1, 1, 1};
+  Image b = a;
+  b.pixels[0] = NAN;
+  b.pixels[5] = INFINITY;
+  EXPECT_EQ(compare_images(b, a).nonfinite, 2u);
+  EXPECT_EQ(compare_images(a, a).nonfinite, 0u);
+  EXPECT_DOUBLE_EQ(compare_images(a, a).ssim, 1.0);
+}
+
+// Chiang 2019, Fig. 5, read off the grid the contour command plots.
+TEST(Contour, GridReproducesFigure5Relations) {
+  const ContourGrid grid = make_contour_grid(
+      {{TerminatorMethod::kChiang2019, 0.0}, {TerminatorMethod::kEstevez2019, 0.0}}, 1.0);
+  ASSERT_EQ(grid.light_deg.size(), 91u);
+  ASSERT_EQ(grid.deviation_deg.size(), 90u);
+  const auto& chiang = grid.g[0];
+  const auto& estevez = grid.g[1];
+  bool estevez_less_somewhere_small = false, estevez_more_somewhere_large = false;
+  for (std::size_t i = 0; i < grid.deviation_deg.size(); ++i)
+    for (std::size_t j = 0; j < grid.light_deg.size(); ++j) {
+      const double d = grid.deviation_deg[i], t = grid.light_deg[j];
+      if (t >= 90.0) continue;
+      if (d == 0.0) {  // no deviation: both leave shading alone
+        EXPECT_NEAR(chiang[i][j], 1.0, 1e-12) << t;
+        EXPECT_NEAR(estevez[i][j], 1.0, 1e-12) << t;
+      }
+      if (d > t && t > 0.0) {  // normal tilted past the light (t = 0: tan = 0, G = 1)
+        EXPECT_NEAR(chiang[i][j], 1.0, 1e-12) << t << " " << d;
+        EXPECT_LT(estevez[i][j], 1.0) << t << " " << d;
+      }
+      if (d > 0 && d <= 10 && t > 80 && estevez[i][j] > chiang[i][j] + 1e-3)
+        estevez_less_somewhere_small = true;  // Estevez shadows less
+      if (d >= 40 && t > d && estevez[i][j] < chiang[i][j] - 1e-3)
+        estevez_more_somewhere_large = true;  // Estevez shadows more
+    }
+  EXPECT_TRUE(estevez_less_somewhere_small);
+  EXPECT_TRUE(estevez_more_somewhere_large);
+}
+
+class Study : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("penumbra-study-" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string write(const std::string& name, const json& j) const {
+    std::ofstream(path(name)) << j.dump(2);
+    return path(name);
+  }
+  // A small study: 2 variants x (evaluator 1 + 3 methods, POV-Ray 2) renders.
+  json tiny() const {
+    return {{"version", 1},
+            {"name", "tiny"},
+            {"scenes", {kSource + "/scenes/calibration/sphere.json"}},
+            {"set",
+             {{"/camera/width", 32},
+              {"/camera/height", 32},
+              {"/camera/spp", 4},
+              {"/displacement/edge_length", 0.02}}},
+            {"axes", {{{"pointer", "/height/amplitude"}, {"values", {0.01, 0.02}}}}},
+            {"methods", {"none", "chiang2019", "estevez2019"}},
+            {"renderers", {"evaluator", "povray"}}};
+  }
+  fs::path dir_;
+};
+
+std::string read_text(const std::string& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+TEST_F(Study, InterruptedAndResumedEqualsCleanWithNoRenderDoneTwice) {
+  const ::penumbra::Study study = load_study(write("tiny.json", tiny()));
+  StudyOptions clean;
+  clean.output_dir = path("clean");
+  clean.jobs = 2;
+  clean.figures = false;
+  const StudyRunStats a = run_study(study, clean);
+  ASSERT_TRUE(a.complete());
+  EXPECT_EQ(a.renders, 2u * (4 + 2));
+  EXPECT_EQ(a.rendered, a.renders);
+
+  StudyOptions first = clean;
+  first.output_dir = path("resumed");
+  first.max_new_renders = 5;  // the "interrupt"
+  const StudyRunStats b1 = run_study(study, first);
+  EXPECT_EQ(b1.rendered, 5u);
+  EXPECT_EQ(b1.not_started, a.renders - 5);
+  EXPECT_FALSE(fs::exists(path("resumed/report.json")));  // no report from a partial study
+  StudyOptions second = first;
+  second.max_new_renders = -1;
+  const StudyRunStats b2 = run_study(study, second);
+  EXPECT_EQ(b2.cached, 5u);
+  EXPECT_EQ(b2.rendered, a.renders - 5);  // each render exactly once over both runs
+  ASSERT_TRUE(b2.complete());
+  EXPECT_EQ(read_text(path("clean/report.json")), read_text(path("resumed/report.json")));
+  EXPECT_EQ(read_text(path("clean/metrics.csv")), read_text(path("resumed/metrics.csv")));
+  // A third run renders nothing.
+  const StudyRunStats b3 = run_study(study, second);
+  EXPECT_EQ(b3.rendered, 0u);
+  EXPECT_EQ(b3.cached, a.renders);
+}
+
+TEST_F(Study, ReportRoundTripsAndCsvHasOneRowPerComparison) {
+  const ::penumbra::Study study = load_study(write("tiny.json", tiny()));
+  StudyOptions o;
+  o.output_dir = path("out");
+  o.jobs = 2;
+  o.figures = false;
+  ASSERT_TRUE(run_study(study, o).complete());
+  const std::string text = read_text(path("out/report.json"));
+  const json report = json::parse(text);
+  EXPECT_EQ(report.at("format"), "penumbra-report");
+  EXPECT_EQ(report.at("version"), kReportFormatVersion);
+  EXPECT_EQ(json::parse(report.dump()), report);
+  EXPECT_EQ(report.dump(1) + "\n", text);
+  // Comparisons: per variant, evaluator 3 methods vs its ground truth, and
+  // POV-Ray's none vs its own and vs the evaluator's.
+  const auto& comparisons = report.at("comparisons");
+  EXPECT_EQ(comparisons.size(), 2u * (3 + 2));
+  std::istringstream csv(read_text(path("out/metrics.csv")));
+  std::string line;
+  std::size_t lines = 0, headers = 0;
+  while (std::getline(csv, line)) {
+    ++lines;
+    headers += line.rfind("study,", 0) == 0;
+  }
+  EXPECT_EQ(headers, 1u);
+  EXPECT_EQ(lines, comparisons.size() + 1);
+  // The renderer that cannot provide a row says so.
+  bool povray_chiang_missing = false;
+  for (const json& m : report.at("missing"))
+    povray_chiang_missing |= m.at("renderer") == "povray" && m.at("method") == "chiang2019";
+  EXPECT_TRUE(povray_chiang_missing);
+  // Every metric states a unit.
+  EXPECT_TRUE(comparisons[0].at("profile").contains("unit"));
+  EXPECT_TRUE(comparisons[0].at("image").contains("unit"));
+}
+
+TEST_F(Study, MalformedStudiesNameFileAndPointer) {
+  struct Case {
+    std::function<void(json&)> edit;
+    std::string pointer, words;
+  };
+  const std::vector<Case> cases = {
+      {[](json& j) { j["colour"] = 1; }, "/colour", "unknown key"},
+      {[](json& j) { j["version"] = 7; }, "/version", "expected 1"},
+      {[](json& j) { j.erase("scenes"); }, "/scenes", "missing"},
+      {[](json& j) { j["scenes"] = {"no-such.json"}; }, "/scenes/0", "no such scene file"},
+      {[](json& j) {
+         j["methods"] = {"none", "bogus"};
+       },
+       "/methods/1", "unknown method"},
+      {[](json& j) {
+         j["renderers"] = {"evaluator", "mitsuba"};
+       },
+       "/renderers/1", "expected"},
+      {[](json& j) { j["renderers"] = {"povray"}; }, "/renderers", "must include"},
+      {[](json& j) { j["axes"][0]["values"] = json::array(); }, "/axes/0/values", "non-empty"},
+      {[](json& j) { j["axes"][0]["pointer"] = "height"; }, "/axes/0/pointer", "JSON pointer"},
+      {[](json& j) {
+         j["plots"] = {
+             {{"metric", "nonsense"}, {"x", "/height/amplitude"}, {"y", "/height/amplitude"}}};
+       },
+       "/plots/0/metric", "expected one of"},
+      {[](json& j) {
+         j["plots"] = {{{"metric", "image.ssim"}, {"x", "/nope"}, {"y", "/height/amplitude"}}};
+       },
+       "/plots/0/x", "axes"},
+  };
+  for (const Case& c : cases) {
+    json j = tiny();
+    c.edit(j);
+    const std::string file = write("bad.json", j);
+    try {
+      load_study(file);
+      ADD_FAILURE() << "accepted: " << j.dump();
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), file);
+      EXPECT_EQ(e.pointer(), c.pointer) << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.words), std::string::npos) << e.what();
+    }
+  }
+  // A pointer that names no scene value fails when the study expands, with
+  // the scene file in the message.
+  json j = tiny();
+  j["axes"][0]["pointer"] = "/height/amplitud";
+  StudyOptions o;
+  o.output_dir = path("out");
+  o.figures = false;
+  EXPECT_THROW(run_study(load_study(write("bad.json", j)), o), InputError);
+}
+
+// The smoke study end to end, every renderer, then its report.html in
+// headless Chromium: no console errors, every image decoded.
+TEST_F(Study, SmokeStudyReportLoadsInChromium) {
+  const ::penumbra::Study study = load_study(kSource + "/scenes/studies/smoke.json");
+  StudyOptions o;
+  o.output_dir = path("smoke");
+  o.jobs = 2;
+  const StudyRunStats stats = run_study(study, o);
+  ASSERT_TRUE(stats.complete()) << (stats.failures.empty() ? "" : stats.failures[0]);
+  ASSERT_TRUE(fs::exists(stats.report_html));
+  for (const char* ext : {"png", "svg", "pdf"})
+    EXPECT_TRUE(fs::exists(path(std::string("smoke/figures/ranking.") + ext))) << ext;
+
+  // A copy with a probe appended: after load it writes how many images
+  // decoded into the DOM, which --dump-dom prints. The report itself has no script.
+  std::string html = read_text(stats.report_html);
+  const std::string probe =
+      "<script>window.addEventListener('load',function(){var i=document.images,ok=0;"
+      "for(var k=0;k<i.length;k++){if(i[k].complete&&i[k].naturalWidth>0)ok++;}"
+      "document.body.setAttribute('data-probe',ok+'/'+i.length);});</script>";
+  const auto body = html.rfind("</body>");
+  ASSERT_NE(body, std::string::npos);
+  html.insert(body, probe);
+  std::ofstream(path("smoke/probe.html")) << html;
+  const auto chromium = find_executable("chromium");
+  ASSERT_TRUE(chromium) << "chromium is not installed (apt-get install chromium)";
+  const ProcessResult p = run_process(
+      {*chromium, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+       "--disable-background-networking", "--disable-component-update", "--disable-sync",
+       "--user-data-dir=" + path("chromium-profile"), "--enable-logging=stderr", "--v=0",
+       "--virtual-time-budget=10000", "--dump-dom", "file://" + path("smoke/probe.html")},
+      dir_.string(), path("chromium.log"), 120);
+  const std::string log = read_text(path("chromium.log"));
+  ASSERT_TRUE(p.ok()) << log;
+  EXPECT_EQ(log.find("Uncaught"), std::string::npos) << log;
+  EXPECT_EQ(log.find(":CONSOLE("), std::string::npos) << log;
+  EXPECT_EQ(log.find("ERR_FILE_NOT_FOUND"), std::string::npos) << log;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(log, m, std::regex("data-probe=\"(\\d+)/(\\d+)\""))) << log;
+  EXPECT_GT(std::stoi(m[2]), 20);
+  EXPECT_EQ(m[1], m[2]) << "images that did not decode";
+}
+
+}  // namespace
+}  // namespace penumbra
