@@ -1,6 +1,8 @@
 // The command line: exit codes, messages, and no half-written output.
 #include <gtest/gtest.h>
 
+#include "temp_dir_test.h"
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -33,17 +35,8 @@ Result run(std::vector<std::string> args) {
   return {code, out.str(), err.str()};
 }
 
-class Cli : public ::testing::Test {
+class Cli : public TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("penumbra-cli-" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
   // Nothing but the files named may exist: no temporary left behind either.
   void expect_only(const std::vector<std::string>& names) const {
     std::vector<std::string> found;
@@ -54,7 +47,6 @@ class Cli : public ::testing::Test {
     std::sort(expected.begin(), expected.end());
     EXPECT_EQ(found, expected);
   }
-  fs::path dir_;
 };
 
 TEST_F(Cli, MethodsListsEveryIdAsTextAndJson) {

@@ -3,6 +3,8 @@
 // these tests, it is never skipped as a pass.
 #include <gtest/gtest.h>
 
+#include "temp_dir_test.h"
+
 #include <sys/stat.h>
 
 #include <cmath>
@@ -31,17 +33,8 @@ using nlohmann::json;
 
 const std::string kSource = PENUMBRA_SOURCE_DIR;
 
-class Renderers : public ::testing::Test {
+class Renderers : public TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("penumbra-renderers-" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
   // A shell script standing in for a renderer.
   std::string fake(const std::string& name, const std::string& body) const {
     const std::string p = path(name);
@@ -56,7 +49,6 @@ class Renderers : public ::testing::Test {
     std::sort(found.begin(), found.end());
     return found;
   }
-  fs::path dir_;
 };
 
 json calibration_scene(const std::string& shape) {

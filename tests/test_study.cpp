@@ -2,6 +2,8 @@
 // cache, interruption and resume, reports) and the report in a real browser.
 #include <gtest/gtest.h>
 
+#include "temp_dir_test.h"
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -123,17 +125,8 @@ TEST(Contour, GridReproducesFigure5Relations) {
   EXPECT_TRUE(estevez_more_somewhere_large);
 }
 
-class Study : public ::testing::Test {
+class Study : public TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("penumbra-study-" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
   std::string write(const std::string& name, const json& j) const {
     std::ofstream(path(name)) << j.dump(2);
     return path(name);
@@ -152,7 +145,6 @@ class Study : public ::testing::Test {
             {"methods", {"none", "chiang2019", "estevez2019"}},
             {"renderers", {"evaluator", "povray"}}};
   }
-  fs::path dir_;
 };
 
 std::string read_text(const std::string& p) {
