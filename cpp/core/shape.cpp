@@ -155,6 +155,13 @@ SurfaceGeometry surface_at(const Shape& s, double u, double v) {
   return g;
 }
 
+SurfaceGeometry base_geometry_under(const Shape& s, const Vec3& p, int cap) {
+  const Vec3 local = s.frame.to_local(p - s.center);
+  if (cap != 0) return cylinder_cap(s, local, cap);
+  if (s.type == ShapeType::kSphere) return sphere_at_direction(s, normalize(local));
+  return cylinder_side(s, {local.x, local.y, std::clamp(local.z, -0.5 * s.height, 0.5 * s.height)});
+}
+
 Vec3 displaced_normal(const SurfaceGeometry& g, double amplitude, const HeightSample& h) {
   if (!g.displaceable || amplitude == 0.0) return g.n;
   const double c1 = 1.0 + amplitude * h.h * g.kappa1;

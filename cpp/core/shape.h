@@ -61,6 +61,12 @@ bool occluded(const Shape& shape, const Ray& ray, double t_min, double t_max);
 // Geometry of the displaceable part at parameters (u, v).
 SurfaceGeometry surface_at(const Shape& shape, double u, double v);
 
+// Geometry of the base surface under a point near it: its radial projection
+// onto the sphere or the cylinder side (cap = 0), or onto a cap (cap = +1 top,
+// -1 bottom). For mesh hits: the analytic point a tessellation approximates.
+// Leaves u and v at 0, like intersect().
+SurfaceGeometry base_geometry_under(const Shape& shape, const Vec3& p, int cap = 0);
+
 // Normal of the displaced surface P' = P + A h(P) N(P) at the base point, in
 // closed form from the principal frame (exact, not first order):
 //   Ns ~ c1 c2 N - A g1 c2 t1 - A g2 c1 t2,  ci = 1 + A h kappa_i,  gi = grad h . ti.

@@ -102,6 +102,14 @@ inline double acos_approx(double x) {
   return x < 0.0 ? kPi - r : r;
 }
 
+// v rotated by the rotation that takes unit a to unit b about a x b (the
+// identity for a == b). Undefined for b == -a.
+inline Vec3 rotate_between(const Vec3& a, const Vec3& b, const Vec3& v) {
+  const Vec3 k = cross(a, b);
+  const double c = dot(a, b);
+  return v * c + cross(k, v) + k * (dot(k, v) / (1.0 + c));
+}
+
 // Orthonormal basis around a unit vector n (Duff et al. 2017, branchless).
 struct Frame {
   Vec3 s, t, n;

@@ -7,15 +7,13 @@
 #include <limits>
 #include <stdexcept>
 
-#include <embree3/rtcore.h>
-#include <fmt/format.h>
+#include "render/embree_mesh.h"
 
 namespace penumbra {
 
 // Primitive ids are decoded with the layout documented in core/grid_mesh.h.
 struct DisplacedMesh::Impl {
-  RTCDevice device = nullptr;
-  RTCScene scene = nullptr;
+  std::unique_ptr<EmbreeMesh> bvh;
   Shape shape;
   double amplitude = 0.0;
   HeightFunction height;
@@ -77,54 +75,21 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
       1.0 / std::max(m.shape.radius - reach, 1e-12) + m.amplitude * max_hessian_norm(m.height);
   shadow_offset_ = e * e * kappa / 8.0 + 1e-9 * m.shape.radius;
 
-  m.device = rtcNewDevice(nullptr);
-  if (!m.device) throw std::runtime_error("Embree: cannot create a device");
-  m.scene = rtcNewScene(m.device);
-  rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST);
-  RTCGeometry geometry = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* positions = static_cast<float*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertices_));
-  auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles_));
-  if (!positions || !indices) throw std::runtime_error("Embree: cannot allocate the mesh buffers");
-  std::copy(mesh.positions.begin(), mesh.positions.end(), positions);
-  std::copy(mesh.triangles.begin(), mesh.triangles.end(), indices);
-  rtcCommitGeometry(geometry);
-  rtcAttachGeometry(m.scene, geometry);
-  rtcReleaseGeometry(geometry);
-  rtcCommitScene(m.scene);
-  if (rtcGetDeviceError(m.device) != RTC_ERROR_NONE)
-    throw std::runtime_error(fmt::format(
-        "Embree could not build the displaced mesh ({} triangles): out of memory?", triangles_));
+  m.bvh = std::make_unique<EmbreeMesh>(mesh);
 }
 
-DisplacedMesh::~DisplacedMesh() {
-  if (impl_->scene) rtcReleaseScene(impl_->scene);
-  if (impl_->device) rtcReleaseDevice(impl_->device);
-}
+DisplacedMesh::~DisplacedMesh() = default;
 
 std::optional<MeshHit> DisplacedMesh::intersect(const Ray& ray) const {
   const Impl& m = *impl_;
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  RTCRayHit rh{};
-  rh.ray.org_x = static_cast<float>(ray.origin.x);
-  rh.ray.org_y = static_cast<float>(ray.origin.y);
-  rh.ray.org_z = static_cast<float>(ray.origin.z);
-  rh.ray.dir_x = static_cast<float>(ray.direction.x);
-  rh.ray.dir_y = static_cast<float>(ray.direction.y);
-  rh.ray.dir_z = static_cast<float>(ray.direction.z);
-  rh.ray.tnear = 0.0f;
-  rh.ray.tfar = std::numeric_limits<float>::infinity();
-  rh.ray.mask = ~0u;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(m.scene, &context, &rh);
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+  const auto triangle = m.bvh->intersect(ray);
+  if (!triangle) return std::nullopt;
   MeshHit hit;
-  hit.t = rh.ray.tfar;
-  if (rh.hit.primID >= m.side_primitives) {  // a flat cap
+  hit.t = triangle->t;
+  const unsigned prim = triangle->triangle;
+  if (prim >= m.side_primitives) {  // a flat cap
     const Vec3 p = ray.origin + ray.direction * hit.t;
-    const bool top = rh.hit.primID >= m.side_primitives + m.nu;
+    const bool top = prim >= m.side_primitives + m.nu;
     SurfaceGeometry& g = hit.geometry;
     g.n = m.shape.axis * (top ? 1.0 : -1.0);
     g.p = p;
@@ -134,28 +99,15 @@ std::optional<MeshHit> DisplacedMesh::intersect(const Ray& ray) const {
     return hit;
   }
   double u[3], v[3];
-  m.corners(rh.hit.primID, u, v);
-  const double b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1.0 - b1 - b2;
+  m.corners(prim, u, v);
+  const double b1 = triangle->b1, b2 = triangle->b2, b0 = 1.0 - b1 - b2;
   hit.geometry =
       surface_at(m.shape, b0 * u[0] + b1 * u[1] + b2 * u[2], b0 * v[0] + b1 * v[1] + b2 * v[2]);
   return hit;
 }
 
 bool DisplacedMesh::occluded(const Ray& ray, double t_max) const {
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  RTCRay r{};
-  r.org_x = static_cast<float>(ray.origin.x);
-  r.org_y = static_cast<float>(ray.origin.y);
-  r.org_z = static_cast<float>(ray.origin.z);
-  r.dir_x = static_cast<float>(ray.direction.x);
-  r.dir_y = static_cast<float>(ray.direction.y);
-  r.dir_z = static_cast<float>(ray.direction.z);
-  r.tnear = 0.0f;
-  r.tfar = static_cast<float>(std::min(t_max, double(std::numeric_limits<float>::max())));
-  r.mask = ~0u;
-  rtcOccluded1(impl_->scene, &context, &r);
-  return r.tfar < 0.0f;
+  return impl_->bvh->occluded(ray, 0.0, t_max);
 }
 
 }  // namespace penumbra

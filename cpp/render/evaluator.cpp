@@ -12,6 +12,7 @@
 
 #include "core/random.h"
 #include "render/displaced_mesh.h"
+#include "render/lowpoly_mesh.h"
 
 namespace penumbra {
 
@@ -48,8 +49,26 @@ LightSample sample_light(const Light& light, const Vec3& p) {
 
 // What a camera ray sees: the surface point to shade and how to leave it.
 struct SurfaceHit {
-  SurfaceGeometry geometry;  // base surface (under the hit, for displacement)
+  double t = 0.0;
+  SurfaceGeometry geometry;  // base surface (under the hit, for displacement and meshes)
   Vec3 shading_point;        // where light is evaluated and shadow rays start
+  // The true normal and the interpolated one, as the surface stores them
+  // (not yet turned towards the viewer). Analytic shapes: both geometry.n.
+  Vec3 ng, ni;
+  LowPolyHit triangle;  // low-poly meshes only
+  bool on_prop = false;
+};
+
+// Where a shadow ray starts, and which mesh triangle it ignores.
+struct ShadowRay {
+  Vec3 origin;
+  std::uint32_t skip = kNoTriangle;
+};
+
+// The normals at a hit after turning them towards the viewer.
+struct FacingNormals {
+  Vec3 ng, ns;
+  bool backfacing = false;
 };
 
 // Smooth and bump: the analytic base shape is both what the camera sees and
@@ -63,14 +82,19 @@ class BaseTracer {
     Hit hit;
     if (!penumbra::intersect(shape_, ray, 0.0, std::numeric_limits<double>::infinity(), &hit))
       return false;
+    out->t = hit.t;
     out->geometry = hit.geometry;
     out->shading_point = hit.geometry.p;
+    out->ng = out->ni = hit.geometry.n;
     return true;
+  }
+  ShadowRay shadow_ray(const SurfaceHit& hit, const FacingNormals&, const Vec3&) const {
+    return {hit.shading_point};
   }
   // The origin lies on the analytic surface, so the root at t = 0 is skipped
   // by a relative epsilon rather than by moving the origin.
-  bool occluded(const Vec3& origin, const Vec3& /*ns*/, const Vec3& wi, double distance) const {
-    return penumbra::occluded(shape_, {origin, wi}, t_min_, distance);
+  bool occluded(const ShadowRay& ray, const Vec3& wi, double distance) const {
+    return penumbra::occluded(shape_, {ray.origin, wi}, t_min_, distance);
   }
 
  private:
@@ -89,7 +113,9 @@ class MeshTracer {
   bool primary(const Ray& ray, SurfaceHit* out) const {
     const auto hit = mesh_.intersect(ray);
     if (!hit) return false;
+    out->t = hit->t;
     out->geometry = hit->geometry;
+    out->ng = out->ni = hit->geometry.n;
     if (hit->geometry.displaceable)
       out->shading_point =
           displaced_point(hit->geometry, amplitude_, evaluate_height(height_, hit->geometry.p));
@@ -97,15 +123,91 @@ class MeshTracer {
       out->shading_point = hit->geometry.p;
     return true;
   }
-  bool occluded(const Vec3& origin, const Vec3& ns, const Vec3& wi, double distance) const {
-    const Vec3 lifted = origin + ns * mesh_.shadow_offset();
-    return mesh_.occluded({lifted, wi}, distance);
+  ShadowRay shadow_ray(const SurfaceHit& hit, const FacingNormals& n, const Vec3&) const {
+    return {hit.shading_point + n.ns * mesh_.shadow_offset()};
+  }
+  bool occluded(const ShadowRay& ray, const Vec3& wi, double distance) const {
+    return mesh_.occluded({ray.origin, wi}, distance);
   }
 
  private:
   const DisplacedMesh& mesh_;
   double amplitude_;
   const HeightFunction& height_;
+};
+
+// A low-poly tessellation: the camera and the shadow rays see flat
+// triangles, shading uses the interpolated normal, and the scene's offset
+// method decides where shadow rays leave the triangle.
+class LowPolyTracer {
+ public:
+  LowPolyTracer(const Scene& scene, const LowPolyMesh& mesh)
+      : mesh_(mesh), offset_(scene.offset), t_min_(1e-6 * scene.shape.radius) {}
+
+  bool primary(const Ray& ray, SurfaceHit* out) const {
+    const auto hit = mesh_.intersect(ray);
+    if (!hit) return false;
+    out->t = hit->t;
+    out->geometry = hit->base;
+    out->shading_point = hit->p;
+    out->ng = hit->ng;
+    out->ni = hit->ni;
+    out->triangle = *hit;
+    return true;
+  }
+  ShadowRay shadow_ray(const SurfaceHit& hit, const FacingNormals& n, const Vec3& wi) const {
+    ShadowQuery q;
+    q.triangle = mesh_.shading_triangle(hit.triangle, n.backfacing);
+    q.p = hit.shading_point;
+    q.ng = n.ng;
+    q.ns = n.ns;
+    q.wi = wi;
+    q.backfacing = n.backfacing;
+    const ShadowOrigin o = shadow_ray_origin(offset_, q);
+    return {o.origin, o.skip_self ? hit.triangle.triangle : kNoTriangle};
+  }
+  bool occluded(const ShadowRay& ray, const Vec3& wi, double distance) const {
+    return mesh_.occluded({ray.origin, wi}, t_min_, distance, ray.skip);
+  }
+
+ private:
+  const LowPolyMesh& mesh_;
+  const OffsetSettings& offset_;
+  double t_min_;
+};
+
+// The scene's props: analytic spheres that every tracer's rays also meet.
+class Props {
+ public:
+  explicit Props(const Scene& scene) : props_(scene.props) {}
+
+  bool empty() const { return props_.empty(); }
+  // Replaces *out when a prop is nearer than out->t (or when `found` is false).
+  bool nearer(const Ray& ray, bool found, SurfaceHit* out) const {
+    bool replaced = false;
+    for (const Shape& prop : props_) {
+      Hit hit;
+      const double t_max = found || replaced ? out->t : std::numeric_limits<double>::infinity();
+      if (!penumbra::intersect(prop, ray, 0.0, t_max, &hit)) continue;
+      *out = SurfaceHit{};
+      out->t = hit.t;
+      out->geometry = hit.geometry;
+      out->geometry.displaceable = false;
+      out->shading_point = hit.geometry.p;
+      out->ng = out->ni = hit.geometry.n;
+      out->on_prop = true;
+      replaced = true;
+    }
+    return replaced;
+  }
+  bool occluded(const Vec3& origin, const Vec3& wi, double distance) const {
+    for (const Shape& prop : props_)
+      if (penumbra::occluded(prop, {origin, wi}, 1e-7 * prop.radius, distance)) return true;
+    return false;
+  }
+
+ private:
+  const std::vector<Shape>& props_;
 };
 
 struct PixelSums {
@@ -128,6 +230,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   const double amplitude = scene.height.amplitude;
   const HeightFunction& height_function = scene.height.function;
   const TerminatorSettings& terminator = scene.terminator;
+  const Props props(scene);
 
   std::atomic<int> rows_done{0};
   std::atomic<std::uint64_t> shadow_rays{0};
@@ -155,21 +258,35 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
               ray = {camera.position + camera.right * x0 + camera.up * y0, orthographic_direction};
             }
             SurfaceHit hit;
-            if (!tracer.primary(ray, &hit)) continue;
+            const bool found = tracer.primary(ray, &hit);
+            if (!(props.nearer(ray, found, &hit) || found)) continue;
             const SurfaceGeometry& g = hit.geometry;
             const Vec3 wo = -ray.direction;
             Vec3 n = g.n;
-            Vec3 ns = n;
-            if (displaced_shading && g.displaceable && amplitude != 0.0)
-              ns = displaced_normal(g, amplitude, evaluate_height(height_function, g.p));
-            // Two-sided: the inside of an open cylinder is seen from inside.
-            if (dot(n, wo) < 0.0) {
-              n = -n;
-              ns = -ns;
+            FacingNormals facing{hit.ng, hit.ni, false};
+            Vec3 ni = hit.ni;
+            if (displaced_shading && g.displaceable && amplitude != 0.0) {
+              // The bump perturbs the analytic normal; on a mesh it is carried
+              // over to Ni, so that Ns relates to Ni as it would to N.
+              const Vec3 bumped =
+                  displaced_normal(g, amplitude, evaluate_height(height_function, g.p));
+              facing.ns = hit.ni == g.n ? bumped : normalize(rotate_between(g.n, hit.ni, bumped));
             }
+            // Two-sided: the inside of an open cylinder is seen from inside.
+            if (dot(facing.ng, wo) < 0.0) {
+              n = -n;
+              ni = -ni;
+              facing.ng = -facing.ng;
+              facing.ns = -facing.ns;
+              facing.backfacing = true;
+            }
+            const Vec3& ns = facing.ns;
             // On the displaced surface the true normal is Ns itself; on the
             // analytic base Ng and Ni coincide with the base normal.
-            const Vec3 ng_ref = is_ground_truth ? ns : n;
+            const Vec3 ng_ref = is_ground_truth && !hit.on_prop ? ns
+                                : terminator.reference_normal == ReferenceNormal::kGeometric
+                                    ? facing.ng
+                                    : ni;
             const LightSample light = sample_light(scene.light, hit.shading_point);
             const double factor = terminator_factor(terminator.method, {ng_ref, ns, light.wi, wo});
             sums.hits += 1.0;
@@ -184,7 +301,11 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
                              lobes.specular * (terminator.lobes == Lobes::kAll ? factor : 1.0);
             if (!(f > 0.0)) continue;
             ++local_shadow_rays;
-            if (tracer.occluded(hit.shading_point, ns, light.wi, light.distance)) continue;
+            const ShadowRay shadow = hit.on_prop ? ShadowRay{hit.shading_point}
+                                                 : tracer.shadow_ray(hit, facing, light.wi);
+            if (tracer.occluded(shadow, light.wi, light.distance) ||
+                props.occluded(shadow.origin, light.wi, light.distance))
+              continue;
             sums.radiance += f * cos_theta_s * light.irradiance;
           }
         }
@@ -231,6 +352,11 @@ Image render(const Scene& scene, const RenderOptions& options, RenderStats* stat
     local.triangles = mesh.triangle_count();
     local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     render_image(scene, MeshTracer(scene, mesh), options, &image, &local);
+  } else if (scene.tessellation) {
+    const LowPolyMesh mesh(scene.shape, *scene.tessellation);
+    local.triangles = mesh.triangle_count();
+    local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    render_image(scene, LowPolyTracer(scene, mesh), options, &image, &local);
   } else {
     render_image(scene, BaseTracer(scene), options, &image, &local);
   }

@@ -40,8 +40,8 @@ struct RenderStats {
   std::uint64_t camera_samples = 0;
   std::uint64_t shadow_rays = 0;
   double seconds = 0.0;        // wall time, preparation included
-  double build_seconds = 0.0;  // displacement: mesh + BVH build
-  std::size_t triangles = 0;   // displacement: mesh size
+  double build_seconds = 0.0;  // displacement and low-poly meshes: mesh + BVH build
+  std::size_t triangles = 0;   // displacement and low-poly meshes: mesh size
 };
 
 struct RenderOptions {

@@ -5,12 +5,16 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "core/bsdf.h"
 #include "core/height.h"
+#include "core/shadow_origin.h"
 #include "core/shape.h"
 #include "core/terminator.h"
+#include "core/tessellation.h"
 #include "core/vec.h"
 
 namespace penumbra {
@@ -94,6 +98,17 @@ struct Scene {
   Camera camera;
   Light light;
   Shape shape;
+  // JSON /shape/tessellation. Absent: the analytic shape. Present: the shape
+  // as a triangle mesh (smooth and bump representations only), which is
+  // what makes the smooth-shading terminator and what `offset` acts on.
+  std::optional<Tessellation> tessellation;
+  // Where shadow rays leave a mesh triangle; anything but `none` needs a
+  // tessellation.
+  OffsetSettings offset;
+  // Extra analytic spheres (smooth, same material, no height): they cast and
+  // receive shadows, for side-effect scenes such as a small ball resting on a
+  // large low-poly surface. Evaluator only.
+  std::vector<Shape> props;
   Material material;
   HeightSpec height;
   Representation representation = Representation::kBump;

@@ -192,7 +192,53 @@ Light read_light(Reader r) {
   return l;
 }
 
-Shape read_shape(Reader r) {
+Tessellation read_tessellation(Reader r, const Shape& shape) {
+  Tessellation t;
+  t.scheme = r.choice<TessellationScheme>(
+      "scheme", {{"uv", TessellationScheme::kUv}, {"icosphere", TessellationScheme::kIcosphere}},
+      TessellationScheme::kUv);
+  if (t.scheme == TessellationScheme::kUv) {
+    t.segments = static_cast<unsigned>(r.integer_or("segments", t.segments, 3, 65536));
+    const long long min_rings = shape.type == ShapeType::kSphere ? 2 : 1;
+    t.rings = r.has("rings") ? static_cast<unsigned>(r.integer("rings", min_rings, 65536)) : 0;
+  } else {
+    if (shape.type != ShapeType::kSphere)
+      r.fail("scheme", "expected \"uv\" for a cylinder (\"icosphere\" tessellates spheres only)");
+    t.frequency = static_cast<unsigned>(r.integer_or("frequency", t.frequency, 1, 2048));
+  }
+  t.shading = r.choice<NormalShading>(
+      "shading", {{"smooth", NormalShading::kSmooth}, {"flat", NormalShading::kFlat}},
+      NormalShading::kSmooth);
+  r.finish();
+  return t;
+}
+
+OffsetSettings read_offset(Reader r) {
+  OffsetSettings o;
+  const std::string id = r.string("method");
+  const auto method = offset_method_from_id(id);
+  if (!method) {
+    std::string ids;
+    for (const OffsetMethodInfo& info : all_offset_methods())
+      ids += (ids.empty() ? "" : ", ") + std::string(info.id);
+    r.fail("method", fmt::format("unknown offset method \"{}\" (valid: {})", id, ids));
+  }
+  o.method = *method;
+  // Only the chosen method's parameters are keys here; any other is an error.
+  for (const MethodParameter& parameter : offset_method_info(o.method).parameters) {
+    const double value = r.number_or(
+        std::string(parameter.name), parameter.default_value,
+        [&](double x) { return x >= parameter.min_value && x <= parameter.max_value; },
+        fmt::format("in [{}, {}] ({})", parameter.min_value, parameter.max_value, parameter.unit)
+            .c_str());
+    if (o.method == OffsetMethod::kEpsilon) o.epsilon = value;
+    if (o.method == OffsetMethod::kCyclesGeometryOffset) o.cutoff = value;
+  }
+  r.finish();
+  return o;
+}
+
+Shape read_shape(Reader r, std::optional<Tessellation>* tessellation = nullptr) {
   Shape s;
   s.type = r.choice<ShapeType>(
       "type", {{"cylinder", ShapeType::kCylinder}, {"sphere", ShapeType::kSphere}});
@@ -203,8 +249,11 @@ Shape read_shape(Reader r) {
     s.height = r.number("height", positive, "> 0 (scene units)");
     s.caps = r.boolean_or("caps", false);
   }
+  s = with_frame(s);
+  if (tessellation && r.has("tessellation") && !r.at("tessellation").is_null())
+    *tessellation = read_tessellation(r.object("tessellation"), s);
   r.finish();
-  return with_frame(s);
+  return s;
 }
 
 Material read_material(Reader r) {
@@ -383,7 +432,7 @@ Scene scene_from_json(const json& document, const std::string& origin) {
   if (r.has("name")) s.name = r.string("name");
   s.camera = read_camera(r.object("camera"));
   s.light = read_light(r.object("light"));
-  s.shape = read_shape(r.object("shape"));
+  s.shape = read_shape(r.object("shape"), &s.tessellation);
   if (r.has("material")) s.material = read_material(r.object("material"));
   if (r.has("height")) s.height = read_height(r.object("height"), s.shape);
   s.representation = r.choice<Representation>("representation",
@@ -392,6 +441,34 @@ Scene scene_from_json(const json& document, const std::string& origin) {
                                                {"displacement", Representation::kDisplacement}},
                                               Representation::kBump);
   if (r.has("terminator")) s.terminator = read_terminator(r.object("terminator"));
+  if (r.has("offset")) s.offset = read_offset(r.object("offset"));
+  if (r.has("props")) {
+    const json& list = r.at("props");
+    if (!list.is_array() || list.size() > 64)
+      r.fail("props", "expected an array of at most 64 spheres, got " + describe(list));
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      Reader item(list[i], r.child_pointer("props") + "/" + std::to_string(i), r.origin());
+      Shape prop = read_shape(item);
+      if (prop.type != ShapeType::kSphere)
+        item.fail("type", "expected \"sphere\" (props are spheres)");
+      s.props.push_back(prop);
+    }
+  }
+  if (s.tessellation && s.representation == Representation::kDisplacement)
+    throw InputError(origin, "/shape/tessellation",
+                     "expected no tessellation for the displacement representation (the ground "
+                     "truth is its own fine mesh; see /displacement/edge_length)");
+  if (!s.tessellation && s.offset.method != OffsetMethod::kNone)
+    throw InputError(origin, "/offset/method",
+                     fmt::format("expected \"none\" on an analytic shape, got \"{}\" (offset "
+                                 "methods act on triangle meshes: set /shape/tessellation)",
+                                 offset_method_info(s.offset.method).id));
+  if (s.tessellation && static_cast<double>(tessellated_triangle_count(s.shape, *s.tessellation)) >
+                            kMaxDisplacementTriangles)
+    throw InputError(origin, "/shape/tessellation",
+                     fmt::format("expected at most {:.0f} million triangles, got {}",
+                                 kMaxDisplacementTriangles / 1e6,
+                                 tessellated_triangle_count(s.shape, *s.tessellation)));
   s.displacement.edge_length = s.shape.radius / 256.0;
   if (r.has("displacement")) {
     Reader d = r.object("displacement");

@@ -1,0 +1,156 @@
+#include "core/shadow_origin.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace penumbra {
+
+namespace {
+
+constexpr MethodParameter kEpsilonParameters[] = {
+    {"distance", "scene units", 1e-9, 1e3, 0.01,
+     "how far the origin moves along the geometric normal Ng"},
+};
+constexpr MethodParameter kCyclesParameters[] = {
+    {"cutoff", "dimensionless (a cosine)", 0.0, 1.0, 0.1,
+     "Cycles' object Geometry Offset: the full offset applies while dot(Ng, wi) < cutoff/2 and "
+     "fades out at dot(Ng, wi) = cutoff; 0 disables it"},
+};
+
+constexpr std::array<OffsetMethodInfo, 5> kOffsetMethods{{
+    {OffsetMethod::kNone,
+     "none",
+     "-",
+     "the hit point on the flat triangle (the triangle itself is skipped)",
+     {}},
+    {OffsetMethod::kEpsilon, "epsilon", "common hack",
+     "P + distance * Ng: one fixed lift everywhere", kEpsilonParameters},
+    {OffsetMethod::kGist2020,
+     "gist2020",
+     "pixnblox gist (2020), shared/seeds",
+     "mean of P's projections onto the vertices' tangent planes, where that lies above P "
+     "(convex patch); P elsewhere",
+     {}},
+    {OffsetMethod::kHanika2021,
+     "hanika2021",
+     "Hanika, \"Hacking the Shadow Terminator\", Ray Tracing Gems II ch. 4",
+     "P lifted only towards the tangent planes it lies below; crack-free along shared edges",
+     {}},
+    {OffsetMethod::kCyclesGeometryOffset, "cycles-geometry-offset",
+     "Blender Cycles 3.x object \"Geometry Offset\"",
+     "parabolic surface through the vertices, clamped by a linear envelope, applied near the "
+     "triangle's horizon",
+     kCyclesParameters},
+}};
+
+}  // namespace
+
+std::span<const OffsetMethodInfo> all_offset_methods() {
+  return kOffsetMethods;
+}
+
+const OffsetMethodInfo& offset_method_info(OffsetMethod method) {
+  for (const OffsetMethodInfo& info : kOffsetMethods)
+    if (info.method == method) return info;
+  return kOffsetMethods[0];
+}
+
+std::optional<OffsetMethod> offset_method_from_id(std::string_view id) {
+  for (const OffsetMethodInfo& info : kOffsetMethods)
+    if (info.id == id) return info.method;
+  return std::nullopt;
+}
+
+Vec3 gist2020_origin(const ShadingTriangle& t, const Vec3& p, const Vec3& ns) {
+  Vec3 s;
+  for (int k = 0; k < 3; ++k) s += (p - t.n[k] * dot(p - t.v[k], t.n[k])) * t.b[k];
+  return dot(s - p, ns) > 0.0 ? s : p;
+}
+
+Vec3 hanika2021_origin(const ShadingTriangle& t, const Vec3& p) {
+  Vec3 lifted = p;
+  for (int k = 0; k < 3; ++k) lifted += t.n[k] * (-t.b[k] * std::min(0.0, dot(p - t.v[k], t.n[k])));
+  return lifted;
+}
+
+Vec3 cycles_smooth_surface_offset(const CyclesTriangle& t, const Vec3& ng) {
+  const Vec3* v = t.v;
+  const Vec3* n = t.n;
+  const double u = t.u, w1 = t.v_weight, w2 = 1.0 - u - w1;
+  const Vec3 p = v[0] * u + v[1] * w1 + v[2] * w2;
+  const Vec3 normal = n[0] * u + n[1] * w1 + n[2] * w2;  // unnormalised, as in Cycles
+  // Parabolic approximation: zero at the vertices, its edge coefficients from
+  // how the normals turn along each edge.
+  const double a = dot(n[2] - n[0], v[0] - v[2]);
+  const double b = dot(n[2] - n[1], v[1] - v[2]);
+  const double c = dot(n[1] - n[0], v[1] - v[0]);
+  double h = a * u * (u - 1.0) + (a + b + c) * u * w1 + b * w1 * (w1 - 1.0);
+  if (dot(normal, ng) > 0.0) {
+    double e[3];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& o1 = v[(k + 1) % 3];
+      const Vec3& o2 = v[(k + 2) % 3];
+      const double reach = std::max({dot(o1 - v[k], n[k]), dot(o2 - v[k], n[k]), 0.0});
+      e[k] = std::max(dot(v[k] - p, n[k]) + reach, 0.0);
+    }
+    h = std::max(std::min({e[0], e[1], e[2]}), 0.5 * h);
+  } else {  // the stored normals face away from Ng: Cycles mirrors the envelope
+    double e[3];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& o1 = v[(k + 1) % 3];
+      const Vec3& o2 = v[(k + 2) % 3];
+      const double reach = std::max({dot(v[k] - o1, n[k]), dot(v[k] - o2, n[k]), 0.0});
+      e[k] = std::max(dot(p - v[k], n[k]) + reach, 0.0);
+    }
+    h = std::min(-std::min({e[0], e[1], e[2]}), 0.5 * h);
+  }
+  return normal * h;
+}
+
+double cycles_offset_amount(double cutoff, double nl, double ngl) {
+  if (!(cutoff > 0.0)) return 0.0;
+  const double amount = nl < cutoff ? 2.0 - (ngl + nl) / cutoff : 1.0 - ngl / cutoff;
+  return std::clamp(amount, 0.0, 1.0);
+}
+
+ShadowOrigin shadow_ray_origin(const OffsetSettings& settings, const ShadowQuery& q) {
+  const double ngl = dot(q.ng, q.wi);
+  auto lifted = [&](const Vec3& origin) { return ShadowOrigin{origin, ngl > 0.0}; };
+  switch (settings.method) {
+    case OffsetMethod::kNone:
+      return {q.p, true};
+    case OffsetMethod::kEpsilon:
+      return lifted(q.p + q.ng * settings.epsilon);
+    case OffsetMethod::kGist2020: {
+      const Vec3 s = gist2020_origin(q.triangle, q.p, q.ns);
+      return s == q.p ? ShadowOrigin{q.p, true} : lifted(s);
+    }
+    case OffsetMethod::kHanika2021: {
+      const Vec3 s = hanika2021_origin(q.triangle, q.p);
+      return s == q.p ? ShadowOrigin{q.p, true} : lifted(s);
+    }
+    case OffsetMethod::kCyclesGeometryOffset: {
+      // Cycles: N and Ng are flipped towards the viewer, the vertex normals
+      // are not; a light behind N mirrors Ng (transmission).
+      double nl = dot(q.ns, q.wi);
+      const bool transmit = nl < 0.0;
+      nl = std::abs(nl);
+      const Vec3 ng = transmit ? -q.ng : q.ng;
+      const double cycles_ngl = dot(ng, q.wi);
+      const double amount = cycles_offset_amount(settings.cutoff, nl, cycles_ngl);
+      if (!(amount > 0.0)) return {q.p, true};
+      CyclesTriangle t;
+      for (int k = 0; k < 3; ++k) {
+        t.v[k] = q.triangle.v[k];
+        t.n[k] = q.backfacing ? -q.triangle.n[k] : q.triangle.n[k];
+      }
+      t.u = q.triangle.b[0];
+      t.v_weight = q.triangle.b[1];
+      return {q.p + cycles_smooth_surface_offset(t, ng) * amount, cycles_ngl > 0.0};
+    }
+  }
+  return {q.p, true};
+}
+
+}  // namespace penumbra

@@ -1,0 +1,45 @@
+// Low-poly tessellations of the analytic shapes: what a modeller exports and a
+// production renderer traces with smooth shading. Vertices lie on the exact
+// surface and carry its exact normal; the triangles between them are flat,
+// which is what makes the smooth-shading terminator (shadow_origin.h).
+#pragma once
+
+#include "core/grid_mesh.h"
+#include "core/shape.h"
+
+namespace penumbra {
+
+enum class TessellationScheme {
+  kUv,         // cylinder: segments x rings grid (+ cap fans); sphere: UV sphere
+  kIcosphere,  // sphere only: geodesic subdivision of the icosahedron
+};
+
+enum class NormalShading {
+  kSmooth,  // shading normal Ni interpolated from the vertex normals
+  kFlat,    // shading normal = the triangle's Ng
+};
+
+struct Tessellation {
+  TessellationScheme scheme = TessellationScheme::kUv;
+  unsigned segments = 16;  // uv: segments around the axis, [3, 65536]
+  // uv: segments along the cylinder side or from pole to pole, [1, 65536]
+  // (sphere: >= 2); 0 asks for the default: cylinder 1 (the side is straight
+  // along the axis, so one row is exact), sphere segments / 2.
+  unsigned rings = 0;
+  unsigned frequency =
+      1;  // icosphere: each icosahedron edge in `frequency` parts, 20 f^2 triangles
+  NormalShading shading = NormalShading::kSmooth;
+};
+
+// The grid of a uv tessellation, defaults resolved.
+GridResolution uv_resolution(const Shape& shape, const Tessellation& t);
+
+// Number of triangles tessellate() makes, without making them.
+std::size_t tessellated_triangle_count(const Shape& shape, const Tessellation& t);
+
+// The mesh; its normals are the exact surface normals at the vertices (flat
+// shading ignores them). Cylinder caps keep their own rim vertices. Shape must
+// carry its frame (with_frame).
+TriangleMesh tessellate(const Shape& shape, const Tessellation& t);
+
+}  // namespace penumbra

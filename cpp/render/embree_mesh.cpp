@@ -1,0 +1,106 @@
+#include "render/embree_mesh.h"
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+
+#include <embree3/rtcore.h>
+#include <fmt/format.h>
+
+namespace penumbra {
+
+namespace {
+
+// Embree hands the filter the context it was given; the shadow ray's own
+// triangle rides along after the standard part.
+struct SkipContext {
+  RTCIntersectContext context;
+  std::uint32_t skip = kNoTriangle;
+};
+
+void skip_filter(const RTCFilterFunctionNArguments* args) {
+  const auto* context = reinterpret_cast<const SkipContext*>(args->context);
+  if (context->skip == kNoTriangle) return;
+  for (unsigned i = 0; i < args->N; ++i)
+    if (args->valid[i] != 0 && RTCHitN_primID(args->hit, args->N, i) == context->skip)
+      args->valid[i] = 0;
+}
+
+RTCRay to_embree(const Ray& ray, double t_min, double t_max) {
+  RTCRay r{};
+  r.org_x = static_cast<float>(ray.origin.x);
+  r.org_y = static_cast<float>(ray.origin.y);
+  r.org_z = static_cast<float>(ray.origin.z);
+  r.dir_x = static_cast<float>(ray.direction.x);
+  r.dir_y = static_cast<float>(ray.direction.y);
+  r.dir_z = static_cast<float>(ray.direction.z);
+  r.tnear = static_cast<float>(t_min);
+  r.tfar = static_cast<float>(std::min(t_max, double(std::numeric_limits<float>::max())));
+  r.mask = ~0u;
+  return r;
+}
+
+}  // namespace
+
+struct EmbreeMesh::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+};
+
+EmbreeMesh::EmbreeMesh(const TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.device = rtcNewDevice(nullptr);
+  if (!m.device) throw std::runtime_error("Embree: cannot create a device");
+  m.scene = rtcNewScene(m.device);
+  rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST);
+  RTCGeometry geometry = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* positions = static_cast<float*>(
+      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                              3 * sizeof(float), mesh.vertex_count()));
+  auto* indices = static_cast<unsigned*>(
+      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                              3 * sizeof(unsigned), mesh.triangle_count()));
+  if (!positions || !indices) {
+    rtcReleaseGeometry(geometry);
+    throw std::runtime_error(
+        fmt::format("Embree: cannot allocate the buffers of {} triangles", mesh.triangle_count()));
+  }
+  std::copy(mesh.positions.begin(), mesh.positions.end(), positions);
+  std::copy(mesh.triangles.begin(), mesh.triangles.end(), indices);
+  rtcSetGeometryOccludedFilterFunction(geometry, skip_filter);
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometry(m.scene, geometry);
+  rtcReleaseGeometry(geometry);
+  rtcCommitScene(m.scene);
+  if (rtcGetDeviceError(m.device) != RTC_ERROR_NONE)
+    throw std::runtime_error(fmt::format(
+        "Embree could not build the BVH of {} triangles: out of memory?", mesh.triangle_count()));
+}
+
+EmbreeMesh::~EmbreeMesh() {
+  if (impl_->scene) rtcReleaseScene(impl_->scene);
+  if (impl_->device) rtcReleaseDevice(impl_->device);
+}
+
+std::optional<TriangleHit> EmbreeMesh::intersect(const Ray& ray) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh{};
+  rh.ray = to_embree(ray, 0.0, std::numeric_limits<double>::infinity());
+  rh.ray.tfar = std::numeric_limits<float>::infinity();
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(impl_->scene, &context, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+  return TriangleHit{rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v};
+}
+
+bool EmbreeMesh::occluded(const Ray& ray, double t_min, double t_max, std::uint32_t skip) const {
+  SkipContext context;
+  rtcInitIntersectContext(&context.context);
+  context.skip = skip;
+  RTCRay r = to_embree(ray, t_min, t_max);
+  rtcOccluded1(impl_->scene, &context.context, &r);
+  return r.tfar < 0.0f;
+}
+
+}  // namespace penumbra
