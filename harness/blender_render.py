@@ -5,11 +5,13 @@ Usage (Blender 3.4):
     blender -b --factory-startup -noaudio --python-exit-code 1 \\
         --python harness/blender_render.py -- JOB.json OUTPUT.exr [--threads N]
 
-JOB.json ("penumbra-blender-job" version 1, see SCHEMA) gives a camera, a sun,
+JOB.json ("penumbra-blender-job" version 2, see SCHEMA) gives a camera, a sun,
 a triangle mesh in three raw little-endian files beside it (float32 positions,
-float32 unit vertex normals, uint32 triangles), a Diffuse albedo, a sum or
-product of sines h(P), and a shading mode: "smooth", "bump-displacement",
-"bump-node" or "mesh".
+float32 unit vertex normals, uint32 triangles) with smooth faces (shaded with
+those normals) or flat faces (shaded with the triangle's normal), a Diffuse
+albedo, a sum or product of sines h(P), a shading mode: "smooth",
+"bump-displacement", "bump-node" or "mesh", and the object's shading and
+geometry ("shadow terminator") offsets.
 
 The job is data only: it is validated strictly (unknown keys, wrong types and
 out-of-range values are errors naming the JSON path) and only its numbers and
@@ -51,7 +53,7 @@ CAMERA = {"projection": ("enum", "orthographic", "perspective"),
           "height": ("int", 1, 65536)}
 SCHEMA = {
     "format": ("enum", "penumbra-blender-job"),
-    "version": ("int", 1, 1),
+    "version": ("int", 2, 2),
     "camera": ("switch", "projection", {
         "orthographic": dict(CAMERA, ortho_scale=POSITIVE,
                              **{"sensor_width?": POSITIVE}),
@@ -61,7 +63,8 @@ SCHEMA = {
               "strength": ("num", 0.0, None)},
     "mesh": {"positions": ("file",), "normals": ("file",),
              "triangles": ("file",), "vertex_count": ("int", 3, INT32),
-             "triangle_count": ("int", 1, INT32 // 3)},
+             "triangle_count": ("int", 1, INT32 // 3),
+             "faces": ("enum", "smooth", "flat")},
     "material": {"albedo": UNIT},
     "height": {"amplitude": ("num", 0.0, None),
                "combine": ("enum", "sum", "product"),
@@ -207,13 +210,21 @@ def build_mesh(job, folder):
     me.polygons.foreach_set("loop_start",
                             np.arange(0, 3 * m, 3, dtype=np.int32))
     me.polygons.foreach_set("loop_total", np.full(m, 3, dtype=np.int32))
-    me.polygons.foreach_set("use_smooth", np.ones(m, dtype=bool))
+    # Cycles applies the geometry offset to smooth faces only
+    # (SHADER_SMOOTH_NORMAL): smooth faces must really be marked smooth.
+    smooth = jm["faces"] == "smooth"
+    me.polygons.foreach_set("use_smooth", np.full(m, smooth, dtype=bool))
     me.update(calc_edges=True)
     if len(me.vertices) != n or len(me.polygons) != m:
         raise JobError("/mesh: Blender changed the mesh while building it")
-    # Custom split normals: Cycles then shades with these vertex normals.
-    configure(me, "Mesh", use_auto_smooth=True, auto_smooth_angle=math.pi)
-    me.normals_split_custom_set_from_vertices(nrm)
+    if smooth:
+        # Custom split normals: Cycles then shades with these vertex normals.
+        configure(me, "Mesh", use_auto_smooth=True, auto_smooth_angle=math.pi)
+        me.normals_split_custom_set_from_vertices(nrm)
+    kept = np.empty(m, dtype=bool)
+    me.polygons.foreach_get("use_smooth", kept)
+    if (kept != smooth).any():
+        raise JobError("/mesh/faces: Blender did not keep the face shading")
     ob = bpy.data.objects.new("penumbra_object", me)
     sh = job["shading"]
     configure(ob.cycles, "Object.cycles",
@@ -444,8 +455,10 @@ def main():
             if os.path.exists(name):
                 os.remove(name)
     print(f"{PROG}: {len(ob.data.vertices)} vertices, "
-          f"{len(ob.data.polygons)} triangles, mode "
-          f"{job['shading']['mode']}, {scene.cycles.samples} samples, "
+          f"{len(ob.data.polygons)} {job['mesh']['faces']} triangles, mode "
+          f"{job['shading']['mode']}, geometry offset "
+          f"{ob.cycles.shadow_terminator_geometry_offset:g}, "
+          f"{scene.cycles.samples} samples, "
           f"{scene.render.resolution_x}x{scene.render.resolution_y}, "
           f"{scene.render.threads} threads, setup {t1 - t0:.2f} s, "
           f"render {t2 - t1:.2f} s -> {out_path}", flush=True)

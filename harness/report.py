@@ -23,8 +23,23 @@ profile{bin_degrees,value[],count[]}}]}], comparisons[{variant,scene,
 renderer,method,reference,profile{rmse_terminator,...},image{rmse,ssim,...}}],
 ranking{metric,reference,renderer,per_scene[{scene,methods[{method,mean,
 count}]}],overall[...]}, missing[{renderer,method,why}],
-failures[{render,error}], plots[{metric,x,y,kind,renderer}]. image and
-difference are PNG paths relative to OUT.
+failures[{render,error}], plots[{metric,x,y,kind,renderer}], lowpoly (null,
+or the low-poly section: axes[], convergence_axis (an axes pointer or null),
+renderers[{id,offsets[]}], missing[{renderer,offset or scene,why}],
+variants[{id,scene,label,axis_values[],renders[{renderer,offset ("analytic":
+the untessellated truth),triangles,image,difference,exr,profile{}}]}],
+comparisons[{variant,scene,axis_values[],renderer,offset,reference
+("<renderer>:analytic"),shadow{darkened_fraction,max_darkening,
+lost_shadow_fraction,shadow_shift_px,shadowed_pixels,...},profile{},
+image{}}], ranking{metric,reference,renderer,per_scene[{scene,offsets[{offset,
+darkened_fraction,rmse_terminator,count}]}],overall[...]}, units{}). image
+and difference are PNG paths relative to OUT.
+
+The low-poly section (after the bump one) draws figures/lowpoly-convergence-
+<group>.* (evaluator offsets vs evaluator:analytic over the convergence axis),
+lowpoly-external-<group>.* (other renderers vs their own analytic render) and
+lowpoly-shadow-<group>.* (cast-shadow loss and shift, scenes with a cast
+shadow); a group is a scene plus the values of any other axes.
 
 contour JSON ("format": "penumbra-contour", "version": 1): light_deg[],
 deviation_deg[], methods[{id, G[deviation][light]}] (null: undefined).
@@ -213,7 +228,7 @@ def column(r):
 
 def fig_ranking(rk, colors, figdir, written):
     overall, scenes = objs(rk.get('overall')), objs(rk.get('per_scene'))
-    if not overall and not scenes:
+    if not overall and not any(objs(s.get('methods')) for s in scenes):
         return None
     methods = list(dict.fromkeys(str(e.get('method')) for e in overall + [
         e for s in scenes for e in objs(s.get('methods'))]))
@@ -540,6 +555,8 @@ def run_report(out):
                 if r.get(key) is not None:
                     path = inside(out, r[key], src, ctx)
                     uris[r[key]] = data_uri(path, src, ctx)
+    lp = doc.get('lowpoly')  # checked before any drawing too
+    lp = None if lp is None else LowPoly(lp, out, src)
     units = obj(doc.get('units'))
     terminator, lit = ([float(t) for t in r] if isinstance(r, list) and len(
         r) == 2 and all(math.isfinite(num(t)) for t in r) else d for r, d in (
@@ -567,11 +584,16 @@ def run_report(out):
              f'</b> ({esc(study.get("file", ""))}), penumbra '
              f'{esc(doc.get("penumbra", "?"))}.</p><nav><a href="#headline">'
              f'Headline</a><a href="#renderers">Renderers</a>{nav}'
-             '<a href="#plots">Sweeps</a></nav>',
+             '<a href="#plots">Sweeps</a>' +
+             ('<a href="#lowpoly">Low-poly</a>' if lp else '') + '</nav>',
              '<h2 id="headline">Headline</h2>',
              f'<p>Ranking by {esc(rk.get("metric", "?"))} of renderer '
              f'{esc(rk.get("renderer", "?"))} against '
              f'{esc(rk.get("reference", "?"))}; lower is better.</p>']
+    if not variants:
+        parts.append('<p class="na">This study has no bump-mapping variants'
+                     + (': see the low-poly section.' if lp else '.') +
+                     '</p>')
     name, unit = METRICS.get(rk.get('metric'), (rk.get('metric'), ''))
     scale = 100 if unit == FRACTION else 1
     for group, entries in groups:
@@ -620,6 +642,10 @@ def run_report(out):
                       f'scene {s}: {os.path.relpath(f, out)[:-4]}'
                       '.{png,svg,pdf}') for s, f in figs] or [
             '<p class="na">no finite values for this plot</p>']
+    if not doc.get('plots'):
+        parts.append('<p class="na">no sweeps in this study</p>')
+    if lp:
+        parts += lowpoly_html(lp, out, src, figdir, written)
     parts.append(
         '<footer><p>Profile values are fractions of albedo·E/π (a smooth '
         'Lambertian surface gives cos θ). θ is the angle between the light '
@@ -629,13 +655,459 @@ def run_report(out):
         'steps and bias in the tables are in percent of albedo·E/π; image '
         'metrics are in the image unit (' +
         esc(units.get('image', 'W m^-2 sr^-1')) +
-        '). Every figure is also in figures/ as PNG, SVG and PDF.</p>'
+        '). ' + ('In the low-poly section the darkened and lost-shadow '
+                 'fractions are percent of pixels, max darkening and the '
+                 'terminator RMSE percent of albedo·E/π, shadow shifts '
+                 'pixels. ' if lp else '') +
+        'Every figure is also in figures/ as PNG, SVG and PDF.</p>'
         '</footer></body></html>\n')
     path = os.path.join(out, 'report.html')
     with open(path + '.tmp', 'w', encoding='utf-8') as f:
         f.write('\n'.join(parts))
     os.replace(path + '.tmp', path)
     return written + [path]
+
+
+# -------------------------------------------------------------- low-poly ---
+
+LP_TRUTH = 'analytic'             # the untessellated surface
+LP_PANELS = (                     # (metric, name, unit, scale)
+    ('shadow.darkened_fraction', 'darkened fraction', '% of the lit pixels',
+     100),
+    ('shadow.max_darkening', 'max darkening', '% of albedo·E/π', 100),
+    ('profile.rmse_terminator', 'terminator profile RMSE',
+     '% of albedo·E/π', 100))
+LP_SIDE = (
+    ('shadow.lost_shadow_fraction', 'lost cast shadow',
+     '% of the analytic shadow', 100),
+    ('shadow.shadow_shift_px', 'cast-shadow shift', 'pixels', 1),
+    ('shadow.darkened_fraction', 'darkened fraction', '% of the lit pixels',
+     100))
+LP_UNITS = ('darkened_fraction', 'max_darkening', 'lost_shadow_fraction',
+            'shadow_shift_px')
+MARKERS = 'osD^vPX*<>p'
+RENDERER_DASHES = ['-', (0, (5, 2)), (0, (6, 2, 1, 2)), (0, (2, 1.5))]
+
+
+class LowPoly:
+    """report['lowpoly'] checked, with every variant and comparison placed in
+    a group (the scene and the values of the non-convergence axes) at a
+    level (the convergence axis' value)."""
+
+    def __init__(self, lp, out, src):
+        if not isinstance(lp, dict):
+            raise BadInput(src, '"lowpoly" must be an object or null')
+        for key in ('axes', 'renderers', 'variants', 'comparisons',
+                    'missing'):
+            if not isinstance(lp.get(key, []), list):
+                raise BadInput(src, f'lowpoly: "{key}" must be an array')
+        self.axes = objs(lp.get('axes'))
+        for i, a in enumerate(self.axes):
+            if not isinstance(a.get('values'), list):
+                raise BadInput(src, f'lowpoly: axes[{i}]: expected '
+                               '{"values": [...]}')
+        ptr = lp.get('convergence_axis')
+        self.conv = next((i for i, a in enumerate(self.axes)
+                          if ptr is not None and a.get('pointer') == ptr),
+                         0 if len(self.axes) == 1 else None)  # the only one
+        self.variants = objs(lp.get('variants'))
+        self.comps = objs(lp.get('comparisons'))
+        self.renderers = objs(lp.get('renderers'))
+        self.missing = list({json.dumps(m, sort_keys=True): m for m in objs(
+            lp.get('missing'))}.values())  # once per variant: once here
+        self.ranking = obj(lp.get('ranking'))
+        self.units = obj(lp.get('units'))
+        for v in self.variants:  # every image path, before any drawing
+            for r in objs(v.get('renders')):
+                for key in ('image', 'difference'):
+                    if r.get(key) is not None:
+                        inside(out, r[key], src,
+                               f'lowpoly variant {v.get("id")}: {key}')
+        if self.conv is not None:
+            vals = self.axes[self.conv]['values']
+            self.numeric = bool(vals) and all(
+                math.isfinite(num(t)) for t in vals)
+            self.levels = sorted(vals, key=num) if self.numeric else \
+                list(vals)
+            self.xlabel = str(self.axes[self.conv].get(
+                'label', self.axes[self.conv].get('pointer')))
+        else:  # no convergence axis: the variants' axis values as text
+            self.numeric = False
+            self.levels = list(dict.fromkeys(
+                self.place(v)[1] for v in self.variants + self.comps))
+            self.xlabel = 'variant'
+        self.groups = list(dict.fromkeys(
+            self.place(x)[0] for x in self.variants + self.comps))
+        self.rend_ids = list(dict.fromkeys(
+            [str(r.get('id')) for r in self.renderers] +
+            [str(c.get('renderer')) for c in self.comps]))
+        self.offsets = list(dict.fromkeys(
+            [str(o) for r in self.renderers for o in r.get('offsets') or []] +
+            [str(c.get('offset')) for c in self.comps]))
+        self.colors = method_colors(self.offsets)
+
+    def place(self, x):
+        """(group, level) of a variant or comparison; level None when its
+        axis values do not fit the axes."""
+        av, scene = x.get('axis_values'), str(x.get('scene'))
+        if not isinstance(av, list) or len(av) != len(self.axes):
+            return scene, None
+        if self.conv is None:
+            return scene, ', '.join(axis_text(v, i)
+                                    for i, v in enumerate(av)) or '—'
+        return scene + ''.join(
+            f', {a.get("label", a.get("pointer"))}={axis_text(v, i)}'
+            for i, (a, v) in enumerate(zip(self.axes, av))
+            if i != self.conv), av[self.conv]
+
+    def level_index(self, x):
+        level = self.place(x)[1]
+        if self.conv is None:
+            return self.levels.index(level) if level in self.levels else None
+        return None if level is None else axis_index(self.levels, level)
+
+    def level_text(self, level):
+        return axis_text(level, 0) if self.conv is not None else str(level)
+
+    def series(self, group, own):
+        """{(renderer, offset): {metric: array over levels}} of the group's
+        comparisons: own=False the evaluator against evaluator:analytic,
+        own=True the other renderers against their own analytic render."""
+        acc = {}
+        for c in self.comps:
+            rend = str(c.get('renderer'))
+            if (rend != REF) != own or \
+                    c.get('reference') != f'{rend}:{LP_TRUTH}' or \
+                    self.place(c)[0] != group:
+                continue
+            j = self.level_index(c)
+            if j is None:
+                continue
+            key = (rend, str(c.get('offset')))
+            s = acc.setdefault(key, {})
+            for metric, *_ in LP_PANELS + LP_SIDE:
+                a = s.setdefault(metric, np.zeros((2, len(self.levels))))
+                v = get_metric(c, metric)
+                if math.isfinite(v):
+                    a[:, j] += (v, 1)
+        order = {o: i for i, o in enumerate(self.offsets)}
+        rorder = {r: i for i, r in enumerate(self.rend_ids)}
+        out = {}
+        for key in sorted(acc, key=lambda k: (rorder.get(k[0], 0),
+                                              order.get(k[1], 0))):
+            with np.errstate(invalid='ignore', divide='ignore'):
+                out[key] = {m: a[0] / a[1] for m, a in acc[key].items()}
+        return out
+
+    def cast_shadow_pixels(self, group):
+        """The reference cast-shadow pixel counts of a group's
+        comparisons (empty when the scene casts no shadow)."""
+        return sorted({int(get_metric(c, 'shadow.shadowed_pixels'))
+                       for c in self.comps if self.place(c)[0] == group and
+                       get_metric(c, 'shadow.shadowed_pixels') > 0})
+
+
+def log_floor(ax, values):
+    """A log y axis when the positive values span more than a decade and
+    none is negative; returns the floor where zeros are drawn (None: no
+    zero, or a linear axis)."""
+    v = values[np.isfinite(values)]
+    pos = v[v > 0]
+    if pos.size < 2 or (v < 0).any() or pos.max() / pos.min() < 20:
+        return None
+    ax.set_yscale('log')
+    floor = 10.0 ** math.floor(math.log10(pos.min()) - 0.3)
+    return floor if (v == 0).any() else None
+
+
+def fig_lp_lines(name, title, lp, series, panels, style, figdir, written):
+    """One panel per metric over the levels, one line per series; returns
+    (png path, [(panel name, log y?, zeros on a floor?)])."""
+    levels = lp.levels
+    xs = np.array([num(t) for t in levels]) if lp.numeric else \
+        np.arange(len(levels), dtype=float)
+    log2 = lp.numeric and len(levels) >= 2 and (xs > 0).all()
+    fig, axs = plt.subplots(1, len(panels), squeeze=False,
+                            layout='constrained',
+                            figsize=(4.3 * len(panels) + 2.4, 4.1))
+    floors = []
+    for ax, (metric, pname, unit, scale) in zip(axs[0], panels):
+        ys = {k: s[metric] * scale for k, s in series.items()}
+        floor = log_floor(ax, np.concatenate(list(ys.values()) or [[]]))
+        for i, (key, y) in enumerate(ys.items()):
+            if floor is not None:
+                y = np.where(y == 0, floor, y)
+            ax.plot(xs, y, label=style(key)[0], **style(key)[1], zorder=2 + i,
+                    marker=MARKERS[i % len(MARKERS)], mfc='none', mew=1.2,
+                    ms=max(3.0, 9 - 0.9 * i), lw=max(0.8, 2.6 - 0.3 * i))
+        floors.append((pname, ax.get_yscale() == 'log', floor is not None))
+        if floor is not None:
+            ax.axhline(floor, color='0.55', lw=0.8, ls=':', zorder=1)
+            ax.text(0.98, floor / 1.15, 'zero: drawn on this floor',
+                    fontsize=7, color='0.4', ha='right', va='top',
+                    transform=ax.get_yaxis_transform())
+            ax.set_ylim(bottom=floor / 3)
+        if log2:
+            ax.set_xscale('log', base=2)
+        ax.set_xticks(xs, [lp.level_text(t) for t in levels],
+                      rotation=45 if len(levels) > 8 else 0)
+        ax.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
+        ax.set(title=pname, xlabel=lp.xlabel, ylabel=f'{pname} ({unit})')
+        ax.grid(alpha=0.3)
+    axs[0][-1].legend(loc='upper left', bbox_to_anchor=(1.02, 1.0))
+    fig.suptitle(title)
+    return save(fig, figdir, name, written), floors
+
+
+def lp_style(lp, own):
+    """(label, line style) of a series: colour by offset, dashes by
+    renderer for the external renderers."""
+    def style(key):
+        rend, off = key
+        if not own:
+            return off, dict(color=lp.colors[off])
+        ext = [r for r in lp.rend_ids if r != REF]
+        dash = RENDERER_DASHES[ext.index(rend) % len(RENDERER_DASHES)] \
+            if rend in ext else '-'
+        return f'{rend}: {off}', dict(color=lp.colors[off], ls=dash)
+    return style
+
+
+def lp_caption(path, out, floors, lp):
+    cap = f'figures/{os.path.basename(path)[:-4]}.{{png,svg,pdf}}. '
+    if lp.numeric and len(lp.levels) >= 2 and all(
+            num(t) > 0 for t in lp.levels):
+        cap += f'x: {lp.xlabel}, log₂ axis. '
+    logs = [n for n, log, _ in floors if log]
+    zeros = [n for n, _, zero in floors if zero]
+    if logs:
+        cap += 'Log y axis (' + ', '.join(logs) + ')'
+        cap += ('; values of exactly 0 are drawn on the dotted floor line '
+                '(' + ', '.join(zeros) + '). ') if zeros else '. '
+    return cap + ('Offsets with equal values overlap: larger hollow markers '
+                  'and thicker lines lie under smaller ones.')
+
+
+def lp_rank_table(entries):
+    vals = [num(e.get('darkened_fraction')) for e in entries]
+    rows = []
+    for e, v in zip(entries, vals):
+        rank = 1 + sum(w < v for w in vals if math.isfinite(w)) \
+            if math.isfinite(v) else None  # equal values share a rank
+        rows.append([rank, str(e.get('offset')), (v, 100),
+                     (e.get('rmse_terminator'), 100), e.get('count')])
+    return table(['rank', 'offset', 'mean darkened fraction (% of lit '
+                  'pixels)', 'mean terminator profile RMSE (% of '
+                  'albedo·E/π)', 'count'], rows)
+
+
+def lp_grid(lp, var, uris):
+    """Columns: the analytic truth, then each offset; rows: per renderer
+    its images, then their differences from its analytic render."""
+    renders = objs(var.get('renders'))
+    at = {(str(r.get('renderer')), str(r.get('offset'))): r for r in renders}
+    cols = list(dict.fromkeys([LP_TRUTH] + [
+        o for o in lp.offsets if any(k[1] == o for k in at)] +
+        [k[1] for k in at]))
+    why = {(str(m.get('renderer')), str(m.get('offset'))): str(m.get('why'))
+           for m in lp.missing if 'offset' in m}
+
+    def cell(rel, alt, cap):
+        return '<td>' + img(uris[rel], alt, cap) + '</td>'
+
+    def tri(r):
+        t = num(r.get('triangles'))
+        return f', {t:.0f} triangles' if math.isfinite(t) else ''
+    grid = '<tr><th>renderer</th>' + ''.join(
+        f'<th>{esc("analytic surface (truth)" if c == LP_TRUTH else c)}</th>'
+        for c in cols) + '</tr>'
+    for rend in dict.fromkeys(lp.rend_ids + [k[0] for k in at]):
+        rs = [at.get((rend, c)) for c in cols]
+        if not any(rs):
+            continue
+        grid += f'\n<tr><th>{esc(rend)}</th>' + ''.join(
+            cell(r['image'], f'{rend} {c}', f'{rend} / {c}{tri(r)}')
+            if r and r.get('image') is not None else
+            f'<td class="na">{esc(why.get((rend, c), "not rendered"))}</td>'
+            for c, r in zip(cols, rs)) + '</tr>'
+        if any(r and r.get('difference') is not None for r in rs):
+            grid += '\n<tr><th>difference</th>' + ''.join(
+                cell(r['difference'], f'{rend} {c} difference',
+                     f'{c} − analytic ({rend})')
+                if r and r.get('difference') is not None else '<td></td>'
+                for c, r in zip(cols, rs)) + '</tr>'
+    return f'<div class="scroll"><table class="grid">{grid}</table></div>'
+
+
+def lowpoly_html(lp, out, src, figdir, written):
+    """The low-poly section's HTML parts."""
+    parts = [
+        '<h2 id="lowpoly">Low-poly meshes: the smooth-shading terminator</h2>',
+        '<p>A smooth-shaded low-poly mesh shades each flat triangle with '
+        'normals interpolated from its vertices, so near the terminator a '
+        'point can be shaded as facing the light while the flat triangle it '
+        'lies on, or its neighbours, block the shadow ray: the mesh shadows '
+        'itself along a stair-stepped line that follows the facets. Each '
+        'offset method moves the shadow ray’s origin off the triangle so '
+        'that the ray clears the neighbouring facets (<i>none</i> leaves it '
+        'on the triangle). The ground truth is the same scene with the '
+        'analytic, untessellated surface. Moving the origin can also thin '
+        'or move a cast shadow (another object’s, or the open cylinder’s '
+        'own wall): that is measured below, not hidden.</p>']
+    u = lp.units
+    keys = [k for k in LP_UNITS if k in u] + sorted(
+        k for k in u if k not in LP_UNITS)
+    parts.append('<dl>' + ''.join(
+        f'<dt><b>{esc(k)}</b></dt><dd>{esc(u[k])}</dd>' for k in keys) +
+        '<dt><b>rmse_terminator</b></dt><dd>terminator-region profile RMSE '
+        'against the analytic render’s profile, fraction of albedo·E/π '
+        '(shown as %)</dd></dl>')
+    rk = lp.ranking
+    parts.append(f'<h3>Ranking</h3><p>Offsets of renderer '
+                 f'{esc(rk.get("renderer", "?"))} against '
+                 f'{esc(rk.get("reference", "?"))}, by '
+                 f'{esc(rk.get("metric", "?"))} (mean over tessellation '
+                 'levels; lower is better; equal values share a rank).</p>')
+    for group, entries in [('overall', objs(rk.get('overall')))] + [
+            (f'scene {s.get("scene")}', objs(s.get('offsets')))
+            for s in objs(rk.get('per_scene'))]:
+        parts.append(f'<h4>{esc(group)}</h4>' + (
+            lp_rank_table(entries) if entries else
+            '<p class="na">no comparisons</p>'))
+
+    parts.append('<h3>Convergence over tessellation levels</h3>')
+    if lp.conv is None or not lp.numeric:
+        parts.append('<p class="na">No numeric convergence axis: the '
+                     'metrics are plotted over the variants in order.</p>')
+    shadow_groups = []
+    for group in lp.groups:
+        own = lp.series(group, False)
+        ext = lp.series(group, True)
+        if lp.cast_shadow_pixels(group):
+            shadow_groups.append((group, own, ext))
+        if not own and not ext:
+            continue
+        parts.append(f'<h4>{esc(group)}</h4>')
+        if own:
+            f, floors = fig_lp_lines(
+                f'lowpoly-convergence-{stem(group)}',
+                f'{group}: {REF} offsets vs {REF}:{LP_TRUTH}', lp, own,
+                LP_PANELS, lp_style(lp, False), figdir, written)
+            parts.append(img(data_uri(f, f, 'figure'),
+                             f'convergence {group}',
+                             lp_caption(f, out, floors, lp)))
+        if ext:
+            f, floors = fig_lp_lines(
+                f'lowpoly-external-{stem(group)}',
+                f'{group}: external renderers vs their own analytic render',
+                lp, ext, LP_PANELS, lp_style(lp, True), figdir, written)
+            parts.append(img(data_uri(f, f, 'figure'),
+                             f'external renderers {group}',
+                             lp_caption(f, out, floors, lp)))
+
+    parts.append('<h3>Side effects on cast shadows</h3>')
+    if not shadow_groups:
+        parts.append('<p class="na">No scene of this study casts a shadow '
+                     'in its analytic render.</p>')
+    for group, own, ext in shadow_groups:
+        px = lp.cast_shadow_pixels(group)
+        parts.append(
+            f'<h4>{esc(group)}</h4><p>The analytic render’s cast shadow '
+            f'covers {px[0]}{f"–{px[-1]}" if len(px) > 1 else ""} pixels. '
+            'Per offset and tessellation level, against the same renderer’s '
+            'analytic render; n/a: no cast shadow in one of the two.</p>')
+        rows = {**own, **ext}
+        for metric, pname, unit, scale in LP_SIDE:
+            parts.append(table(
+                [f'{pname} ({unit}); offset \\ {lp.xlabel}'] +
+                [lp.level_text(t) for t in lp.levels],
+                [[k[1] if k[0] == REF else f'{k[0]}: {k[1]}'] +
+                 [(v, scale) for v in s[metric]] for k, s in rows.items()]))
+        f, floors = fig_lp_lines(
+            f'lowpoly-shadow-{stem(group)}',
+            f'{group}: cast-shadow side effects vs the analytic render', lp,
+            rows, LP_SIDE[:2], lp_style(lp, bool(ext)), figdir, written)
+        parts.append(img(data_uri(f, f, 'figure'), f'cast shadow {group}',
+                         lp_caption(f, out, floors, lp)))
+
+    parts.append(
+        '<h3>Images: the stair-stepped terminator and how each method '
+        'removes it</h3><p class="note">At the two coarsest tessellation '
+        'levels. Difference images: offset minus the same renderer’s '
+        'analytic render; red brighter, blue darker, white equal, '
+        'saturating at ±0.25 albedo·E/π; grey where either image has no '
+        'object.</p>')
+    uris = {}
+    scene_why = {}
+    for m in lp.missing:
+        if 'scene' in m:
+            scene_why.setdefault(str(m.get('scene')), []).append(
+                f'{m.get("renderer")}: {m.get("why")}')
+    for group in lp.groups:
+        vs = [v for v in lp.variants if lp.place(v)[0] == group and
+              lp.level_index(v) is not None]
+        first = sorted({lp.level_index(v) for v in vs})[:2]
+        for v in sorted((v for v in vs if lp.level_index(v) in first),
+                        key=lp.level_index):
+            for r in objs(v.get('renders')):
+                for key in ('image', 'difference'):
+                    rel = r.get(key)
+                    if rel is not None and rel not in uris:
+                        ctx = f'lowpoly variant {v.get("id")}: {key}'
+                        uris[rel] = data_uri(inside(out, rel, src, ctx),
+                                             src, ctx)
+            parts.append(f'<h4>{esc(v.get("id"))}: '
+                         f'{esc(v.get("label", group))}</h4>' +
+                         lp_grid(lp, v, uris))
+            why = scene_why.get(str(v.get('scene')))
+            if why:
+                parts.append('<p class="na">Not rendered: ' +
+                             esc('; '.join(why)) + '</p>')
+
+    parts.append('<h3>Renderers and what they cannot provide</h3>' + table(
+        ['renderer', 'offsets'],
+        [[str(r.get('id')), ', '.join(map(str, r.get('offsets') or []))]
+         for r in lp.renderers]))
+    if lp.missing:
+        parts.append(table(
+            ['renderer', 'offset or scene', 'why'],
+            [[str(m.get('renderer', '')),
+              f'offset {m["offset"]}' if 'offset' in m else
+              f'scene {m.get("scene", "")}', str(m.get('why', ''))]
+             for m in lp.missing]))
+    elif lp.renderers:
+        parts.append('<p>Every renderer provides every offset and scene.</p>')
+
+    parts.append('<h3>All comparisons</h3>' + (
+        '' if lp.comps else '<p class="na">no comparisons</p>'))
+    tris = {(str(v.get('id')), str(r.get('renderer')), str(r.get('offset'))):
+            r.get('triangles') for v in lp.variants
+            for r in objs(v.get('renders'))}
+    head = ['renderer', 'offset', 'reference', lp.xlabel, 'triangles',
+            'darkened (%)', 'max darkening (%)', 'terminator RMSE (%)',
+            'lost shadow (%)', 'shadow shift (px)', 'position error (deg)',
+            'image RMSE', 'SSIM']
+    metrics = [('shadow.darkened_fraction', 100),
+               ('shadow.max_darkening', 100),
+               ('profile.rmse_terminator', 100),
+               ('shadow.lost_shadow_fraction', 100),
+               ('shadow.shadow_shift_px', 1),
+               ('profile.position_error_deg', 1), ('image.rmse', 1),
+               ('image.ssim', 1)]
+    for group in lp.groups:
+        cs = [c for c in lp.comps if lp.place(c)[0] == group]
+        if not cs:
+            continue
+        rows = [[str(c.get('renderer')), str(c.get('offset')),
+                 str(c.get('reference')),
+                 lp.level_text(lp.place(c)[1]) if lp.place(c)[1] is not None
+                 else 'n/a',
+                 tris.get((str(c.get('variant')), str(c.get('renderer')),
+                           str(c.get('offset'))))] +
+                [(get_metric(c, m), s) for m, s in metrics] for c in cs]
+        parts.append(f'<details><summary>{esc(group)}: {len(cs)} '
+                     f'comparisons</summary>{table(head, rows)}</details>')
+    return parts
 
 
 # --------------------------------------------------------------- contour ---

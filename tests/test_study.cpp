@@ -11,6 +11,8 @@
 #include <sstream>
 #include <string>
 
+#include <map>
+
 #include <nlohmann/json.hpp>
 
 #include "analysis/contour.h"
@@ -274,6 +276,58 @@ TEST_F(Study, MalformedStudiesNameFileAndPointer) {
   o.output_dir = path("out");
   o.figures = false;
   EXPECT_THROW(run_study(load_study(write("bad.json", j)), o), InputError);
+}
+
+// A low-poly study: every offset against the analytic render; the analytic
+// render is one per scene and renderer whatever the tessellation level.
+TEST_F(Study, LowPolyStudyComparesEveryOffsetWithTheAnalyticSurface) {
+  const json j = {
+      {"version", 1},
+      {"name", "tiny-lowpoly"},
+      {"lowpoly",
+       {{"scenes", {kSource + "/scenes/lowpoly/sphere.json"}},
+        {"set", {{"/camera/width", 32}, {"/camera/height", 32}, {"/camera/spp", 4}}},
+        {"axes", {{{"pointer", "/shape/tessellation/segments"}, {"values", {8, 64}}}}},
+        {"convergence", "/shape/tessellation/segments"},
+        {"offsets",
+         {"none", "hanika2021", {{"id", "epsilon"}, {"parameters", {{"distance", 0.02}}}}}},
+        {"renderers", {"evaluator"}}}}};
+  StudyOptions o;
+  o.output_dir = path("out");
+  o.jobs = 2;
+  o.figures = false;
+  const StudyRunStats stats = run_study(load_study(write("lp.json", j)), o);
+  ASSERT_TRUE(stats.complete());
+  EXPECT_EQ(stats.renders, 2u * (1 + 3));
+  EXPECT_EQ(stats.rendered, 2u * 3 + 1);  // the shared analytic render once
+  const json report = json::parse(read_text(path("out/report.json")));
+  const json& lowpoly = report.at("lowpoly");
+  EXPECT_EQ(lowpoly.at("comparisons").size(), 2u * 3);
+  EXPECT_EQ(lowpoly.at("convergence_axis"), "/shape/tessellation/segments");
+  std::map<std::string, double> darkened_at_8;
+  for (const json& c : lowpoly.at("comparisons")) {
+    EXPECT_EQ(c.at("reference"), "evaluator:analytic");
+    EXPECT_TRUE(c.at("shadow").contains("unit"));
+    if (c.at("axis_values")[0] == 8)
+      darkened_at_8[c.at("offset")] = c.at("shadow").at("darkened_fraction").get<double>();
+  }
+  EXPECT_GT(darkened_at_8.at("none"), darkened_at_8.at("hanika2021"));
+  EXPECT_EQ(lowpoly.at("ranking").at("overall").size(), 3u);
+  // lowpoly.csv: one header, one row per comparison.
+  std::istringstream csv(read_text(path("out/lowpoly.csv")));
+  std::string line;
+  std::size_t lines = 0;
+  while (std::getline(csv, line)) ++lines;
+  EXPECT_EQ(lines, lowpoly.at("comparisons").size() + 1);
+  // A misspelt offset names its pointer.
+  json bad = j;
+  bad["lowpoly"]["offsets"][1] = "hanika";
+  try {
+    load_study(write("bad.json", bad));
+    ADD_FAILURE() << "accepted an unknown offset";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.pointer(), "/lowpoly/offsets/1") << e.what();
+  }
 }
 
 // The smoke study end to end, every renderer, then its report.html in

@@ -171,15 +171,32 @@ ProfileMetrics compare_profiles(const Profile& test, const Profile& reference,
   return m;
 }
 
-ImageMetrics compare_images(const Image& test, const Image& reference, double min_coverage) {
+namespace {
+
+// Channel indices of two images of the same size that are compared.
+struct PairChannels {
+  int trgb[3], rrgb[3];
+  int ta, ra;
+};
+
+PairChannels pair_channels(const Image& test, const Image& reference) {
   if (test.width != reference.width || test.height != reference.height)
     throw std::invalid_argument(fmt::format("image sizes differ: {}x{} and {}x{}", test.width,
                                             test.height, reference.width, reference.height));
-  const int trgb[3] = {require_channel(test, "R"), require_channel(test, "G"),
-                       require_channel(test, "B")};
-  const int rrgb[3] = {require_channel(reference, "R"), require_channel(reference, "G"),
-                       require_channel(reference, "B")};
-  const int ta = require_channel(test, "A"), ra = require_channel(reference, "A");
+  return {{require_channel(test, "R"), require_channel(test, "G"), require_channel(test, "B")},
+          {require_channel(reference, "R"), require_channel(reference, "G"),
+           require_channel(reference, "B")},
+          require_channel(test, "A"),
+          require_channel(reference, "A")};
+}
+
+}  // namespace
+
+ImageMetrics compare_images(const Image& test, const Image& reference, double min_coverage) {
+  const PairChannels ch = pair_channels(test, reference);
+  const int(&trgb)[3] = ch.trgb;
+  const int(&rrgb)[3] = ch.rrgb;
+  const int ta = ch.ta, ra = ch.ra;
   ImageMetrics m;
   std::size_t both = 0, either = 0;
   double sum_sq = 0.0, sum = 0.0, sum_ref = 0.0;
@@ -214,6 +231,48 @@ ImageMetrics compare_images(const Image& test, const Image& reference, double mi
     m.reference_mean = sum_ref / double(m.pixels);
   } else {
     m.rmse = m.max_error = m.mean_error = kNaN;
+  }
+  return m;
+}
+
+ShadowMetrics compare_shadows(const Image& test, const Image& reference, double scale,
+                              double min_coverage) {
+  const PairChannels ch = pair_channels(test, reference);
+  const int(&trgb)[3] = ch.trgb;
+  const int(&rrgb)[3] = ch.rrgb;
+  const int ta = ch.ta, ra = ch.ra;
+  const int theta_channel = require_channel(reference, "analysis.theta");
+  ShadowMetrics m;
+  double cx[2] = {0, 0}, cy[2] = {0, 0};
+  std::size_t lost = 0;
+  for (int y = 0; y < test.height; ++y)
+    for (int x = 0; x < test.width; ++x) {
+      if (!(test.at(x, y, ta) >= min_coverage && reference.at(x, y, ra) >= min_coverage)) continue;
+      const double vt = radiance(test, x, y, trgb) / scale;
+      const double vr = radiance(reference, x, y, rrgb) / scale;
+      if (!std::isfinite(vt) || !std::isfinite(vr)) continue;
+      m.max_darkening = std::max(m.max_darkening, vr - vt);
+      if (vr >= kDarkLevel) {
+        ++m.lit_pixels;
+        m.darkened_pixels += vt < 0.5 * vr;
+      }
+      const double theta = reference.at(x, y, theta_channel);
+      if (!(theta < kShadowMaxTheta)) continue;
+      const double unshadowed = std::cos(radians(theta));
+      const bool shadowed[2] = {vr < 0.5 * unshadowed, vt < 0.5 * unshadowed};
+      for (int k = 0; k < 2; ++k)
+        if (shadowed[k]) cx[k] += x, cy[k] += y;
+      m.shadowed_pixels += shadowed[0];
+      m.test_shadowed_pixels += shadowed[1];
+      lost += shadowed[0] && !shadowed[1];
+    }
+  m.darkened_fraction = m.lit_pixels ? double(m.darkened_pixels) / double(m.lit_pixels) : kNaN;
+  m.lost_shadow_fraction = m.shadowed_pixels ? double(lost) / double(m.shadowed_pixels) : kNaN;
+  if (m.shadowed_pixels && m.test_shadowed_pixels) {
+    const double n0 = double(m.shadowed_pixels), n1 = double(m.test_shadowed_pixels);
+    m.shadow_shift_px = std::hypot(cx[1] / n1 - cx[0] / n0, cy[1] / n1 - cy[0] / n0);
+  } else {
+    m.shadow_shift_px = kNaN;
   }
   return m;
 }

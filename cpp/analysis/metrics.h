@@ -88,4 +88,28 @@ struct ImageMetrics {
 
 ImageMetrics compare_images(const Image& test, const Image& reference, double min_coverage = 0.999);
 
+// Shadow changes of a low-poly render against a smooth (unbumped) ground
+// truth, over pixels fully covered in both. Radiances are in units of
+// scale = albedo * E / pi, so the truth's unshadowed value is cos(theta),
+// theta from the reference's analysis.theta channel.
+struct ShadowMetrics {
+  std::size_t lit_pixels = 0;       // reference >= kDarkLevel (lit in the truth)
+  std::size_t darkened_pixels = 0;  // of those, test < half the reference
+  double darkened_fraction = 0.0;   // darkened / lit: the shadow-line pixels
+  double max_darkening = 0.0;       // max(reference - test), fraction of albedo*E/pi
+  // Cast shadows: facing the light (theta < kShadowMaxTheta) yet below half
+  // the unshadowed value cos(theta).
+  std::size_t shadowed_pixels = 0;       // in the reference
+  std::size_t test_shadowed_pixels = 0;  // in the test
+  // Reference-shadowed pixels that the test lights: a shadow the offset lost.
+  double lost_shadow_fraction = 0.0;  // NaN when the reference has no cast shadow
+  // Distance between the centroids of the two shadowed sets, pixels; NaN
+  // when either is empty.
+  double shadow_shift_px = 0.0;
+};
+inline constexpr double kShadowMaxTheta = 85.0;  // degrees
+
+ShadowMetrics compare_shadows(const Image& test, const Image& reference, double scale,
+                              double min_coverage = 0.999);
+
 }  // namespace penumbra

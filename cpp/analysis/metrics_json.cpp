@@ -41,6 +41,19 @@ nlohmann::json image_metrics_json(const ImageMetrics& m) {
           {"nonfinite", m.nonfinite}};
 }
 
+nlohmann::json shadow_metrics_json(const ShadowMetrics& m) {
+  return {
+      {"unit", "fraction of albedo*E/pi (max_darkening), of pixels (fractions), pixels (shift)"},
+      {"lit_pixels", m.lit_pixels},
+      {"darkened_pixels", m.darkened_pixels},
+      {"darkened_fraction", number(m.darkened_fraction)},
+      {"max_darkening", number(m.max_darkening)},
+      {"shadowed_pixels", m.shadowed_pixels},
+      {"test_shadowed_pixels", m.test_shadowed_pixels},
+      {"lost_shadow_fraction", number(m.lost_shadow_fraction)},
+      {"shadow_shift_px", number(m.shadow_shift_px)}};
+}
+
 nlohmann::json profile_json(const Profile& p) {
   nlohmann::json value = nlohmann::json::array(), count = nlohmann::json::array();
   for (std::size_t k = 0; k < p.value.size(); ++k) {

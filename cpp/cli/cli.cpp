@@ -50,6 +50,8 @@ struct RenderArgs {
   std::string output;
   std::string preview;
   std::string method;
+  std::string offset;
+  int segments = 0;
   std::string representation;
   int width = 0, height = 0, spp = 0;
   std::vector<std::string> sets;
@@ -77,24 +79,38 @@ std::string parameter_domain(const MethodParameter& p) {
                      p.default_value);
 }
 
+json parameters_json(std::span<const MethodParameter> list) {
+  json parameters = json::array();
+  for (const MethodParameter& p : list)
+    parameters.push_back({{"name", p.name},
+                          {"unit", p.unit},
+                          {"min", p.min_value},
+                          {"max", p.max_value},
+                          {"default", p.default_value},
+                          {"description", p.description}});
+  return parameters;
+}
+
 int command_methods(bool as_json, std::ostream& out) {
   if (as_json) {
     json list = json::array();
     for (const MethodInfo& m : all_methods()) {
-      json parameters = json::array();
-      for (const MethodParameter& p : m.parameters)
-        parameters.push_back({{"name", p.name},
-                              {"unit", p.unit},
-                              {"min", p.min_value},
-                              {"max", p.max_value},
-                              {"default", p.default_value},
-                              {"description", p.description}});
+      const json parameters = parameters_json(m.parameters);
       list.push_back({{"id", m.id},
+                      {"kind", "terminator"},
                       {"source", m.source},
                       {"summary", m.summary},
                       {"parameters", parameters},
                       {"identity_without_deviation", m.identity_without_deviation},
                       {"note", m.identity_note}});
+    }
+    for (const OffsetMethodInfo& m : all_offset_methods()) {
+      const json parameters = parameters_json(m.parameters);
+      list.push_back({{"id", m.id},
+                      {"kind", "offset"},
+                      {"source", m.source},
+                      {"summary", m.summary},
+                      {"parameters", parameters}});
     }
     out << list.dump(2) << "\n";
     return kExitOk;
@@ -109,12 +125,24 @@ int command_methods(bool as_json, std::ostream& out) {
   }
   out << "\nAll factors lie in [0,1] and multiply the light's contribution to the lobes chosen by "
          "/terminator/lobes.\n";
+  out << fmt::format(
+      "\nShadow-ray origin methods (/offset/method; low-poly meshes only):\n{:<24} "
+      "{:<40} {}\n",
+      "id", "parameters", "source");
+  for (const OffsetMethodInfo& m : all_offset_methods()) {
+    std::string parameters = "-";
+    for (const MethodParameter& p : m.parameters) parameters = parameter_domain(p);
+    out << fmt::format("{:<24} {:<40} {}\n", m.id, parameters, m.source);
+    out << fmt::format("{:<24} {}\n", "", m.summary);
+  }
   return kExitOk;
 }
 
 std::vector<Override> collect_overrides(const RenderArgs& a) {
   std::vector<Override> overrides;
   if (!a.method.empty()) overrides.push_back({"/terminator/method", a.method});
+  if (!a.offset.empty()) overrides.push_back({"/offset/method", a.offset});
+  if (a.segments > 0) overrides.push_back({"/shape/tessellation/segments", a.segments});
   if (!a.representation.empty()) overrides.push_back({"/representation", a.representation});
   if (a.width > 0) overrides.push_back({"/camera/width", a.width});
   if (a.height > 0) overrides.push_back({"/camera/height", a.height});
@@ -177,6 +205,7 @@ int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
              {"penumbra:renderer", to_string(*renderer)},
              {"penumbra:scene", document.dump()},
              {"penumbra:method", std::string(method_info(scene.terminator.method.method).id)},
+             {"penumbra:offset", std::string(offset_method_info(scene.offset.method).id)},
              {"penumbra:representation", to_string(scene.representation)},
              {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
   if (!a.preview.empty()) write_preview_png(image, a.preview);
@@ -195,6 +224,8 @@ int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
         double(stats.camera_samples) / stats.seconds / 1e6);
     if (stats.triangles)
       out << fmt::format(", {} triangles built in {:.3f} s", stats.triangles, stats.build_seconds);
+    if (scene.tessellation)
+      out << fmt::format(", offset {}", offset_method_info(scene.offset.method).id);
     out << "\n";
     if (!a.preview.empty()) out << "wrote " << a.preview << "\n";
   }
@@ -564,6 +595,13 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   render_cmd->add_option("-o,--output", r.output, "output OpenEXR file")->required();
   render_cmd->add_option("--preview", r.preview, "also write an sRGB PNG preview");
   render_cmd->add_option("--method", r.method, "terminator method id (see `penumbra methods`)");
+  render_cmd->add_option("--offset", r.offset,
+                         "shadow-ray origin method of a low-poly mesh (see `penumbra methods`)");
+  render_cmd
+      ->add_option("--segments", r.segments,
+                   "tessellate the shape: segments around the axis "
+                   "(sets /shape/tessellation/segments)")
+      ->check(CLI::Range(3, 65536));
   render_cmd->add_option("--representation", r.representation, "smooth, bump or displacement");
   render_cmd->add_option("--width", r.width, "image width in pixels")->check(CLI::PositiveNumber);
   render_cmd->add_option("--height", r.height, "image height in pixels")

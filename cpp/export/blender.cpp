@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "core/tessellation.h"
 #include "export/export.h"
 #include "scene/scene_json.h"
 
@@ -73,6 +74,17 @@ std::vector<TerminatorMethod> methods_offered(const std::string& renderer,
   return {};
 }
 
+std::vector<OffsetMethod> offsets_offered(const std::string& renderer) {
+  if (renderer == "evaluator") {
+    std::vector<OffsetMethod> all;
+    for (const OffsetMethodInfo& m : all_offset_methods()) all.push_back(m.method);
+    return all;
+  }
+  if (renderer == "povray") return {OffsetMethod::kNone};
+  if (renderer == "blender") return {OffsetMethod::kNone, OffsetMethod::kCyclesGeometryOffset};
+  return {};
+}
+
 BlenderExport export_blender(const Scene& scene) {
   const TerminatorMethod method = scene.terminator.method.method;
   bool offered = false;
@@ -93,11 +105,28 @@ BlenderExport export_blender(const Scene& scene) {
         "Blender's own power convention, which the evaluator does not model");
   if (scene.material.specular_weight > 0.0)
     throw ExportError("Blender export supports Lambertian materials only (specular_weight 0)");
+  if (!scene.props.empty())
+    throw ExportError("Blender export: props are evaluator-only (remove /props)");
+  // Cycles' object "Geometry Offset" is its only shadow-ray offset; 0 turns
+  // it off, which is `none`.
+  if (scene.offset.method != OffsetMethod::kNone &&
+      scene.offset.method != OffsetMethod::kCyclesGeometryOffset)
+    throw ExportError(fmt::format(
+        "Blender Cycles 3.4 offers the shadow-ray offsets `none` and `cycles-geometry-offset`; "
+        "`{}` is not available",
+        offset_method_info(scene.offset.method).id));
 
   BlenderExport out;
   const HeightFunction& hf = scene.height.function;
   const double amplitude = scene.height.amplitude;
   const bool has_height = amplitude > 0.0 && !hf.terms.empty();
+  // Cycles would bump the flat triangle with h differenced over its own
+  // plane; the evaluator rotates the analytic bumped normal onto Ni. Not the
+  // same shading normal, so a low-poly bump render would not be comparable.
+  if (scene.tessellation && scene.representation != Representation::kSmooth && has_height)
+    throw ExportError(
+        "Blender export: bump on a tessellated shape is evaluator-only (use the smooth "
+        "representation, or no /shape/tessellation)");
   switch (scene.representation) {
     case Representation::kSmooth:
       out.shading = BlenderShading::kSmooth;
@@ -120,7 +149,11 @@ BlenderExport export_blender(const Scene& scene) {
   // then loads a few thousand triangles instead of a million.
   GridResolution res = grid_resolution(scene.shape, scene.displacement.edge_length, reach);
   if (!displaced) res = {1024, scene.shape.type == ShapeType::kCylinder ? 1u : 512u};
-  out.mesh = make_grid_mesh(scene.shape, hf, displaced ? amplitude : 0.0, res);
+  // A tessellated shape is sent as the evaluator's own triangles (its normals
+  // are the exact ones at the vertices), through the same coordinate change.
+  out.mesh = scene.tessellation ? tessellate(scene.shape, *scene.tessellation)
+                                : make_grid_mesh(scene.shape, hf, displaced ? amplitude : 0.0, res);
+  const bool flat = scene.tessellation && scene.tessellation->shading == NormalShading::kFlat;
   // Swap y and z (a mirror), then restore outward winding: Cycles flips the
   // shading normal on back faces, so a reversed triangle would shade dark.
   TriangleMesh& mesh = out.mesh;
@@ -160,7 +193,7 @@ BlenderExport export_blender(const Scene& scene) {
   }
   const json job = {
       {"format", "penumbra-blender-job"},
-      {"version", 1},
+      {"version", 2},
       {"camera", camera_json(scene.camera)},
       {"render", {{"samples", scene.camera.spp}, {"seed", scene.camera.seed % 2147483647u}}},
       {"light",
@@ -172,7 +205,8 @@ BlenderExport export_blender(const Scene& scene) {
         {"normals", kBlenderNormalsFile},
         {"triangles", kBlenderTrianglesFile},
         {"vertex_count", mesh.vertex_count()},
-        {"triangle_count", mesh.triangle_count()}}},
+        {"triangle_count", mesh.triangle_count()},
+        {"faces", flat ? "flat" : "smooth"}}},
       {"material", {{"albedo", scene.material.albedo}}},
       {"height",
        {{"amplitude", has_height ? amplitude : 0.0},
@@ -182,7 +216,8 @@ BlenderExport export_blender(const Scene& scene) {
        {{"mode", mode},
         {"shading_offset",
          method == TerminatorMethod::kShadingOffset ? scene.terminator.method.shading_offset : 0.0},
-        {"geometry_offset", 0.0}}}};
+        {"geometry_offset",
+         scene.offset.method == OffsetMethod::kCyclesGeometryOffset ? scene.offset.cutoff : 0.0}}}};
   out.job_json = job.dump(2) + "\n";
   return out;
 }

@@ -37,8 +37,10 @@ struct PovrayExport {
                                      int threads) const;
 };
 
-// POV-Ray has no shadow-terminator method: only `none` is accepted. Distant
-// lights only: POV-Ray's fade_power 2 is 2/(1+(d/D)^2), not 1/d^2.
+// POV-Ray has no shadow-terminator method: only `none` is accepted, and no
+// shadow-ray offset: only offset `none`. A tessellated shape becomes a mesh2
+// (normal_vectors for smooth shading). Distant lights only: POV-Ray's
+// fade_power 2 is 2/(1+(d/D)^2), not 1/d^2. No props (evaluator-only).
 PovrayExport export_povray(const Scene& scene);
 
 // ---- Blender 3.4 Cycles ---------------------------------------------------
@@ -59,8 +61,11 @@ struct BlenderExport {
 
 // Methods Blender provides for each representation: smooth and displacement
 // take `none` or `shading-offset`; bump takes `none`, `chiang2019` (Bump
-// node) and `shading-offset` (object setting, on raw bump). Geometry offset
-// is always 0: the meshes are fine grids of the analytic surface.
+// node) and `shading-offset` (object setting, on raw bump). A tessellated
+// shape is sent as its low-poly mesh, smooth or flat faces. The object's
+// Geometry Offset is the scene's cycles-geometry-offset cutoff, else 0 (not
+// Cycles' default 0.1): offset `none`, as on the fine grids that stand in for
+// the analytic shapes.
 BlenderExport export_blender(const Scene& scene);
 // File names the job refers to (fixed: never derived from scene values).
 inline constexpr const char* kBlenderJobFile = "job.json";
@@ -78,6 +83,11 @@ inline Vec3 to_blender(const Vec3& p) {
 // "blender". Empty when the renderer cannot render the representation.
 std::vector<TerminatorMethod> methods_offered(const std::string& renderer,
                                               Representation representation);
+
+// Which shadow-ray offsets (scene /offset) each renderer offers: "evaluator"
+// all, "povray" `none` (shadow rays start at the hit), "blender" `none` and
+// `cycles-geometry-offset`. Empty for an unknown renderer.
+std::vector<OffsetMethod> offsets_offered(const std::string& renderer);
 
 // A scene name reduced to [A-Za-z0-9 _.+-], at most 80 characters, for comments.
 std::string comment_safe(const std::string& text);

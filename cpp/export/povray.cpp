@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include "core/tessellation.h"
 #include "export/export.h"
 #include "scene/scene_json.h"
 
@@ -17,6 +18,19 @@ std::string num(double v) {
 }
 std::string vec(const Vec3& v) {
   return fmt::format("<{}, {}, {}>", num(v.x), num(v.y), num(v.z));
+}
+// Mesh data are single precision, and POV-Ray stores mesh2 vectors as floats:
+// the shortest decimal that rounds back to the float gives POV-Ray the
+// evaluator's vertices bit for bit, in fewer characters than the double.
+std::string num(float v) {
+  if (!std::isfinite(v)) throw ExportError("POV-Ray export: a non-finite number reached the SDL");
+  return fmt::format("{}", v == 0.0f ? 0.0f : v);
+}
+std::string mesh_vectors(const std::vector<float>& xyz) {
+  std::string out;
+  for (std::size_t i = 0; i < xyz.size(); i += 3)
+    out += fmt::format(",\n    <{}, {}, {}>", num(xyz[i]), num(xyz[i + 1]), num(xyz[i + 2]));
+  return out;
 }
 
 // A proper rotation taking canonical +y to the shape's axis. POV-Ray's
@@ -92,6 +106,14 @@ PovrayExport export_povray(const Scene& scene) {
         "2/(1+(d/D)^2), not the inverse-square law the evaluator uses)");
   if (scene.material.specular_weight > 0.0)
     throw ExportError("POV-Ray export supports Lambertian materials only (specular_weight 0)");
+  if (!scene.props.empty())
+    throw ExportError("POV-Ray export: props are evaluator-only (remove /props)");
+  // POV-Ray starts shadow rays at the hit itself: the smooth-shading
+  // terminator cannot be moved there (reference sheet, section 6).
+  if (scene.offset.method != OffsetMethod::kNone)
+    throw ExportError(
+        fmt::format("POV-Ray has no shadow-ray offset; it offers only `none` (got offset `{}`)",
+                    offset_method_info(scene.offset.method).id));
 
   PovrayExport out;
   const Camera& cam = scene.camera;
@@ -138,15 +160,47 @@ PovrayExport export_povray(const Scene& scene) {
   s += fmt::format("light_source {{\n  {}\n  color rgb {}\n  parallel\n  point_at {}\n}}\n\n",
                    vec(shape.center + wi * far), num(colour), vec(shape.center));
 
-  if (has_height)
-    s += fmt::format("#declare Penumbra_H = function(x, y, z) {{\n    {}\n}}\n\n",
-                     height_function(hf, place));
-
   const std::string texture = fmt::format(
       "  pigment {{ rgb {} }}\n"
       "  finish {{ ambient 0 emission 0 diffuse 1 brilliance 1 specular 0 phong 0 reflection 0 "
       "}}\n",
       num(scene.material.albedo));
+
+  if (scene.tessellation) {
+    // POV-Ray's bump perturbs the normal with the 3D pattern gradient, the
+    // evaluator rotates the analytic bumped normal onto Ni: not the same
+    // shading normal, so the comparison would measure that, not the mesh.
+    if (scene.representation != Representation::kSmooth && has_height)
+      throw ExportError(
+          "POV-Ray export: bump on a tessellated shape is evaluator-only (use the smooth "
+          "representation, or no /shape/tessellation)");
+    // The evaluator's very triangles, in scene coordinates. Smooth shading:
+    // one normal per vertex, indexed like the vertices (POV-Ray interpolates
+    // them barycentrically); flat: no normals, POV-Ray shades with Ng.
+    const TriangleMesh mesh = tessellate(shape, *scene.tessellation);
+    std::string faces;
+    for (std::size_t t = 0; t < mesh.triangles.size(); t += 3)
+      faces += fmt::format(",\n    <{}, {}, {}>", mesh.triangles[t], mesh.triangles[t + 1],
+                           mesh.triangles[t + 2]);
+    const bool smooth = scene.tessellation->shading == NormalShading::kSmooth;
+    s += fmt::format(
+        "// Low-poly {} mesh: {} vertices, {} triangles. POV-Ray starts shadow rays\n"
+        "// on the flat triangle (offset `none`).\n"
+        "mesh2 {{\n  vertex_vectors {{\n    {}{}\n  }}\n",
+        smooth ? "smooth-shaded" : "flat-shaded", mesh.vertex_count(), mesh.triangle_count(),
+        mesh.vertex_count(), mesh_vectors(mesh.positions));
+    if (smooth)
+      s += fmt::format("  normal_vectors {{\n    {}{}\n  }}\n", mesh.vertex_count(),
+                       mesh_vectors(mesh.normals));
+    s += fmt::format("  face_indices {{\n    {}{}\n  }}\n{}}}\n", mesh.triangle_count(), faces,
+                     texture);
+    out.sdl = std::move(s);
+    return out;
+  }
+
+  if (has_height)
+    s += fmt::format("#declare Penumbra_H = function(x, y, z) {{\n    {}\n}}\n\n",
+                     height_function(hf, place));
 
   // h at the base point under q (radial projection onto the base surface):
   // constant along the normal, so POV-Ray's 3D pattern gradient is the

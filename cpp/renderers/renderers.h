@@ -57,7 +57,7 @@ struct RendererRun {
 // expressed: bad input) or RendererError (the renderer failed).
 RendererRun render_with(RendererKind renderer, const Scene& scene, const RenderSettings& settings);
 
-// "POV-Ray 3.7.0.10" / "Blender 3.4.1" / "penumbra 0.2.0": the first line
+// "POV-Ray 3.7.0.10" / "Blender 3.4.1" / "penumbra 0.3.0": the first line
 // the renderer prints for --version; part of cache keys.
 std::string renderer_version(RendererKind renderer, const RenderSettings& settings);
 

@@ -1,6 +1,7 @@
 #include "report/study.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -64,14 +65,174 @@ std::string method_label(const std::string& id, const json& parameters) {
 
 }  // namespace
 
+namespace {
+
+// The parts the bump and low-poly sections share: scene files, fixed
+// overrides, sweep axes and renderers, under the JSON pointer `at`.
+void read_scenes(const json& doc, const std::string& f, const std::string& at, const fs::path& base,
+                 std::vector<std::string>* scenes) {
+  const json& list = require(doc, "scenes", f, at);
+  if (!list.is_array() || list.empty())
+    throw InputError(f, at + "/scenes", "expected a non-empty array of scene file paths");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    if (!list[i].is_string())
+      throw InputError(f, fmt::format("{}/scenes/{}", at, i), "expected a path (string)");
+    const fs::path p = base / list[i].get<std::string>();
+    if (!fs::is_regular_file(p))
+      throw InputError(f, fmt::format("{}/scenes/{}", at, i),
+                       fmt::format("no such scene file: {}", p.string()));
+    scenes->push_back(p.lexically_normal().string());
+  }
+}
+
+json read_set(const json& doc, const std::string& f, const std::string& at) {
+  if (!doc.contains("set")) return json::object();
+  if (!doc["set"].is_object())
+    throw InputError(f, at + "/set", "expected an object of JSON pointer -> value");
+  return doc["set"];
+}
+
+std::vector<StudyAxis> read_axes(const json& doc, const std::string& f, const std::string& at) {
+  std::vector<StudyAxis> out;
+  if (!doc.contains("axes")) return out;
+  const json& axes = doc["axes"];
+  if (!axes.is_array()) throw InputError(f, at + "/axes", "expected an array");
+  for (std::size_t i = 0; i < axes.size(); ++i) {
+    const std::string p = fmt::format("{}/axes/{}", at, i);
+    if (!axes[i].is_object()) throw InputError(f, p, "expected an object");
+    reject_unknown(axes[i], {"pointer", "label", "values"}, f, p);
+    StudyAxis axis;
+    const json& pointer = require(axes[i], "pointer", f, p);
+    if (!pointer.is_string() || pointer.get<std::string>().rfind("/", 0) != 0)
+      throw InputError(f, p + "/pointer", "expected a JSON pointer such as \"/height/amplitude\"");
+    axis.pointer = pointer.get<std::string>();
+    axis.label = axis.pointer;
+    if (axes[i].contains("label")) {
+      if (!axes[i]["label"].is_string()) throw InputError(f, p + "/label", "expected a string");
+      axis.label = axes[i]["label"].get<std::string>();
+    }
+    const json& values = require(axes[i], "values", f, p);
+    if (!values.is_array() || values.empty())
+      throw InputError(f, p + "/values", "expected a non-empty array of values");
+    axis.values = values.get<std::vector<json>>();
+    out.push_back(std::move(axis));
+  }
+  return out;
+}
+
+std::vector<RendererKind> read_renderers(const json& doc, const std::string& f,
+                                         const std::string& at) {
+  if (!doc.contains("renderers")) return all_renderers();
+  std::vector<RendererKind> out;
+  const json& renderers = doc["renderers"];
+  if (!renderers.is_array() || renderers.empty())
+    throw InputError(f, at + "/renderers", "expected a non-empty array of renderer ids");
+  for (std::size_t i = 0; i < renderers.size(); ++i) {
+    const auto r =
+        renderers[i].is_string() ? renderer_from_id(renderers[i].get<std::string>()) : std::nullopt;
+    if (!r)
+      throw InputError(f, fmt::format("{}/renderers/{}", at, i),
+                       "expected \"evaluator\", \"povray\" or \"blender\"");
+    out.push_back(*r);
+  }
+  if (std::find(out.begin(), out.end(), RendererKind::kEvaluator) == out.end())
+    throw InputError(f, at + "/renderers",
+                     "must include \"evaluator\": it provides the geometry and the reference");
+  return out;
+}
+
+// Method ids, or {"id": ..., "parameters": {...}} objects, under `key`;
+// parameter values are checked by the scene reader when variants expand.
+// Absent: every id. `what` names the kind in errors ("method", "offset method").
+std::vector<StudyMethod> read_method_list(const json& doc, const char* key, const std::string& f,
+                                          const std::string& at,
+                                          const std::vector<std::string>& ids, const char* what) {
+  std::vector<StudyMethod> out;
+  if (!doc.contains(key)) {
+    for (const std::string& id : ids) out.push_back({id, json(), id});
+    return out;
+  }
+  const std::string pointer = at + "/" + key;
+  const json& list = doc[key];
+  if (!list.is_array() || list.empty())
+    throw InputError(f, pointer, fmt::format("expected a non-empty array of {} ids", what));
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string p = fmt::format("{}/{}", pointer, i);
+    StudyMethod m;
+    if (list[i].is_string()) {
+      m.id = list[i].get<std::string>();
+    } else if (list[i].is_object()) {
+      reject_unknown(list[i], {"id", "parameters"}, f, p);
+      const json& id = require(list[i], "id", f, p);
+      if (!id.is_string()) throw InputError(f, p + "/id", fmt::format("expected a {} id", what));
+      m.id = id.get<std::string>();
+      if (list[i].contains("parameters")) {
+        if (!list[i]["parameters"].is_object())
+          throw InputError(f, p + "/parameters", "expected an object of parameter values");
+        m.parameters = list[i]["parameters"];
+      }
+    } else {
+      throw InputError(
+          f, p, fmt::format("expected a {} id or {{\"id\": ..., \"parameters\": {{...}}}}", what));
+    }
+    if (std::find(ids.begin(), ids.end(), m.id) == ids.end()) {
+      std::string valid;
+      for (const std::string& id : ids) valid += (valid.empty() ? "" : ", ") + id;
+      throw InputError(f, p, fmt::format("unknown {} \"{}\" (valid: {})", what, m.id, valid));
+    }
+    m.label = method_label(m.id, m.parameters);
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+std::vector<std::string> offset_ids() {
+  std::vector<std::string> ids;
+  for (const OffsetMethodInfo& info : all_offset_methods()) ids.emplace_back(info.id);
+  return ids;
+}
+
+std::vector<std::string> terminator_ids() {
+  std::vector<std::string> ids;
+  for (const MethodInfo& info : all_methods()) ids.emplace_back(info.id);
+  return ids;
+}
+
+LowPolyPart read_lowpoly(const json& doc, const std::string& f, const fs::path& base) {
+  const std::string at = "/lowpoly";
+  if (!doc.is_object()) throw InputError(f, at, "expected an object");
+  reject_unknown(doc, {"scenes", "set", "axes", "offsets", "renderers", "convergence"}, f, at);
+  LowPolyPart part;
+  read_scenes(doc, f, at, base, &part.scenes);
+  part.set = read_set(doc, f, at);
+  part.axes = read_axes(doc, f, at);
+  part.offsets = read_method_list(doc, "offsets", f, at, offset_ids(), "offset method");
+  part.renderers = read_renderers(doc, f, at);
+  if (doc.contains("convergence")) {
+    const json& c = doc["convergence"];
+    bool found = false;
+    for (std::size_t a = 0; a < part.axes.size(); ++a)
+      if (c.is_string() && c.get<std::string>() == part.axes[a].pointer) {
+        part.convergence_axis = static_cast<int>(a);
+        found = true;
+      }
+    if (!found)
+      throw InputError(f, at + "/convergence",
+                       "expected the pointer of one of /lowpoly/axes (the tessellation level)");
+  }
+  return part;
+}
+
+}  // namespace
+
 Study load_study(const std::string& path) {
   const json doc = read_json_file(path);
   const std::string& f = path;
   if (!doc.is_object()) throw InputError(f, "", "expected a JSON object");
-  reject_unknown(
-      doc,
-      {"version", "name", "scenes", "set", "axes", "methods", "renderers", "blender_spp", "plots"},
-      f, "");
+  reject_unknown(doc,
+                 {"version", "name", "scenes", "set", "axes", "methods", "renderers", "blender_spp",
+                  "plots", "lowpoly"},
+                 f, "");
   const json& version = require(doc, "version", f, "");
   if (!version.is_number_integer() || version.get<int>() != kStudyFormatVersion)
     throw InputError(f, "/version", fmt::format("expected {}", kStudyFormatVersion));
@@ -82,99 +243,14 @@ Study load_study(const std::string& path) {
     if (!doc["name"].is_string()) throw InputError(f, "/name", "expected a string");
     s.name = doc["name"].get<std::string>();
   }
-  const json& scenes = require(doc, "scenes", f, "");
-  if (!scenes.is_array() || scenes.empty())
-    throw InputError(f, "/scenes", "expected a non-empty array of scene file paths");
   const fs::path base = fs::path(path).parent_path();
-  for (std::size_t i = 0; i < scenes.size(); ++i) {
-    if (!scenes[i].is_string())
-      throw InputError(f, fmt::format("/scenes/{}", i), "expected a path (string)");
-    const fs::path p = base / scenes[i].get<std::string>();
-    if (!fs::is_regular_file(p))
-      throw InputError(f, fmt::format("/scenes/{}", i),
-                       fmt::format("no such scene file: {}", p.string()));
-    s.scenes.push_back(p.lexically_normal().string());
-  }
-  if (doc.contains("set")) {
-    if (!doc["set"].is_object())
-      throw InputError(f, "/set", "expected an object of JSON pointer -> value");
-    s.set = doc["set"];
-  }
-  if (doc.contains("axes")) {
-    const json& axes = doc["axes"];
-    if (!axes.is_array()) throw InputError(f, "/axes", "expected an array");
-    for (std::size_t i = 0; i < axes.size(); ++i) {
-      const std::string p = fmt::format("/axes/{}", i);
-      if (!axes[i].is_object()) throw InputError(f, p, "expected an object");
-      reject_unknown(axes[i], {"pointer", "label", "values"}, f, p);
-      StudyAxis axis;
-      const json& pointer = require(axes[i], "pointer", f, p);
-      if (!pointer.is_string() || pointer.get<std::string>().rfind("/", 0) != 0)
-        throw InputError(f, p + "/pointer",
-                         "expected a JSON pointer such as \"/height/amplitude\"");
-      axis.pointer = pointer.get<std::string>();
-      axis.label = axis.pointer;
-      if (axes[i].contains("label")) {
-        if (!axes[i]["label"].is_string()) throw InputError(f, p + "/label", "expected a string");
-        axis.label = axes[i]["label"].get<std::string>();
-      }
-      const json& values = require(axes[i], "values", f, p);
-      if (!values.is_array() || values.empty())
-        throw InputError(f, p + "/values", "expected a non-empty array of values");
-      axis.values = values.get<std::vector<json>>();
-      s.axes.push_back(std::move(axis));
-    }
-  }
-  if (doc.contains("methods")) {
-    const json& methods = doc["methods"];
-    if (!methods.is_array() || methods.empty())
-      throw InputError(f, "/methods", "expected a non-empty array of method ids");
-    for (std::size_t i = 0; i < methods.size(); ++i) {
-      const std::string p = fmt::format("/methods/{}", i);
-      StudyMethod m;
-      if (methods[i].is_string()) {
-        m.id = methods[i].get<std::string>();
-      } else if (methods[i].is_object()) {
-        reject_unknown(methods[i], {"id", "parameters"}, f, p);
-        const json& id = require(methods[i], "id", f, p);
-        if (!id.is_string()) throw InputError(f, p + "/id", "expected a method id");
-        m.id = id.get<std::string>();
-        if (methods[i].contains("parameters")) m.parameters = methods[i]["parameters"];
-      } else {
-        throw InputError(f, p, "expected a method id or {\"id\": ..., \"parameters\": {...}}");
-      }
-      if (!method_from_id(m.id)) {
-        std::string ids;
-        for (const MethodInfo& info : all_methods())
-          ids += (ids.empty() ? "" : ", ") + std::string(info.id);
-        throw InputError(f, p, fmt::format("unknown method \"{}\" (valid: {})", m.id, ids));
-      }
-      m.label = method_label(m.id, m.parameters);
-      s.methods.push_back(std::move(m));
-    }
-  } else {
-    for (const MethodInfo& info : all_methods())
-      s.methods.push_back({std::string(info.id), json(), std::string(info.id)});
-  }
-  if (doc.contains("renderers")) {
-    const json& renderers = doc["renderers"];
-    if (!renderers.is_array() || renderers.empty())
-      throw InputError(f, "/renderers", "expected a non-empty array of renderer ids");
-    for (std::size_t i = 0; i < renderers.size(); ++i) {
-      const auto r = renderers[i].is_string() ? renderer_from_id(renderers[i].get<std::string>())
-                                              : std::nullopt;
-      if (!r)
-        throw InputError(f, fmt::format("/renderers/{}", i),
-                         "expected \"evaluator\", \"povray\" or \"blender\"");
-      s.renderers.push_back(*r);
-    }
-    if (std::find(s.renderers.begin(), s.renderers.end(), RendererKind::kEvaluator) ==
-        s.renderers.end())
-      throw InputError(f, "/renderers",
-                       "must include \"evaluator\": it provides the geometry and the reference");
-  } else {
-    s.renderers = all_renderers();
-  }
+  if (doc.contains("lowpoly")) s.lowpoly = read_lowpoly(doc["lowpoly"], f, base);
+  // A study is a bump study, a low-poly study, or both.
+  if (doc.contains("scenes") || !s.lowpoly) read_scenes(doc, f, "", base, &s.scenes);
+  s.set = read_set(doc, f, "");
+  s.axes = read_axes(doc, f, "");
+  s.methods = read_method_list(doc, "methods", f, "", terminator_ids(), "method");
+  s.renderers = read_renderers(doc, f, "");
   if (doc.contains("blender_spp")) {
     const json& b = doc["blender_spp"];
     if (!b.is_number_integer() || b.get<int>() < 1 || b.get<int>() > 65536)
@@ -259,6 +335,7 @@ struct Job {
 };
 
 struct Variant {
+  bool lowpoly = false;  // the low-poly section (truth: the analytic surface)
   std::string id, scene, label;
   std::vector<json> axis_values;
   std::vector<std::size_t> jobs;
@@ -276,6 +353,22 @@ std::string file_safe(const std::string& label) {
 std::string value_text(const json& v) {
   if (v.is_number_float()) return fmt::format("{:g}", v.get<double>());
   return v.dump();
+}
+
+// Combination `c` of the axes (mixed radix, the first axis fastest) as
+// overrides after `set`; records the values and extends the label of `v`.
+std::vector<Override> axis_combination(const std::vector<Override>& set,
+                                       const std::vector<StudyAxis>& axes, std::size_t c,
+                                       Variant* v) {
+  std::vector<Override> overrides = set;
+  for (const StudyAxis& a : axes) {
+    const json& value = a.values[c % a.values.size()];
+    c /= a.values.size();
+    overrides.push_back({a.pointer, value});
+    v->axis_values.push_back(value);
+    v->label += fmt::format(", {}={}", a.label, value_text(value));
+  }
+  return overrides;
 }
 
 std::string python_executable(const std::string& preferred) {
@@ -384,15 +477,7 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
       v.id = fmt::format("v{:03d}", variants.size());
       v.scene = scene_name;
       v.label = scene_name;
-      std::vector<Override> overrides = base_set;
-      std::size_t rest = c;
-      for (const StudyAxis& a : study.axes) {
-        const json& value = a.values[rest % a.values.size()];
-        rest /= a.values.size();
-        overrides.push_back({a.pointer, value});
-        v.axis_values.push_back(value);
-        v.label += fmt::format(", {}={}", a.label, value_text(value));
-      }
+      const std::vector<Override> overrides = axis_combination(base_set, study.axes, c, &v);
       const std::string origin =
           fmt::format("{} (study {}, variant {})", scene_file, study.file, v.id);
       for (RendererKind r : study.renderers) {
@@ -429,16 +514,92 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     }
   }
 
+  json lowpoly_skipped = json::array();
+  if (study.lowpoly) {
+    const LowPolyPart& part = *study.lowpoly;
+    std::vector<Override> part_set;
+    for (const auto& [pointer, value] : part.set.items()) part_set.push_back({pointer, value});
+    std::size_t part_combos = 1;
+    for (const StudyAxis& a : part.axes) part_combos *= a.values.size();
+    std::size_t count = 0;
+    for (const std::string& scene_file : part.scenes) {
+      const json base = read_json_file(scene_file);
+      const std::string scene_name = fs::path(scene_file).stem().string();
+      for (std::size_t c = 0; c < part_combos; ++c) {
+        Variant v;
+        v.lowpoly = true;
+        v.id = fmt::format("l{:03d}", count++);
+        v.scene = scene_name;
+        v.label = scene_name;
+        const std::vector<Override> overrides = axis_combination(part_set, part.axes, c, &v);
+        const std::string origin =
+            fmt::format("{} (study {}, low-poly variant {})", scene_file, study.file, v.id);
+        json with_overrides = base;
+        apply_overrides(with_overrides, overrides, origin);
+        const bool has_props = with_overrides.contains("props") && !with_overrides["props"].empty();
+        for (RendererKind r : part.renderers) {
+          // m == nullptr: the ground truth, the same scene untessellated.
+          auto add = [&](const StudyMethod* m) {
+            json doc = base;
+            std::vector<Override> all = overrides;
+            json offset = {{"method", m ? m->id : "none"}};
+            if (m && m->parameters.is_object())
+              for (const auto& [k, value] : m->parameters.items()) offset[k] = value;
+            all.push_back({"/offset", offset});
+            if (!m) all.push_back({"/shape/tessellation", nullptr});
+            if (r == RendererKind::kBlender) all.push_back({"/camera/spp", study.blender_spp});
+            apply_overrides(doc, all, origin);
+            Job job;
+            job.variant = variants.size();
+            job.renderer = r;
+            job.scene = scene_from_json(doc, origin);
+            job.representation = job.scene.representation;
+            job.method = m ? m->label : "analytic";
+            doc.erase("name");
+            job.scene_json = doc;
+            job.label = fmt::format("{}-{}-{}", v.id, to_string(r), job.method);
+            job.key = render_key(doc, to_string(r),
+                                 versions.count(r) ? versions[r] : std::string("unavailable"));
+            v.jobs.push_back(jobs.size());
+            jobs.push_back(std::move(job));
+          };
+          if (r != RendererKind::kEvaluator && has_props) {
+            const json skipped = {{"renderer", to_string(r)},
+                                  {"scene", scene_name},
+                                  {"why", "props (extra spheres) are evaluator-only"}};
+            if (std::find(lowpoly_skipped.begin(), lowpoly_skipped.end(), skipped) ==
+                lowpoly_skipped.end())
+              lowpoly_skipped.push_back(skipped);
+            continue;
+          }
+          add(nullptr);
+          const auto offered = offsets_offered(to_string(r));
+          for (const StudyMethod& m : part.offsets)
+            if (std::find(offered.begin(), offered.end(), *offset_method_from_id(m.id)) !=
+                offered.end())
+              add(&m);
+        }
+        variants.push_back(std::move(v));
+      }
+    }
+  }
+
   // Render what the cache lacks.
   StudyRunStats stats;
   stats.renders = jobs.size();
   std::vector<std::string> errors(jobs.size());
   std::vector<char> done(jobs.size(), 0), attempted(jobs.size(), 0);
   std::vector<std::size_t> todo;
+  // Jobs with the same key (a ground truth shared by every tessellation
+  // level) are rendered once; the others take its result.
+  std::map<std::string, std::size_t> first_with_key;
+  std::vector<long> same_as(jobs.size(), -1);
   for (std::size_t i = 0; i < jobs.size(); ++i) {
     if (fs::exists(out / "cache" / (jobs[i].key + ".exr"))) {
       done[i] = 1;
       ++stats.cached;
+    } else if (const auto [it, inserted] = first_with_key.try_emplace(jobs[i].key, i); !inserted) {
+      same_as[i] = static_cast<long>(it->second);
     } else {
       todo.push_back(i);
     }
@@ -511,6 +672,11 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
                               error.empty() ? "" : ": " + error.substr(0, error.find('\n'))));
   });
   for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (same_as[i] >= 0) {
+      const auto j = static_cast<std::size_t>(same_as[i]);
+      done[i] = done[j], attempted[i] = attempted[j], errors[i] = errors[j];
+    }
+  for (std::size_t i = 0; i < jobs.size(); ++i)
     if (!done[i] && !attempted[i]) ++stats.not_started;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (stats.not_started > 0) return stats;  // interrupted: no report from a partial study
@@ -539,6 +705,7 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   std::size_t nonfinite_total = 0;
   for (std::size_t v = 0; v < variants.size(); ++v) {
     const Variant& var = variants[v];
+    if (var.lowpoly) continue;
     json renders = json::array();
     for (std::size_t i : var.jobs) {
       const Job& job = jobs[i];
@@ -604,6 +771,173 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
                              {"renders", renders}});
   }
 
+  // Low-poly section: every offset against the analytic surface, the same
+  // renderer's and the evaluator's.
+  json lowpoly = nullptr;
+  if (study.lowpoly) {
+    const LowPolyPart& part = *study.lowpoly;
+    json lp_variants = json::array(), lp_comparisons = json::array();
+    std::string lp_csv = "study,variant,scene";
+    for (const StudyAxis& a : part.axes) lp_csv += "," + csv_field(a.pointer);
+    lp_csv +=
+        ",renderer,offset,reference,darkened_fraction,max_darkening,lost_shadow_fraction,"
+        "shadow_shift_px,shadowed_pixels,test_shadowed_pixels,profile_rmse_terminator,"
+        "profile_rmse_overall,profile_max_step,position_error_deg,lit_bias,image_rmse,image_ssim,"
+        "image_mask_iou,image_nonfinite\n";
+    for (std::size_t v = 0; v < variants.size(); ++v) {
+      const Variant& var = variants[v];
+      if (!var.lowpoly) continue;
+      json renders = json::array();
+      for (std::size_t i : var.jobs) {
+        const Job& job = jobs[i];
+        if (!done[i]) continue;
+        const double scale = radiance_scale(job.scene);
+        const std::string stem = file_safe(job.label);
+        const std::string image_rel = "images/" + stem + ".png";
+        write_preview_png(images[i], (out / image_rel).string());
+        const bool truth = job.method == "analytic";
+        const long ground = find_job(v, job.renderer, job.representation, "analytic");
+        json difference;
+        if (!truth && ground >= 0 && done[ground]) {
+          const std::string diff_rel = "images/" + stem + "-diff.png";
+          write_difference_png(images[i], images[ground], scale, (out / diff_rel).string());
+          difference = diff_rel;
+        }
+        renders.push_back(
+            {{"renderer", to_string(job.renderer)},
+             {"offset", job.method},
+             {"triangles", job.scene.tessellation ? json(tessellated_triangle_count(
+                                                        job.scene.shape, *job.scene.tessellation))
+                                                  : json()},
+             {"image", image_rel},
+             {"difference", difference},
+             {"exr", "cache/" + job.key + ".exr"},
+             {"profile", profile_json(terminator_profile(images[i], scale, po))}});
+        if (truth) continue;
+        std::vector<std::pair<RendererKind, long>> refs{{job.renderer, ground}};
+        if (job.renderer != RendererKind::kEvaluator)
+          refs.push_back({RendererKind::kEvaluator,
+                          find_job(v, RendererKind::kEvaluator, job.representation, "analytic")});
+        for (const auto& [ref_renderer, ref] : refs) {
+          if (ref < 0 || !done[ref]) continue;
+          const ProfileMetrics pm =
+              compare_profiles(terminator_profile(images[i], scale, po),
+                               terminator_profile(images[ref], scale, po), po);
+          const ImageMetrics im = compare_images(images[i], images[ref]);
+          const ShadowMetrics sm = compare_shadows(images[i], images[ref], scale);
+          nonfinite_total += im.nonfinite;
+          const std::string reference = std::string(to_string(ref_renderer)) + ":analytic";
+          const json pj = profile_metrics_json(pm), ij = image_metrics_json(im),
+                     sj = shadow_metrics_json(sm);
+          lp_comparisons.push_back({{"variant", var.id},
+                                    {"scene", var.scene},
+                                    {"axis_values", var.axis_values},
+                                    {"renderer", to_string(job.renderer)},
+                                    {"offset", job.method},
+                                    {"reference", reference},
+                                    {"shadow", sj},
+                                    {"profile", pj},
+                                    {"image", ij}});
+          lp_csv += fmt::format("{},{},{}", csv_field(study.name), var.id, csv_field(var.scene));
+          for (const json& value : var.axis_values) lp_csv += "," + csv_field(value.dump());
+          lp_csv +=
+              fmt::format(",{},{},{}", to_string(job.renderer), csv_field(job.method), reference);
+          for (const char* k : {"darkened_fraction", "max_darkening", "lost_shadow_fraction",
+                                "shadow_shift_px", "shadowed_pixels", "test_shadowed_pixels"})
+            lp_csv += "," + csv_number(sj.at(k));
+          for (const char* k :
+               {"rmse_terminator", "rmse_overall", "max_step", "position_error_deg", "lit_bias"})
+            lp_csv += "," + csv_number(pj.at(k));
+          for (const char* k : {"rmse", "ssim", "mask_iou", "nonfinite"})
+            lp_csv += "," + csv_number(ij.at(k));
+          lp_csv += "\n";
+        }
+      }
+      lp_variants.push_back({{"id", var.id},
+                             {"scene", var.scene},
+                             {"label", var.label},
+                             {"axis_values", var.axis_values},
+                             {"renders", renders}});
+    }
+    // Ranking: the evaluator's offsets against its analytic render, by the
+    // mean fraction of lit pixels each one darkens.
+    auto lp_rank = [&](const std::string& scene) {
+      std::map<std::string, std::array<double, 3>> sums;  // darkened, rmse, count
+      for (const json& c : lp_comparisons) {
+        if (c["renderer"] != "evaluator" || c["reference"] != "evaluator:analytic") continue;
+        if (!scene.empty() && c["scene"] != scene) continue;
+        const json& d = c["shadow"]["darkened_fraction"];
+        const json& e = c["profile"]["rmse_terminator"];
+        if (!d.is_number() || !e.is_number()) continue;
+        auto& sum = sums[c["offset"].get<std::string>()];
+        sum[0] += d.get<double>(), sum[1] += e.get<double>(), sum[2] += 1.0;
+      }
+      std::vector<std::pair<double, std::string>> order;
+      for (const auto& [m, sum] : sums) order.push_back({sum[0] / sum[2], m});
+      std::sort(order.begin(), order.end());
+      json list = json::array();
+      for (const auto& [mean, m] : order)
+        list.push_back({{"offset", m},
+                        {"darkened_fraction", mean},
+                        {"rmse_terminator", sums[m][1] / sums[m][2]},
+                        {"count", static_cast<int>(sums[m][2])}});
+      return list;
+    };
+    json lp_per_scene = json::array();
+    std::vector<std::string> lp_scenes;
+    for (const Variant& v : variants)
+      if (v.lowpoly && std::find(lp_scenes.begin(), lp_scenes.end(), v.scene) == lp_scenes.end())
+        lp_scenes.push_back(v.scene);
+    for (const std::string& name : lp_scenes)
+      lp_per_scene.push_back({{"scene", name}, {"offsets", lp_rank(name)}});
+    json lp_renderers = json::array(), lp_missing = lowpoly_skipped;
+    for (RendererKind r : part.renderers) {
+      json offered = json::array();
+      const auto available = offsets_offered(to_string(r));
+      for (const StudyMethod& m : part.offsets) {
+        if (std::find(available.begin(), available.end(), *offset_method_from_id(m.id)) !=
+            available.end())
+          offered.push_back(m.label);
+        else
+          lp_missing.push_back(
+              {{"renderer", to_string(r)},
+               {"offset", m.label},
+               {"why", r == RendererKind::kPovray
+                           ? "POV-Ray 3.7 has no shadow-ray offset: mesh2 with normal_vectors "
+                             "shows the artifact (shadow line artifact, FS#242)"
+                           : "Blender Cycles 3.4 offers only its geometry offset"}});
+      }
+      lp_renderers.push_back({{"id", to_string(r)}, {"offsets", offered}});
+    }
+    json lp_axes = json::array();
+    for (const StudyAxis& a : part.axes)
+      lp_axes.push_back({{"pointer", a.pointer}, {"label", a.label}, {"values", a.values}});
+    lowpoly = {
+        {"axes", lp_axes},
+        {"convergence_axis",
+         part.convergence_axis >= 0 ? json(part.axes[part.convergence_axis].pointer) : json()},
+        {"renderers", lp_renderers},
+        {"variants", lp_variants},
+        {"comparisons", lp_comparisons},
+        {"ranking",
+         {{"metric", "shadow.darkened_fraction"},
+          {"reference", "evaluator:analytic"},
+          {"renderer", "evaluator"},
+          {"per_scene", lp_per_scene},
+          {"overall", lp_rank("")}}},
+        {"missing", lp_missing},
+        {"units",
+         {{"darkened_fraction",
+           "fraction of the pixels lit in the analytic render (>= 0.05 albedo*E/pi) that "
+           "the mesh renders below half of it"},
+          {"max_darkening", "largest analytic - mesh radiance, fraction of albedo*E/pi"},
+          {"lost_shadow_fraction",
+           "fraction of the analytic render's cast-shadow pixels (theta < 85 deg, below "
+           "half of cos theta) that the mesh render lights"},
+          {"shadow_shift_px", "distance between the two cast-shadow centroids, pixels"}}}};
+    write_text_file((out / "lowpoly.csv").string(), lp_csv);
+  }
+
   // Headline: evaluator methods against the evaluator's ground truth, by the
   // terminator-region profile RMSE, per base scene and overall.
   auto rank = [&](const std::string& scene) {
@@ -633,7 +967,8 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     per_scene.push_back({{"scene", s}, {"methods", rank(s)}});
 
   json renderers = json::array(), missing = json::array(), failures = json::array();
-  for (RendererKind r : study.renderers) {
+  // A low-poly-only study has no bump rows to offer or miss.
+  for (RendererKind r : study.scenes.empty() ? std::vector<RendererKind>{} : study.renderers) {
     json offered = json::array();
     const auto methods = methods_offered(to_string(r), Representation::kBump);
     for (const StudyMethod& m : study.methods) {
@@ -693,7 +1028,8 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
                        {"missing", missing},
                        {"failures", failures},
                        {"nonfinite_pixels", nonfinite_total},
-                       {"plots", plots}};
+                       {"plots", plots},
+                       {"lowpoly", lowpoly}};
   write_text_file((out / "report.json").string(), report.dump(1) + "\n");
   write_text_file((out / "metrics.csv").string(), csv);
 

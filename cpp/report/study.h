@@ -1,12 +1,14 @@
 // Batch studies: base scenes x sweep axes x methods x renderers, rendered in
 // parallel into a content-addressed cache, compared with the displacement
-// ground truth, and written as report.json, metrics.csv and (through
+// ground truth (bump methods) or the analytic smooth surface (low-poly
+// meshes and shadow-ray offsets), and written as report.json, metrics.csv and (through
 // harness/report.py) figures and report.html.
 #pragma once
 
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,6 +43,18 @@ struct StudyPlot {
   std::string renderer = "evaluator";
 };
 
+// The low-poly section: tessellated scenes, each rendered with every offset
+// method a renderer offers and compared with the same scene's analytic
+// smooth surface (the ground truth of the smooth-shading terminator).
+struct LowPolyPart {
+  std::vector<std::string> scenes;
+  nlohmann::json set = nlohmann::json::object();
+  std::vector<StudyAxis> axes;
+  std::vector<StudyMethod> offsets;  // offset method ids with parameters
+  std::vector<RendererKind> renderers;
+  int convergence_axis = -1;  // index into axes: the tessellation level, for convergence plots
+};
+
 struct Study {
   std::string name;
   std::string file;
@@ -51,6 +65,7 @@ struct Study {
   std::vector<RendererKind> renderers;
   int blender_spp = 32;
   std::vector<StudyPlot> plots;
+  std::optional<LowPolyPart> lowpoly;
 };
 
 // Strict: unknown keys, wrong types, unknown methods/renderers and pointers

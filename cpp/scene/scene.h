@@ -20,7 +20,7 @@
 namespace penumbra {
 
 inline constexpr int kSceneFormatVersion = 1;
-inline constexpr const char* kPenumbraVersion = "0.2.0";
+inline constexpr const char* kPenumbraVersion = "0.3.0";
 inline constexpr int kMaxImageSize = 16384;
 
 enum class Projection { kOrthographic, kPerspective };
