@@ -419,6 +419,25 @@ std::string csv_number(const json& v) {
   return v.dump();
 }
 
+// One metrics.csv / lowpoly.csv row: study, variant, scene, axis values,
+// renderer, method or offset, reference, then the named fields of each
+// metrics object in order.
+struct CsvFields {
+  const json* object;
+  std::vector<const char*> keys;
+};
+
+std::string csv_row(const std::string& study, const Variant& var, const std::string& renderer,
+                    const std::string& method, const std::string& reference,
+                    std::initializer_list<CsvFields> fields) {
+  std::string row = fmt::format("{},{},{}", csv_field(study), var.id, csv_field(var.scene));
+  for (const json& value : var.axis_values) row += "," + csv_field(value.dump());
+  row += fmt::format(",{},{},{}", renderer, csv_field(method), reference);
+  for (const CsvFields& f : fields)
+    for (const char* k : f.keys) row += "," + csv_number(f.object->at(k));
+  return row + "\n";
+}
+
 }  // namespace
 
 void run_plot_script(const std::vector<std::string>& arguments, const std::string& log_path,
@@ -750,18 +769,14 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
                                {"reference", reference},
                                {"profile", pj},
                                {"image", ij}});
-        csv += fmt::format("{},{},{}", csv_field(study.name), var.id, csv_field(var.scene));
-        for (const json& value : var.axis_values) csv += "," + csv_field(value.dump());
-        csv += fmt::format(",{},{},{}", to_string(job.renderer), csv_field(job.method), reference);
-        for (const char* k :
-             {"rmse_terminator", "rmse_overall", "max_error_terminator", "max_step",
-              "reference_max_step", "position_deg", "reference_position_deg", "position_error_deg",
-              "width_deg", "reference_width_deg", "lit_bias", "common_bins"})
-          csv += "," + csv_number(pj.at(k));
-        for (const char* k :
-             {"mask_iou", "rmse", "ssim", "max_error", "mean_error", "pixels", "nonfinite"})
-          csv += "," + csv_number(ij.at(k));
-        csv += "\n";
+        csv += csv_row(
+            study.name, var, to_string(job.renderer), job.method, reference,
+            {{&pj,
+              {"rmse_terminator", "rmse_overall", "max_error_terminator", "max_step",
+               "reference_max_step", "position_deg", "reference_position_deg", "position_error_deg",
+               "width_deg", "reference_width_deg", "lit_bias", "common_bins"}},
+             {&ij,
+              {"mask_iou", "rmse", "ssim", "max_error", "mean_error", "pixels", "nonfinite"}}});
       }
     }
     variants_json.push_back({{"id", var.id},
@@ -838,19 +853,14 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
                                     {"shadow", sj},
                                     {"profile", pj},
                                     {"image", ij}});
-          lp_csv += fmt::format("{},{},{}", csv_field(study.name), var.id, csv_field(var.scene));
-          for (const json& value : var.axis_values) lp_csv += "," + csv_field(value.dump());
-          lp_csv +=
-              fmt::format(",{},{},{}", to_string(job.renderer), csv_field(job.method), reference);
-          for (const char* k : {"darkened_fraction", "max_darkening", "lost_shadow_fraction",
-                                "shadow_shift_px", "shadowed_pixels", "test_shadowed_pixels"})
-            lp_csv += "," + csv_number(sj.at(k));
-          for (const char* k :
-               {"rmse_terminator", "rmse_overall", "max_step", "position_error_deg", "lit_bias"})
-            lp_csv += "," + csv_number(pj.at(k));
-          for (const char* k : {"rmse", "ssim", "mask_iou", "nonfinite"})
-            lp_csv += "," + csv_number(ij.at(k));
-          lp_csv += "\n";
+          lp_csv += csv_row(
+              study.name, var, to_string(job.renderer), job.method, reference,
+              {{&sj,
+                {"darkened_fraction", "max_darkening", "lost_shadow_fraction", "shadow_shift_px",
+                 "shadowed_pixels", "test_shadowed_pixels"}},
+               {&pj,
+                {"rmse_terminator", "rmse_overall", "max_step", "position_error_deg", "lit_bias"}},
+               {&ij, {"rmse", "ssim", "mask_iou", "nonfinite"}}});
         }
       }
       lp_variants.push_back({{"id", var.id},
