@@ -74,9 +74,21 @@ TEST(Scene, BadInputIsRejectedWithFilePointerAndExpectation) {
        },
        "/camera/position", "expected an array of 3 numbers"},
       {"non-positive radius", [](json& j) { j["shape"]["radius"] = -1; }, "/shape/radius",
-       "expected a number > 0"},
-      {"zero radius", [](json& j) { j["shape"]["radius"] = 0; }, "/shape/radius", "> 0"},
-      {"non-positive height", [](json& j) { j["shape"]["height"] = 0; }, "/shape/height", "> 0"},
+       "expected a number in [1e-6, 1e6]"},
+      {"zero radius", [](json& j) { j["shape"]["radius"] = 0; }, "/shape/radius", "[1e-6, 1e6]"},
+      {"non-positive height", [](json& j) { j["shape"]["height"] = 0; }, "/shape/height",
+       "[1e-6, 1e6]"},
+      {"huge radius", [](json& j) { j["shape"]["radius"] = 1e300; }, "/shape/radius",
+       "[1e-6, 1e6]"},
+      {"huge camera position",
+       [](json& j) {
+         j["camera"]["position"] = {0, 0, 1e300};
+       },
+       "/camera/position", "in [-1e+06, 1e+06]"},
+      {"huge irradiance", [](json& j) { j["light"]["irradiance"] = 1e300; }, "/light/irradiance",
+       "in [0, 1e9]"},
+      {"edge longer than the radius", [](json& j) { j["displacement"]["edge_length"] = 2.0; },
+       "/displacement/edge_length", "(0, radius = 1]"},
       {"spp 0", [](json& j) { j["camera"]["spp"] = 0; }, "/camera/spp",
        "expected an integer in [1, 65536]"},
       {"resolution 0", [](json& j) { j["camera"]["height"] = 0; }, "/camera/height",
@@ -166,7 +178,8 @@ TEST(Scene, OverridesUseJsonPointers) {
     load_scene(kScenes + "/cylinder-grating.json", {parse_override("/shape/radius=-2")});
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("(after --set): /shape/radius: expected a number > 0"),
+    EXPECT_NE(std::string(e.what()).find(
+                  "(after --set): /shape/radius: expected a number in [1e-6, 1e6]"),
               std::string::npos)
         << e.what();
   }

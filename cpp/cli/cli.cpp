@@ -4,7 +4,10 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -26,10 +29,12 @@
 #include "export/export.h"
 #include "render/evaluator.h"
 #include "render/image_io.h"
+#include "renderers/process.h"
 #include "renderers/renderers.h"
 #include "report/calibration.h"
 #include "report/study.h"
 #include "scene/scene_json.h"
+#include "util/files.h"
 
 namespace penumbra {
 namespace {
@@ -45,6 +50,53 @@ class UsageError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+std::atomic<bool> g_interrupted{false};
+std::atomic<int> g_signal{0};
+extern "C" void on_stop_signal(int signal) {
+  g_signal.store(signal);
+  g_interrupted.store(true);
+  cancel_processes();  // ends running renderers and everything they started
+}
+
+// While alive, SIGINT, SIGTERM and SIGHUP stop the command cleanly: running
+// renderers are ended, nothing half-written is left, and the exit status is
+// 128 + the signal (130 for Ctrl-C).
+class StopSignals {
+ public:
+  StopSignals() {
+    g_interrupted.store(false);
+    g_signal.store(0);
+    reset_cancel_processes();
+    struct sigaction action {};
+    action.sa_handler = on_stop_signal;
+    sigemptyset(&action.sa_mask);
+    for (std::size_t i = 0; i < kSignals.size(); ++i)
+      ::sigaction(kSignals[i], &action, &previous_[i]);
+  }
+  ~StopSignals() {
+    for (std::size_t i = 0; i < kSignals.size(); ++i)
+      ::sigaction(kSignals[i], &previous_[i], nullptr);
+    reset_cancel_processes();
+  }
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+  static int exit_code() { return 128 + (g_signal.load() ? g_signal.load() : SIGINT); }
+
+ private:
+  static constexpr std::array<int, 3> kSignals{SIGINT, SIGTERM, SIGHUP};
+  std::array<struct sigaction, 3> previous_{};
+};
+
+// The output formats: the EXR carries 7 float channels; the preview is a PNG.
+void check_extension(const std::string& path, const char* extension, const char* option) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  if (ext != extension)
+    throw UsageError(fmt::format("{} {}: expected a file name ending in {} (got \"{}\")", option,
+                                 path, extension, ext));
+}
+
 struct RenderArgs {
   std::string scene;
   std::string output;
@@ -58,6 +110,7 @@ struct RenderArgs {
   bool quiet = false;
   std::string renderer = "evaluator";
   double timeout = 600.0;
+  double max_memory_gib = kDefaultMaxMemoryBytes / kGiB;
 };
 
 struct CompareArgs {
@@ -185,14 +238,25 @@ int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
   const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
   apply_overrides(document, overrides, origin);
   const Scene scene = scene_from_json(document, origin);
+  check_extension(a.output, ".exr", "-o");
+  if (!a.preview.empty()) check_extension(a.preview, ".png", "--preview");
   check_writable(a.output);
   if (!a.preview.empty()) check_writable(a.preview);
+  const fs::path folder =
+      fs::path(a.output).parent_path().empty() ? fs::path(".") : fs::path(a.output).parent_path();
+  check_resources(estimate_resources(*renderer, scene), a.max_memory_gib * kGiB, origin,
+                  folder.string());
+  remove_stale_temporaries(folder.string());
 
+  const StopSignals stop;
   const ProgressLine progress(err, !a.quiet, "rendering " + a.output);
   RenderSettings settings;
   settings.timeout_s = a.timeout;
   settings.log_path = log_path_for(a.output, *renderer);
-  settings.progress.progress = [&](double f) { progress(f); };
+  settings.progress.progress = [&](double f) {
+    if (g_interrupted.load()) throw RenderCancelled("interrupted");
+    progress(f);
+  };
   if (*renderer != RendererKind::kEvaluator && !a.quiet)
     err << fmt::format("running {} (log {}) ...\n", to_string(*renderer), settings.log_path);
   const RendererRun run = render_with(*renderer, scene, settings);
@@ -300,7 +364,8 @@ double radiance_scale_of(const std::string& path) {
   if (text.empty())
     throw UsageError(fmt::format(
         "{}: no penumbra:scene metadata to take albedo * E / pi from; give --scale", path));
-  const Scene scene = scene_from_json(json::parse(text), path + " (penumbra:scene metadata)");
+  const std::string origin = path + " (penumbra:scene metadata)";
+  const Scene scene = scene_from_json(parse_json_text(text, origin), origin);
   return radiance_scale(scene);
 }
 
@@ -385,11 +450,6 @@ int command_calibrate(const CalibrationOptions& options, bool quiet, std::ostrea
   return kExitOk;
 }
 
-std::atomic<bool> g_interrupted{false};
-extern "C" void on_sigint(int) {
-  g_interrupted.store(true);
-}
-
 std::string duration_text(double s) {
   if (!std::isfinite(s) || s < 0) return "?";
   const long t = std::lround(s);
@@ -401,8 +461,20 @@ struct RunArgs {
   int jobs = 0;
   double timeout = 600.0;
   long max_renders = -1;
-  bool no_figures = false, quiet = false;
+  bool no_figures = false, quiet = false, dry_run = false;
+  double max_memory_gib = kDefaultMaxMemoryBytes / kGiB;
 };
+
+int print_dry_run(const Study& study, const StudyRunStats& stats, const std::string& dir,
+                  std::ostream& out) {
+  std::string per;
+  for (const auto& [renderer, count] : stats.planned)
+    per += fmt::format("{}{} {}", per.empty() ? "" : ", ", count, renderer);
+  out << fmt::format(
+      "study {}: {} renders ({}); {} found in {}/cache, {} to render; nothing written (dry run)\n",
+      study.name, stats.renders, per, stats.cached, dir, stats.renders - stats.cached);
+  return kExitOk;
+}
 
 int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   const Study study = load_study(a.study);
@@ -414,6 +486,8 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   o.max_new_renders = a.max_renders;
   o.figures = !a.no_figures;
   o.interrupted = &g_interrupted;
+  o.dry_run = a.dry_run;
+  o.max_memory_bytes = a.max_memory_gib * kGiB;
   const bool tty = ::isatty(STDERR_FILENO);
   std::mutex mutex;
   if (!a.quiet && tty) {
@@ -427,7 +501,8 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
           << std::flush;
     };
     o.log = [&](const std::string& line) {
-      if (line.find("FAILED") != std::string::npos || line.find("renders:") != std::string::npos) {
+      if (line.find("FAILED") != std::string::npos || line.find("renders:") != std::string::npos ||
+          line.find("WARNING") != std::string::npos) {
         std::lock_guard<std::mutex> lock(mutex);
         err << "\r" << line << "\n" << std::flush;
       }
@@ -438,20 +513,9 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
       err << "penumbra run: " << line << "\n" << std::flush;
     };
   }
-  g_interrupted.store(false);
-  struct sigaction action {
-  }, previous{};
-  action.sa_handler = on_sigint;
-  sigemptyset(&action.sa_mask);
-  ::sigaction(SIGINT, &action, &previous);
-  StudyRunStats stats;
-  try {
-    stats = run_study(study, o);
-  } catch (...) {
-    ::sigaction(SIGINT, &previous, nullptr);
-    throw;
-  }
-  ::sigaction(SIGINT, &previous, nullptr);
+  const StopSignals stop;
+  const StudyRunStats stats = run_study(study, o);
+  if (a.dry_run) return print_dry_run(study, stats, o.output_dir, out);
   if (!a.quiet && tty) err << "\n";
   out << fmt::format(
       "study {}: {} renders ({} rendered now, {} from the cache, {} failed, {} not started) in "
@@ -464,7 +528,7 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
         "stopped before the end; run the same command again to resume (finished "
         "renders are cached in {}/cache)\n",
         o.output_dir);
-    return g_interrupted.load() ? 130 : kExitFailure;
+    return g_interrupted.load() ? StopSignals::exit_code() : kExitFailure;
   }
   out << fmt::format("wrote {0}/report.json, {0}/metrics.csv{1}\n", o.output_dir,
                      stats.report_html.empty() ? "" : ", figures/ and report.html");
@@ -579,8 +643,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   app.require_subcommand(1);
   app.set_version_flag("--version", kPenumbraVersion);
   app.footer(
-      "Exit status: 0 success; 1 a run failed (renderer or internal error); 2 bad input "
-      "(usage, scene file, output path).");
+      "Exit status: 0 success; 1 a run failed (renderer or internal error, NaN or Inf in a "
+      "render); 2 bad input (usage, scene or study file, output path, a render over "
+      "--max-memory); 3 a comparison missed its bound or an image holds NaN/Inf (compare, "
+      "calibrate); 128+N stopped by signal N (130 Ctrl-C, 143 SIGTERM), nothing half-written.");
   int threads = 0;
   app.add_option("--threads", threads, "worker threads (default: all cores)")
       ->check(CLI::Range(1, 1024));
@@ -614,6 +680,11 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   render_cmd->add_option("--renderer", r.renderer, "evaluator (default), povray or blender");
   render_cmd->add_option("--timeout", r.timeout, "seconds an external renderer may run")
       ->check(CLI::PositiveNumber);
+  render_cmd
+      ->add_option("--max-memory", r.max_memory_gib,
+                   "refuse a render estimated to need more memory (GiB)")
+      ->check(CLI::Range(0.001, 1e6))
+      ->capture_default_str();
 
   ExportArgs x;
   CLI::App* export_cmd =
@@ -676,6 +747,13 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
                    "start at most this many new renders, then stop (resume later)")
       ->check(CLI::NonNegativeNumber);
   run_cmd->add_flag("--no-figures", run_args.no_figures, "skip matplotlib figures and report.html");
+  run_cmd->add_flag("--dry-run", run_args.dry_run,
+                    "validate and count the renders (and cache hits); write nothing");
+  run_cmd
+      ->add_option("--max-memory", run_args.max_memory_gib,
+                   "refuse a study with a render estimated to need more memory (GiB, per render)")
+      ->check(CLI::Range(0.001, 1e6))
+      ->capture_default_str();
   run_cmd->add_flag("-q,--quiet", run_args.quiet, "no progress");
 
   std::vector<std::string> contour_methods;
@@ -728,6 +806,9 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   } catch (const OutputError& e) {
     err << "penumbra: error: " << e.what() << "\n";
     return kExitBadInput;
+  } catch (const RenderCancelled& e) {
+    err << "penumbra: stopped: " << e.what() << "; nothing written\n";
+    return StopSignals::exit_code();
   } catch (const RendererError& e) {
     err << "penumbra: failed: " << e.what() << "\n";
     return kExitFailure;

@@ -1,6 +1,7 @@
 #include "render/embree_mesh.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -37,6 +38,17 @@ RTCRay to_embree(const Ray& ray, double t_min, double t_max) {
   r.tnear = static_cast<float>(t_min);
   r.tfar = static_cast<float>(std::min(t_max, double(std::numeric_limits<float>::max())));
   r.mask = ~0u;
+  // Embree aborts the process on a ray it considers invalid; the scene reader
+  // bounds every input, and this turns anything that still slips through
+  // into an error instead.
+  const bool finite = std::isfinite(r.org_x) && std::isfinite(r.org_y) && std::isfinite(r.org_z) &&
+                      std::isfinite(r.dir_x) && std::isfinite(r.dir_y) && std::isfinite(r.dir_z) &&
+                      std::isfinite(r.tnear) && r.tnear >= 0.0f && !std::isnan(r.tfar);
+  if (!finite)
+    throw std::runtime_error(fmt::format(
+        "a ray that is not finite in float (origin {} {} {}, direction {} {} {}, tnear {}): the "
+        "scene's values are out of range",
+        r.org_x, r.org_y, r.org_z, r.dir_x, r.dir_y, r.dir_z, r.tnear));
   return r;
 }
 

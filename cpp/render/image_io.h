@@ -3,6 +3,7 @@
 // never leaves a file that looks like a result.
 #pragma once
 
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -34,7 +35,12 @@ void write_binary_file(const std::string& path, const void* data, std::size_t by
 void write_text_file(const std::string& path, const std::string& text);
 // A string attribute of an image file's header ("" if absent).
 std::string read_image_attribute(const std::string& path, const std::string& name);
-// Reads any file OpenImageIO can read, all channels as float.
-Image read_image(const std::string& path);
+// 16 hex digits: FNV-1a over the size, channel names and float bits of the
+// pixels. Stored in cache entries so that damage to them is detected.
+std::string image_checksum(const Image& image);
+
+// Reads any file OpenImageIO can read, all channels as float; with
+// `attributes`, also every string attribute of its header.
+Image read_image(const std::string& path, std::map<std::string, std::string>* attributes = nullptr);
 
 }  // namespace penumbra

@@ -14,6 +14,8 @@
 #include "export/export.h"
 #include "render/image_io.h"
 #include "renderers/process.h"
+#include "util/files.h"
+#include "util/strict_json.h"
 
 namespace penumbra {
 namespace fs = std::filesystem;
@@ -112,7 +114,9 @@ struct WorkDir {
   explicit WorkDir(const std::string& log_path, RendererKind r) {
     fs::path dir = fs::path(log_path).parent_path();
     if (dir.empty()) dir = ".";
-    std::string pattern = (dir / fmt::format(".penumbra-{}-XXXXXX", to_string(r))).string();
+    // Named after host and process, so a later run can remove it if this
+    // process is killed (remove_stale_temporaries).
+    std::string pattern = (dir / work_folder_pattern(to_string(r))).string();
     if (!::mkdtemp(pattern.data()))
       throw RendererError(fmt::format("cannot create a work folder in {}", dir.string()));
     path = fs::absolute(pattern);
@@ -129,9 +133,12 @@ void write_file(const fs::path& path, const void* data, std::size_t bytes) {
   if (!out) throw RendererError(fmt::format("cannot write {}", path.string()));
 }
 
-void check_process(RendererKind r, const ProcessResult& p, const RenderSettings& s,
-                   const fs::path& work) {
+void check_process(RendererKind r, const ProcessResult& p, const RenderSettings& s, WorkDir& work) {
   if (p.ok()) return;
+  if (p.cancelled) {
+    work.keep = false;  // nothing to rerun by hand: the user stopped it
+    throw RenderCancelled(fmt::format("{} was stopped (interrupted)", to_string(r)));
+  }
   std::string what;
   if (p.timed_out)
     what =
@@ -143,8 +150,36 @@ void check_process(RendererKind r, const ProcessResult& p, const RenderSettings&
   else
     what = fmt::format("exited with status {}", p.exit_code);
   throw RendererError(fmt::format("{} {}; log {} (work files kept in {}), last lines:\n{}",
-                                  to_string(r), what, s.log_path, work.string(),
+                                  to_string(r), what, s.log_path, work.path.string(),
                                   tail_lines(s.log_path, 12)));
+}
+
+// A renderer's output file; unreadable or garbage is the renderer's failure.
+Image read_renderer_image(RendererKind r, const std::string& path) {
+  try {
+    return read_image(path);
+  } catch (const std::exception& e) {
+    throw RendererError(fmt::format("{} wrote an image that cannot be read: {}", to_string(r),
+                                    printable(e.what(), 300)));
+  }
+}
+
+// What every renderer must return before it is used or cached: the scene's
+// size, R G B A, and finite values in every channel.
+void check_output(RendererKind r, const Image& image, const Scene& scene) {
+  if (image.width != scene.camera.width || image.height != scene.camera.height)
+    throw RendererError(fmt::format("{} returned a {}x{} image, expected {}x{}", to_string(r),
+                                    image.width, image.height, scene.camera.width,
+                                    scene.camera.height));
+  for (const char* name : {"R", "G", "B", "A"})
+    if (image.channel_index(name) < 0)
+      throw RendererError(fmt::format("{} returned no {} channel", to_string(r), name));
+  const std::size_t bad = static_cast<std::size_t>(std::count_if(
+      image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); }));
+  if (bad > 0)
+    throw RendererError(
+        fmt::format("{} returned {} NaN or Inf values (of {}); the image is not used or cached",
+                    to_string(r), bad, image.pixels.size()));
 }
 
 // Alpha and colour from the renderer, analysis channels from the evaluator.
@@ -189,11 +224,11 @@ RendererRun render_povray(const Scene& scene, const RenderSettings& settings) {
     argv.push_back(std::move(a));
   const ProcessResult p =
       run_process(argv, work.path.string(), settings.log_path, settings.timeout_s);
-  check_process(RendererKind::kPovray, p, settings, work.path);
+  check_process(RendererKind::kPovray, p, settings, work);
   if (!fs::exists(work.path / "scene.exr"))
     throw RendererError(fmt::format("povray exited 0 but wrote no image; log {}:\n{}",
                                     settings.log_path, tail_lines(settings.log_path, 12)));
-  const Image big = read_image((work.path / "scene.exr").string());
+  const Image big = read_renderer_image(RendererKind::kPovray, (work.path / "scene.exr").string());
   if (big.width != job.width * job.supersample_x || big.height != job.height * job.supersample_y)
     throw RendererError(fmt::format("povray wrote {}x{}, expected {}x{}", big.width, big.height,
                                     job.width * job.supersample_x, job.height * job.supersample_y));
@@ -231,11 +266,12 @@ RendererRun render_blender(const Scene& scene, const RenderSettings& settings) {
                                       std::to_string(thread_count(settings))};
   const ProcessResult p =
       run_process(argv, work.path.string(), settings.log_path, settings.timeout_s);
-  check_process(RendererKind::kBlender, p, settings, work.path);
+  check_process(RendererKind::kBlender, p, settings, work);
   if (!fs::exists(work.path / "render.exr"))
     throw RendererError(fmt::format("blender exited 0 but wrote no image; log {}:\n{}",
                                     settings.log_path, tail_lines(settings.log_path, 12)));
-  const Image colour = read_image((work.path / "render.exr").string());
+  const Image colour =
+      read_renderer_image(RendererKind::kBlender, (work.path / "render.exr").string());
   RendererRun run = geometry_pass(scene, settings);
   run.geometry_seconds = run.seconds;
   run.seconds = p.seconds;
@@ -244,9 +280,8 @@ RendererRun render_blender(const Scene& scene, const RenderSettings& settings) {
   return run;
 }
 
-}  // namespace
-
-RendererRun render_with(RendererKind renderer, const Scene& scene, const RenderSettings& settings) {
+RendererRun render_dispatch(RendererKind renderer, const Scene& scene,
+                            const RenderSettings& settings) {
   switch (renderer) {
     case RendererKind::kEvaluator:
       return geometry_pass(scene, settings);
@@ -258,6 +293,79 @@ RendererRun render_with(RendererKind renderer, const Scene& scene, const RenderS
   throw std::logic_error("unknown renderer");
 }
 
+}  // namespace
+
+RendererRun render_with(RendererKind renderer, const Scene& scene, const RenderSettings& settings) {
+  if (processes_cancelled()) throw RenderCancelled("not started (interrupted)");
+  RendererRun run = render_dispatch(renderer, scene, settings);
+  check_output(renderer, run.image, scene);
+  return run;
+}
+
+namespace {
+
+// Bytes per pixel of an evaluator image (7 float channels) held while it is
+// rendered, written as EXR and previewed: image, OpenImageIO's write buffer,
+// the preview's copies.
+constexpr double kBytesPerPixel = 7 * 4 * 4;
+// Bytes per triangle of a mesh with its Embree BVH (measured: about 100).
+constexpr double kBytesPerTriangle = 120.0;
+
+std::string gib(double bytes) {
+  return fmt::format("{:.2f} GiB", bytes / kGiB);
+}
+
+}  // namespace
+
+ResourceEstimate estimate_resources(RendererKind renderer, const Scene& scene) {
+  ResourceEstimate e;
+  const double pixels = double(scene.camera.width) * double(scene.camera.height);
+  double image_bytes = pixels * kBytesPerPixel;
+  if (renderer == RendererKind::kPovray) {
+    try {  // the supersampled RGBA image POV-Ray writes and Penumbra reads back
+      const PovrayExport job = export_povray(scene);
+      image_bytes += pixels * job.supersample_x * job.supersample_y * 4 * 4 * 2;
+    } catch (const std::exception&) {  // not expressible: render_with says why
+    }
+  }
+  double triangles = 0.0;
+  std::string mesh_pointer;
+  if (scene.tessellation) {
+    triangles = double(tessellated_triangle_count(scene.shape, *scene.tessellation));
+    mesh_pointer = "/shape/tessellation";
+  } else if (scene.representation == Representation::kDisplacement ||
+             renderer == RendererKind::kBlender) {
+    const double reach = scene.height.amplitude * max_abs_height(scene.height.function);
+    const GridResolution r = grid_resolution(scene.shape, scene.displacement.edge_length, reach);
+    triangles = 2.0 * double(r.nu) * double(r.nv);
+    mesh_pointer = "/displacement/edge_length";
+  }
+  const double mesh_bytes = triangles * kBytesPerTriangle;
+  e.memory_bytes = image_bytes + mesh_bytes;
+  e.output_bytes = pixels * 7 * 4 + 65536.0;  // + header
+  e.pointer = mesh_bytes > image_bytes ? mesh_pointer : std::string("/camera/width");
+  e.detail = fmt::format("{}x{} px: {}", scene.camera.width, scene.camera.height, gib(image_bytes));
+  if (triangles > 0)
+    e.detail += fmt::format(", {:.2f} M triangles: {}", triangles / 1e6, gib(mesh_bytes));
+  return e;
+}
+
+void check_resources(const ResourceEstimate& estimate, double max_memory_bytes,
+                     const std::string& origin, const std::string& output_folder) {
+  if (estimate.memory_bytes > max_memory_bytes)
+    throw InputError(
+        origin, estimate.pointer,
+        fmt::format("expected a render within --max-memory {:.3g} GiB, this one "
+                    "needs about {} ({}); lower the resolution or raise the limit",
+                    max_memory_bytes / kGiB, gib(estimate.memory_bytes), estimate.detail));
+  if (output_folder.empty()) return;
+  std::error_code ec;
+  const fs::space_info space = fs::space(output_folder, ec);
+  if (!ec && double(space.available) < estimate.output_bytes)
+    throw OutputError(fmt::format("{}: {} free, the output may take up to {}", output_folder,
+                                  gib(double(space.available)), gib(estimate.output_bytes)));
+}
+
 std::string renderer_version(RendererKind renderer, const RenderSettings& settings) {
   if (renderer == RendererKind::kEvaluator) return std::string("penumbra ") + kPenumbraVersion;
   const std::string exe = executable_for(renderer, settings);
@@ -265,7 +373,10 @@ std::string renderer_version(RendererKind renderer, const RenderSettings& settin
   const int fd = ::mkstemp(pattern);
   if (fd < 0) throw RendererError("cannot create a temporary file");
   ::close(fd);
-  const ProcessResult p = run_process({exe, "--version"}, "/tmp", pattern, 60.0);
+  // The probe obeys the render timeout too (a hanging --version must not
+  // hold a study longer than a hanging render would).
+  const ProcessResult p =
+      run_process({exe, "--version"}, "/tmp", pattern, std::min(60.0, settings.timeout_s));
   std::string line;
   {
     std::ifstream in(pattern);
@@ -277,8 +388,12 @@ std::string renderer_version(RendererKind renderer, const RenderSettings& settin
       }
   }
   ::unlink(pattern);
+  if (p.cancelled) throw RenderCancelled("interrupted");
   if (!p.ok() || line.empty())
-    throw RendererError(fmt::format("{}: `{} --version` failed", to_string(renderer), exe));
+    throw RendererError(fmt::format(
+        "{}: `{} --version` {}", to_string(renderer), exe,
+        p.timed_out ? fmt::format("timed out after {:.0f} s", std::min(60.0, settings.timeout_s))
+                    : std::string("failed")));
   return line;
 }
 

@@ -29,6 +29,12 @@ class RendererError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+// The render was stopped by cancel_processes() (Ctrl-C, SIGTERM): not a
+// failure of the renderer; its work folder is removed.
+class RenderCancelled : public RendererError {
+ public:
+  using RendererError::RendererError;
+};
 
 struct RenderSettings {
   double timeout_s = 600.0;  // per external render, wall clock
@@ -54,12 +60,35 @@ struct RendererRun {
 };
 
 // Renders `scene` with `renderer`. Throws ExportError (the scene cannot be
-// expressed: bad input) or RendererError (the renderer failed).
+// expressed: bad input) or RendererError (the renderer failed, or returned an
+// image of the wrong size, without R G B A, or with NaN or Inf values).
 RendererRun render_with(RendererKind renderer, const Scene& scene, const RenderSettings& settings);
 
 // "POV-Ray 3.7.0.10" / "Blender 3.4.1" / "penumbra 0.3.0": the first line
-// the renderer prints for --version; part of cache keys.
+// the renderer prints for --version; part of cache keys. The probe is killed
+// after min(60 s, settings.timeout_s).
 std::string renderer_version(RendererKind renderer, const RenderSettings& settings);
+
+// What a render will need, estimated before it starts (rough upper bounds,
+// within a factor of about 2): peak memory of the images, the ground-truth or
+// low-poly mesh and its BVH, and the size of the EXR written.
+struct ResourceEstimate {
+  double memory_bytes = 0.0;
+  double output_bytes = 0.0;  // uncompressed EXR: the most the file can take
+  std::string pointer;        // the scene value that dominates memory
+  std::string detail;         // "4096x4096 px: 1.6 GiB, 1.7 M triangles: 0.2 GiB"
+};
+inline constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+// The default of --max-memory: a third of the 24 GiB the project's machines have.
+inline constexpr double kDefaultMaxMemoryBytes = 8.0 * kGiB;
+
+ResourceEstimate estimate_resources(RendererKind renderer, const Scene& scene);
+
+// InputError (bad input, exit 2) naming `origin` and the dominant pointer when
+// the estimate exceeds `max_memory_bytes`; OutputError when `output_folder`
+// (if not empty) has less free space than the output may take.
+void check_resources(const ResourceEstimate& estimate, double max_memory_bytes,
+                     const std::string& origin, const std::string& output_folder = "");
 
 // Mean over each nx x ny block of pixels: the box filter that turns a
 // supersampled render into the final image.

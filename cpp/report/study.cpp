@@ -20,6 +20,7 @@
 #include "renderers/parallel.h"
 #include "renderers/process.h"
 #include "scene/scene_json.h"
+#include "util/files.h"
 
 namespace penumbra {
 namespace fs = std::filesystem;
@@ -50,6 +51,27 @@ const json& require(const json& object, const char* key, const std::string& file
                     const std::string& pointer) {
   if (!object.contains(key)) throw InputError(file, child(pointer, key), "missing required key");
   return object.at(key);
+}
+
+// The value of an integer in [lo, hi], or -1 when `v` is not one (no
+// truncation: 4294967297 is not 1).
+long long strict_integer(const json& v, long long lo, long long hi) {
+  if (v.is_number_unsigned()) {
+    const auto u = v.get<std::uint64_t>();
+    return u >= static_cast<std::uint64_t>(lo) && u <= static_cast<std::uint64_t>(hi)
+               ? static_cast<long long>(u)
+               : -1;
+  }
+  if (!v.is_number_integer()) return -1;
+  const auto i = v.get<std::int64_t>();
+  return i >= lo && i <= hi ? i : -1;
+}
+
+bool plain_name(const std::string& name) {
+  if (name.empty() || name.size() > 100 || name[0] == '.') return false;
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.';
+  });
 }
 
 std::string method_label(const std::string& id, const json& parameters) {
@@ -234,8 +256,10 @@ Study load_study(const std::string& path) {
                   "plots", "lowpoly"},
                  f, "");
   const json& version = require(doc, "version", f, "");
-  if (!version.is_number_integer() || version.get<int>() != kStudyFormatVersion)
-    throw InputError(f, "/version", fmt::format("expected {}", kStudyFormatVersion));
+  if (strict_integer(version, 1, 1000) != kStudyFormatVersion)
+    throw InputError(
+        f, "/version",
+        fmt::format("expected {}, got {}", kStudyFormatVersion, describe_json(version)));
   Study s;
   s.file = path;
   s.name = fs::path(path).stem().string();
@@ -243,6 +267,12 @@ Study load_study(const std::string& path) {
     if (!doc["name"].is_string()) throw InputError(f, "/name", "expected a string");
     s.name = doc["name"].get<std::string>();
   }
+  // The name becomes the default output folder results/NAME: a plain name only.
+  if (!plain_name(s.name))
+    throw InputError(f, doc.contains("name") ? "/name" : "",
+                     fmt::format("expected a study name of 1 to 100 letters, digits, '-', '_' or "
+                                 "'.' (not starting with '.'), got \"{}\"",
+                                 s.name));
   const fs::path base = fs::path(path).parent_path();
   if (doc.contains("lowpoly")) s.lowpoly = read_lowpoly(doc["lowpoly"], f, base);
   // A study is a bump study, a low-poly study, or both.
@@ -252,10 +282,12 @@ Study load_study(const std::string& path) {
   s.methods = read_method_list(doc, "methods", f, "", terminator_ids(), "method");
   s.renderers = read_renderers(doc, f, "");
   if (doc.contains("blender_spp")) {
-    const json& b = doc["blender_spp"];
-    if (!b.is_number_integer() || b.get<int>() < 1 || b.get<int>() > 65536)
-      throw InputError(f, "/blender_spp", "expected an integer in [1, 65536]");
-    s.blender_spp = b.get<int>();
+    const long long spp = strict_integer(doc["blender_spp"], 1, 65536);
+    if (spp < 0)
+      throw InputError(
+          f, "/blender_spp",
+          "expected an integer in [1, 65536], got " + describe_json(doc["blender_spp"]));
+    s.blender_spp = static_cast<int>(spp);
   }
   if (doc.contains("plots")) {
     const json& plots = doc["plots"];
@@ -291,6 +323,8 @@ Study load_study(const std::string& path) {
       };
       plot.x = axis_index("x");
       plot.y = axis_index("y");
+      if (plot.x == plot.y)
+        throw InputError(f, p + "/y", "expected an axis other than x (a plot needs two axes)");
       if (plots[i].contains("kind")) {
         const json& k = plots[i]["kind"];
         if (!k.is_string() || (k != "contour" && k != "heatmap"))
@@ -332,6 +366,7 @@ struct Job {
   json scene_json;     // canonical
   Scene scene;
   std::string key, label;
+  std::string origin;  // the scene file and variant, for error messages
 };
 
 struct Variant {
@@ -461,29 +496,37 @@ void run_plot_script(const std::vector<std::string>& arguments, const std::strin
                     log_path, tail_lines(log_path, 12)));
 }
 
-StudyRunStats run_study(const Study& study, const StudyOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  const fs::path out(options.output_dir);
-  for (const char* sub : {"cache", "images"}) {
-    std::error_code ec;
-    fs::create_directories(out / sub, ec);
-    if (ec)
-      throw OutputError(fmt::format("{}: cannot create: {}", (out / sub).string(), ec.message()));
-  }
+namespace {
 
-  // Renderer versions first: a missing renderer fails its renders, not the study.
-  std::map<RendererKind, std::string> versions, unavailable;
-  for (RendererKind r : study.renderers) {
-    try {
-      versions[r] = renderer_version(r, {});
-    } catch (const std::exception& e) {
-      unavailable[r] = e.what();
-    }
-  }
-
-  // Expand: scenes x axes, then per renderer the ground truth and the methods.
+struct Plan {
   std::vector<Variant> variants;
   std::vector<Job> jobs;
+  json lowpoly_skipped = json::array();
+};
+
+// Number of renders the study expands to, counted before expanding so that
+// a sweep of billions is refused instead of exhausting memory.
+double planned_render_count(const Study& study) {
+  auto product = [](const std::vector<StudyAxis>& axes) {
+    double n = 1.0;
+    for (const StudyAxis& a : axes) n *= double(a.values.size());
+    return n;
+  };
+  double total = double(study.scenes.size()) * product(study.axes) *
+                 double(study.renderers.size()) * double(1 + study.methods.size());
+  if (study.lowpoly)
+    total += double(study.lowpoly->scenes.size()) * product(study.lowpoly->axes) *
+             double(study.lowpoly->renderers.size()) * double(1 + study.lowpoly->offsets.size());
+  return total;
+}
+
+std::string version_of(const std::map<RendererKind, std::string>& versions, RendererKind r) {
+  const auto it = versions.find(r);
+  return it != versions.end() ? it->second : std::string("unavailable");
+}
+
+void add_bump_variants(const Study& study, const std::map<RendererKind, std::string>& versions,
+                       Plan& plan) {
   std::vector<Override> base_set;
   for (const auto& [pointer, value] : study.set.items()) base_set.push_back({pointer, value});
   std::size_t combos = 1;
@@ -493,7 +536,7 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     const std::string scene_name = fs::path(scene_file).stem().string();
     for (std::size_t c = 0; c < combos; ++c) {
       Variant v;
-      v.id = fmt::format("v{:03d}", variants.size());
+      v.id = fmt::format("v{:03d}", plan.variants.size());
       v.scene = scene_name;
       v.label = scene_name;
       const std::vector<Override> overrides = axis_combination(base_set, study.axes, c, &v);
@@ -510,18 +553,18 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
           if (r == RendererKind::kBlender) all.push_back({"/camera/spp", study.blender_spp});
           apply_overrides(doc, all, origin);
           Job job;
-          job.variant = variants.size();
+          job.variant = plan.variants.size();
           job.renderer = r;
           job.representation = rep;
           job.method = m ? m->label : "none";
           job.scene = scene_from_json(doc, origin);
           doc.erase("name");  // a name is not content
           job.scene_json = doc;
+          job.origin = origin;
           job.label = fmt::format("{}-{}-{}-{}", v.id, to_string(r), to_string(rep), job.method);
-          job.key = render_key(doc, to_string(r),
-                               versions.count(r) ? versions[r] : std::string("unavailable"));
-          v.jobs.push_back(jobs.size());
-          jobs.push_back(std::move(job));
+          job.key = render_key(doc, to_string(r), version_of(versions, r));
+          v.jobs.push_back(plan.jobs.size());
+          plan.jobs.push_back(std::move(job));
         };
         add(Representation::kDisplacement, nullptr);
         const auto offered = methods_offered(to_string(r), Representation::kBump);
@@ -529,99 +572,204 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
           if (std::find(offered.begin(), offered.end(), *method_from_id(m.id)) != offered.end())
             add(Representation::kBump, &m);
       }
-      variants.push_back(std::move(v));
+      plan.variants.push_back(std::move(v));
     }
   }
+}
 
-  json lowpoly_skipped = json::array();
-  if (study.lowpoly) {
-    const LowPolyPart& part = *study.lowpoly;
-    std::vector<Override> part_set;
-    for (const auto& [pointer, value] : part.set.items()) part_set.push_back({pointer, value});
-    std::size_t part_combos = 1;
-    for (const StudyAxis& a : part.axes) part_combos *= a.values.size();
-    std::size_t count = 0;
-    for (const std::string& scene_file : part.scenes) {
-      const json base = read_json_file(scene_file);
-      const std::string scene_name = fs::path(scene_file).stem().string();
-      for (std::size_t c = 0; c < part_combos; ++c) {
-        Variant v;
-        v.lowpoly = true;
-        v.id = fmt::format("l{:03d}", count++);
-        v.scene = scene_name;
-        v.label = scene_name;
-        const std::vector<Override> overrides = axis_combination(part_set, part.axes, c, &v);
-        const std::string origin =
-            fmt::format("{} (study {}, low-poly variant {})", scene_file, study.file, v.id);
-        json with_overrides = base;
-        apply_overrides(with_overrides, overrides, origin);
-        const bool has_props = with_overrides.contains("props") && !with_overrides["props"].empty();
-        for (RendererKind r : part.renderers) {
-          // m == nullptr: the ground truth, the same scene untessellated.
-          auto add = [&](const StudyMethod* m) {
-            json doc = base;
-            std::vector<Override> all = overrides;
-            json offset = {{"method", m ? m->id : "none"}};
-            if (m && m->parameters.is_object())
-              for (const auto& [k, value] : m->parameters.items()) offset[k] = value;
-            all.push_back({"/offset", offset});
-            if (!m) all.push_back({"/shape/tessellation", nullptr});
-            if (r == RendererKind::kBlender) all.push_back({"/camera/spp", study.blender_spp});
-            apply_overrides(doc, all, origin);
-            Job job;
-            job.variant = variants.size();
-            job.renderer = r;
-            job.scene = scene_from_json(doc, origin);
-            job.representation = job.scene.representation;
-            job.method = m ? m->label : "analytic";
-            doc.erase("name");
-            job.scene_json = doc;
-            job.label = fmt::format("{}-{}-{}", v.id, to_string(r), job.method);
-            job.key = render_key(doc, to_string(r),
-                                 versions.count(r) ? versions[r] : std::string("unavailable"));
-            v.jobs.push_back(jobs.size());
-            jobs.push_back(std::move(job));
-          };
-          if (r != RendererKind::kEvaluator && has_props) {
-            const json skipped = {{"renderer", to_string(r)},
-                                  {"scene", scene_name},
-                                  {"why", "props (extra spheres) are evaluator-only"}};
-            if (std::find(lowpoly_skipped.begin(), lowpoly_skipped.end(), skipped) ==
-                lowpoly_skipped.end())
-              lowpoly_skipped.push_back(skipped);
-            continue;
-          }
-          add(nullptr);
-          const auto offered = offsets_offered(to_string(r));
-          for (const StudyMethod& m : part.offsets)
-            if (std::find(offered.begin(), offered.end(), *offset_method_from_id(m.id)) !=
-                offered.end())
-              add(&m);
+void add_lowpoly_variants(const Study& study, const std::map<RendererKind, std::string>& versions,
+                          Plan& plan) {
+  const LowPolyPart& part = *study.lowpoly;
+  std::vector<Override> part_set;
+  for (const auto& [pointer, value] : part.set.items()) part_set.push_back({pointer, value});
+  std::size_t part_combos = 1;
+  for (const StudyAxis& a : part.axes) part_combos *= a.values.size();
+  std::size_t count = 0;
+  for (const std::string& scene_file : part.scenes) {
+    const json base = read_json_file(scene_file);
+    const std::string scene_name = fs::path(scene_file).stem().string();
+    for (std::size_t c = 0; c < part_combos; ++c) {
+      Variant v;
+      v.lowpoly = true;
+      v.id = fmt::format("l{:03d}", count++);
+      v.scene = scene_name;
+      v.label = scene_name;
+      const std::vector<Override> overrides = axis_combination(part_set, part.axes, c, &v);
+      const std::string origin =
+          fmt::format("{} (study {}, low-poly variant {})", scene_file, study.file, v.id);
+      json with_overrides = base;
+      apply_overrides(with_overrides, overrides, origin);
+      const bool has_props = with_overrides.contains("props") && !with_overrides["props"].empty();
+      for (RendererKind r : part.renderers) {
+        // m == nullptr: the ground truth, the same scene untessellated.
+        auto add = [&](const StudyMethod* m) {
+          json doc = base;
+          std::vector<Override> all = overrides;
+          json offset = {{"method", m ? m->id : "none"}};
+          if (m && m->parameters.is_object())
+            for (const auto& [k, value] : m->parameters.items()) offset[k] = value;
+          all.push_back({"/offset", offset});
+          if (!m) all.push_back({"/shape/tessellation", nullptr});
+          if (r == RendererKind::kBlender) all.push_back({"/camera/spp", study.blender_spp});
+          apply_overrides(doc, all, origin);
+          Job job;
+          job.variant = plan.variants.size();
+          job.renderer = r;
+          job.scene = scene_from_json(doc, origin);
+          job.representation = job.scene.representation;
+          job.method = m ? m->label : "analytic";
+          doc.erase("name");
+          job.scene_json = doc;
+          job.origin = origin;
+          job.label = fmt::format("{}-{}-{}", v.id, to_string(r), job.method);
+          job.key = render_key(doc, to_string(r), version_of(versions, r));
+          v.jobs.push_back(plan.jobs.size());
+          plan.jobs.push_back(std::move(job));
+        };
+        if (r != RendererKind::kEvaluator && has_props) {
+          const json skipped = {{"renderer", to_string(r)},
+                                {"scene", scene_name},
+                                {"why", "props (extra spheres) are evaluator-only"}};
+          if (std::find(plan.lowpoly_skipped.begin(), plan.lowpoly_skipped.end(), skipped) ==
+              plan.lowpoly_skipped.end())
+            plan.lowpoly_skipped.push_back(skipped);
+          continue;
         }
-        variants.push_back(std::move(v));
+        add(nullptr);
+        const auto offered = offsets_offered(to_string(r));
+        for (const StudyMethod& m : part.offsets)
+          if (std::find(offered.begin(), offered.end(), *offset_method_from_id(m.id)) !=
+              offered.end())
+            add(&m);
       }
+      plan.variants.push_back(std::move(v));
     }
   }
+}
 
-  // Render what the cache lacks.
+// Expands the whole study and validates every scene and its resources;
+// InputError before anything is written.
+Plan plan_study(const Study& study, const std::map<RendererKind, std::string>& versions,
+                double max_memory_bytes) {
+  const double count = planned_render_count(study);
+  if (count > double(kMaxStudyRenders))
+    throw InputError(study.file, study.axes.empty() ? "/scenes" : "/axes",
+                     fmt::format("expected a study of at most {} renders, it expands to {:.3g} "
+                                 "(scenes x axis values x renderers x methods); split it",
+                                 kMaxStudyRenders, count));
+  Plan plan;
+  add_bump_variants(study, versions, plan);
+  if (study.lowpoly) add_lowpoly_variants(study, versions, plan);
+  for (const Job& job : plan.jobs)
+    check_resources(estimate_resources(job.renderer, job.scene), max_memory_bytes, job.origin);
+  return plan;
+}
+
+// A cache entry is used only if it reads, carries this job's key and its
+// pixels match the checksum written with them; nullopt and a reason otherwise.
+std::optional<Image> verified_cache_entry(const std::string& path, const std::string& key,
+                                          std::string* reason) {
+  std::map<std::string, std::string> attributes;
+  Image image;
+  try {
+    image = read_image(path, &attributes);
+  } catch (const std::exception& e) {
+    *reason = fmt::format("unreadable ({})", printable(e.what(), 200));
+    return std::nullopt;
+  }
+  if (attributes["penumbra:key"] != key) {
+    *reason = fmt::format("it carries key \"{}\", not its own",
+                          printable(attributes["penumbra:key"], 40));
+    return std::nullopt;
+  }
+  if (attributes["penumbra:checksum"] != image_checksum(image)) {
+    *reason = "its pixels do not match their checksum";
+    return std::nullopt;
+  }
+  if (std::any_of(image.pixels.begin(), image.pixels.end(),
+                  [](float v) { return !std::isfinite(v); })) {
+    *reason = "it holds NaN or Inf values";
+    return std::nullopt;
+  }
+  return image;
+}
+
+}  // namespace
+
+StudyRunStats run_study(const Study& study, const StudyOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const fs::path out(options.output_dir);
+
+  // Renderer versions first: a missing renderer fails its renders, not the study.
+  std::map<RendererKind, std::string> versions, unavailable;
+  for (RendererKind r : study.renderers) {
+    try {
+      RenderSettings probe;
+      probe.timeout_s = options.timeout_s;
+      versions[r] = renderer_version(r, probe);
+    } catch (const std::exception& e) {
+      unavailable[r] = e.what();
+    }
+  }
+  Plan plan = plan_study(study, versions, options.max_memory_bytes);
+  std::vector<Variant>& variants = plan.variants;
+  std::vector<Job>& jobs = plan.jobs;
+  const json& lowpoly_skipped = plan.lowpoly_skipped;
+
   StudyRunStats stats;
   stats.renders = jobs.size();
+  if (options.dry_run) {
+    for (const Job& job : jobs) {
+      ++stats.planned[to_string(job.renderer)];
+      if (fs::exists(out / "cache" / (job.key + ".exr"))) ++stats.cached;
+    }
+    return stats;
+  }
+  for (const char* sub : {"cache", "images"}) {
+    std::error_code ec;
+    fs::create_directories(out / sub, ec);
+    if (ec)
+      throw OutputError(fmt::format("{}: cannot create: {}", (out / sub).string(), ec.message()));
+    // What a killed earlier run (kill -9) left half-written.
+    stats.stale_removed += remove_stale_temporaries((out / sub).string());
+  }
+  auto warn = [&](const std::string& text) {
+    stats.warnings.push_back(text);
+    if (options.log) options.log("WARNING: " + text);
+  };
+  if (stats.stale_removed > 0)
+    warn(fmt::format("removed {} temporary files and work folders of killed runs",
+                     stats.stale_removed));
+
+  // Render what the cache lacks.
   std::vector<std::string> errors(jobs.size());
   std::vector<char> done(jobs.size(), 0), attempted(jobs.size(), 0);
+  std::vector<Image> images(jobs.size());
   std::vector<std::size_t> todo;
   // Jobs with the same key (a ground truth shared by every tessellation
   // level) are rendered once; the others take its result.
   std::map<std::string, std::size_t> first_with_key;
   std::vector<long> same_as(jobs.size(), -1);
   for (std::size_t i = 0; i < jobs.size(); ++i) {
-    if (fs::exists(out / "cache" / (jobs[i].key + ".exr"))) {
-      done[i] = 1;
-      ++stats.cached;
-    } else if (const auto [it, inserted] = first_with_key.try_emplace(jobs[i].key, i); !inserted) {
-      same_as[i] = static_cast<long>(it->second);
-    } else {
-      todo.push_back(i);
+    const fs::path cached = out / "cache" / (jobs[i].key + ".exr");
+    if (fs::exists(cached)) {
+      std::string reason;
+      if (std::optional<Image> image =
+              verified_cache_entry(cached.string(), jobs[i].key, &reason)) {
+        images[i] = std::move(*image);
+        done[i] = 1;
+        ++stats.cached;
+        continue;
+      }
+      warn(fmt::format("cache entry {} of {} is damaged: {}; rendering it again", cached.string(),
+                       jobs[i].label, reason));
+      std::error_code ignored;
+      fs::remove(cached, ignored);
     }
+    if (const auto [it, inserted] = first_with_key.try_emplace(jobs[i].key, i); !inserted)
+      same_as[i] = static_cast<long>(it->second);
+    else
+      todo.push_back(i);
   }
   std::mutex mutex;
   std::size_t finished = 0;
@@ -645,6 +793,7 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     }
     const auto t0 = std::chrono::steady_clock::now();
     std::string error;
+    bool cancelled = false;
     if (unavailable.count(job.renderer)) {
       error = unavailable[job.renderer];
     } else {
@@ -655,16 +804,21 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
       try {
         std::error_code ignored;
         fs::remove(settings.log_path, ignored);
-        const RendererRun run = render_with(job.renderer, job.scene, settings);
+        RendererRun run = render_with(job.renderer, job.scene, settings);
         write_exr(run.image, (out / "cache" / (job.key + ".exr")).string(),
                   {{"penumbra:version", kPenumbraVersion},
                    {"penumbra:renderer", to_string(job.renderer)},
-                   {"penumbra:renderer_version", versions[job.renderer]},
+                   {"penumbra:renderer_version", version_of(versions, job.renderer)},
                    {"penumbra:scene", job.scene_json.dump()},
                    {"penumbra:method", job.method},
                    {"penumbra:representation", to_string(job.representation)},
-                   {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
+                   {"penumbra:radiance_unit", "W m^-2 sr^-1"},
+                   {"penumbra:key", job.key},
+                   {"penumbra:checksum", image_checksum(run.image)}});
+        images[i] = std::move(run.image);
         if (job.renderer == RendererKind::kEvaluator) fs::remove(settings.log_path, ignored);
+      } catch (const RenderCancelled&) {
+        cancelled = true;
       } catch (const std::exception& e) {
         error = e.what();
       }
@@ -672,6 +826,10 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::lock_guard<std::mutex> lock(mutex);
+    if (cancelled) {  // interrupted: neither done nor failed; a resume renders it
+      attempted[i] = 0;
+      return;
+    }
     ++finished;
     busy_seconds += seconds;
     if (error.empty()) {
@@ -694,16 +852,14 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     if (same_as[i] >= 0) {
       const auto j = static_cast<std::size_t>(same_as[i]);
       done[i] = done[j], attempted[i] = attempted[j], errors[i] = errors[j];
+      images[i] = images[j];
     }
   for (std::size_t i = 0; i < jobs.size(); ++i)
     if (!done[i] && !attempted[i]) ++stats.not_started;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (stats.not_started > 0) return stats;  // interrupted: no report from a partial study
 
-  // Images, profiles and comparisons, in job order (deterministic).
-  std::vector<Image> images(jobs.size());
-  for (std::size_t i = 0; i < jobs.size(); ++i)
-    if (done[i]) images[i] = read_image((out / "cache" / (jobs[i].key + ".exr")).string());
+  // Profiles and comparisons, in job order (deterministic).
   auto find_job = [&](std::size_t v, RendererKind r, Representation rep,
                       const std::string& method) -> long {
     for (std::size_t i : variants[v].jobs)

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,6 +21,9 @@ namespace penumbra {
 
 inline constexpr int kStudyFormatVersion = 1;
 inline constexpr int kReportFormatVersion = 1;
+// The most renders one study may expand to; larger sweeps are refused before
+// expansion (split them into several studies).
+inline constexpr long kMaxStudyRenders = 1000000;
 
 // One sweep axis: a scene value by JSON pointer and the values it takes.
 struct StudyAxis {
@@ -83,7 +87,12 @@ struct StudyOptions {
   std::function<void(const std::string&)> log;     // progress lines
   std::function<void(std::size_t done, std::size_t total, double eta_s)> progress;
   bool figures = true;  // run harness/report.py (figures and report.html)
-  std::string python;   // default: PENUMBRA_PYTHON, /usr/bin/python3, python3
+  // Plan and validate only: count renders and cache hits, write nothing.
+  bool dry_run = false;
+  // Per render; a render estimated above it is refused (bad input) before
+  // anything is written.
+  double max_memory_bytes = kDefaultMaxMemoryBytes;
+  std::string python;  // default: PENUMBRA_PYTHON, /usr/bin/python3, python3
 };
 
 struct StudyRunStats {
@@ -94,7 +103,10 @@ struct StudyRunStats {
   std::size_t not_started = 0;        // interrupted or --max-renders
   std::vector<std::string> failures;  // "label: error"
   double seconds = 0.0;
-  std::string report_html;  // path, when written
+  std::string report_html;                     // path, when written
+  std::map<std::string, std::size_t> planned;  // dry run: renders per renderer
+  std::vector<std::string> warnings;           // damaged cache entries, stale files removed
+  std::size_t stale_removed = 0;
   bool complete() const { return failed == 0 && not_started == 0; }
 };
 

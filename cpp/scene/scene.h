@@ -20,8 +20,16 @@
 namespace penumbra {
 
 inline constexpr int kSceneFormatVersion = 1;
-inline constexpr const char* kPenumbraVersion = "0.3.0";
+inline constexpr const char* kPenumbraVersion = "0.4.0";
 inline constexpr int kMaxImageSize = 16384;
+// Input domains that keep every quantity finite in float (Embree, images):
+// coordinates and lengths within +-1e6 scene units (shapes are meant to be
+// near unit size), lengths at least 1e-6, frequencies at most 1e6 cycles per
+// unit, irradiance and intensity at most 1e9 W/m^2 or W/sr.
+inline constexpr double kMaxCoordinate = 1e6;
+inline constexpr double kMinLength = 1e-6;
+inline constexpr double kMaxFrequency = 1e6;
+inline constexpr double kMaxRadiant = 1e9;
 
 enum class Projection { kOrthographic, kPerspective };
 

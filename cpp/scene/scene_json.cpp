@@ -1,8 +1,10 @@
 #include "scene/scene_json.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -14,18 +16,10 @@ namespace penumbra {
 
 using nlohmann::json;
 
-InputError::InputError(const std::string& file, const std::string& pointer,
-                       const std::string& message)
-    : std::runtime_error(fmt::format("{}: {}: {}", file, pointer.empty() ? "/" : pointer, message)),
-      file_(file),
-      pointer_(pointer) {}
-
 namespace {
 
 std::string describe(const json& j) {
-  std::string text = j.dump();
-  if (text.size() > 60) text = text.substr(0, 57) + "...";
-  return text;
+  return describe_json(j, 60);
 }
 
 // A JSON object being read: remembers which keys were used, so that finish()
@@ -41,9 +35,7 @@ class Reader {
     throw InputError(origin_, key.empty() ? pointer_ : child_pointer(key), message);
   }
   std::string child_pointer(const std::string& key) const {
-    std::string escaped;  // RFC 6901: '~' -> "~0", '/' -> "~1"
-    for (char c : key) escaped += c == '~' ? "~0" : (c == '/' ? "~1" : std::string(1, c));
-    return pointer_ + "/" + escaped;
+    return pointer_ + "/" + pointer_token(key);
   }
   bool has(const std::string& key) {
     known_.insert(key);
@@ -103,25 +95,39 @@ class Reader {
     }
     fail(key, fmt::format("expected one of {}, got {}", names, describe(v)));
   }
-  Vec3 vec3(const std::string& key) {
+  // Three finite numbers, each of magnitude at most `bound`.
+  Vec3 vec3(const std::string& key, double bound = kMaxCoordinate) {
     const json& v = at(key);
     if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() ||
         !v[2].is_number())
       fail(key, "expected an array of 3 numbers, got " + describe(v));
     const Vec3 out{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
-    if (!is_finite(out)) fail(key, "expected finite numbers, got " + describe(v));
+    if (!is_finite(out) || std::abs(out.x) > bound || std::abs(out.y) > bound ||
+        std::abs(out.z) > bound)
+      fail(key, fmt::format("expected 3 numbers in [-{0:g}, {0:g}] (scene units), got {1}", bound,
+                            describe(v)));
     return out;
   }
   Vec3 vec3_or(const std::string& key, const Vec3& fallback) {
     return has(key) ? vec3(key) : fallback;
   }
-  // A direction: any non-zero finite vector, returned normalised.
-  Vec3 direction(const std::string& key) { return check_direction(key, vec3(key)); }
+  // A direction: any non-zero finite vector, returned normalised (scaled by
+  // its largest component first, so that neither 1e200 nor 1e-200 over- or
+  // underflows the length).
+  Vec3 direction(const std::string& key) { return normalize(scaled_direction(key)); }
+  // The same direction divided by its largest component only (exact for the
+  // usual unit components; make_weave normalises it).
+  Vec3 scaled_direction(const std::string& key) {
+    const Vec3 v = vec3(key, std::numeric_limits<double>::max());
+    check_direction(key, v);
+    return v / std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+  }
   Vec3 check_direction(const std::string& key, const Vec3& v) const {
-    if (!(length(v) > 1e-12))
+    const double largest = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+    if (!(largest > 0.0))
       fail(key, fmt::format("expected a non-zero vector (a direction), got [{}, {}, {}]", v.x, v.y,
                             v.z));
-    return normalize(v);
+    return normalize(v / largest);
   }
 
   void finish() const {
@@ -142,17 +148,23 @@ class Reader {
   std::set<std::string> known_;
 };
 
-bool positive(double x) {
-  return x > 0.0;
-}
 bool non_negative(double x) {
   return x >= 0.0;
 }
 bool unit_interval(double x) {
   return x >= 0.0 && x <= 1.0;
 }
-bool any_number(double) {
-  return true;
+bool length_scale(double x) {
+  return x >= kMinLength && x <= kMaxCoordinate;
+}
+bool frequency_range(double x) {
+  return x > 0.0 && x <= kMaxFrequency;
+}
+bool radiant_range(double x) {
+  return x >= 0.0 && x <= kMaxRadiant;
+}
+bool phase_range(double x) {
+  return std::abs(x) <= kMaxCoordinate;
 }
 
 Camera read_camera(Reader r) {
@@ -183,10 +195,10 @@ Light read_light(Reader r) {
       r.choice<LightType>("type", {{"distant", LightType::kDistant}, {"point", LightType::kPoint}});
   if (l.type == LightType::kDistant) {
     l.direction = r.direction("direction");
-    l.irradiance = r.number("irradiance", non_negative, ">= 0 (W/m^2)");
+    l.irradiance = r.number("irradiance", radiant_range, "in [0, 1e9] (W/m^2)");
   } else {
     l.position = r.vec3("position");
-    l.intensity = r.number("intensity", non_negative, ">= 0 (W/sr)");
+    l.intensity = r.number("intensity", radiant_range, "in [0, 1e9] (W/sr)");
   }
   r.finish();
   return l;
@@ -244,9 +256,9 @@ Shape read_shape(Reader r, std::optional<Tessellation>* tessellation = nullptr) 
       "type", {{"cylinder", ShapeType::kCylinder}, {"sphere", ShapeType::kSphere}});
   s.center = r.vec3_or("center", {0, 0, 0});
   s.axis = r.has("axis") ? r.direction("axis") : Vec3{0, 1, 0};
-  s.radius = r.number("radius", positive, "> 0 (scene units)");
+  s.radius = r.number("radius", length_scale, "in [1e-6, 1e6] (scene units)");
   if (s.type == ShapeType::kCylinder) {
-    s.height = r.number("height", positive, "> 0 (scene units)");
+    s.height = r.number("height", length_scale, "in [1e-6, 1e6] (scene units)");
     s.caps = r.boolean_or("caps", false);
   }
   s = with_frame(s);
@@ -284,14 +296,16 @@ HeightSpec read_height(Reader r, const Shape& shape) {
   h.amplitude = r.number("amplitude", non_negative, ">= 0 (scene units)");
   switch (h.family) {
     case HeightFamily::kGrating: {
-      const double frequency = r.number("frequency", positive, "> 0 (cycles per scene unit)");
+      const double frequency =
+          r.number("frequency", frequency_range, "in (0, 1e6] (cycles per scene unit)");
       const Vec3 direction = r.direction("direction");
-      const double phase = r.number_or("phase", 0.0, any_number, "(radians)");
+      const double phase = r.number_or("phase", 0.0, phase_range, "in [-1e6, 1e6] (radians)");
       h.function = make_grating(direction, frequency, phase);
       break;
     }
     case HeightFamily::kWeave: {
-      const double frequency = r.number("frequency", positive, "> 0 (cycles per scene unit)");
+      const double frequency =
+          r.number("frequency", frequency_range, "in (0, 1e6] (cycles per scene unit)");
       const json& list = r.at("directions");
       if (!list.is_array() || list.size() < 2 || list.size() > kMaxProductFactors)
         r.fail("directions", fmt::format("expected an array of 2 to {} directions, got {}",
@@ -300,10 +314,7 @@ HeightSpec read_height(Reader r, const Shape& shape) {
       for (std::size_t i = 0; i < list.size(); ++i) {
         const json wrapper{{"d", list[i]}};
         Reader item(wrapper, r.child_pointer("directions") + "/" + std::to_string(i), r.origin());
-        const Vec3 d = item.vec3("d");
-        if (!(length(d) > 1e-12))
-          throw InputError(r.origin(), item.pointer(), "expected a non-zero vector (a direction)");
-        directions.push_back(d);
+        directions.push_back(item.scaled_direction("d"));
       }
       const HeightCombine combine = r.choice<HeightCombine>(
           "combine", {{"product", HeightCombine::kProduct}, {"sum", HeightCombine::kSum}},
@@ -313,8 +324,10 @@ HeightSpec read_height(Reader r, const Shape& shape) {
     }
     case HeightFamily::kNoise: {
       const int terms = static_cast<int>(r.integer("terms", 1, 256));
-      const double f_min = r.number("frequency_min", positive, "> 0 (cycles per scene unit)");
-      const double f_max = r.number("frequency_max", positive, "> 0 (cycles per scene unit)");
+      const double f_min =
+          r.number("frequency_min", frequency_range, "in (0, 1e6] (cycles per scene unit)");
+      const double f_max =
+          r.number("frequency_max", frequency_range, "in (0, 1e6] (cycles per scene unit)");
       if (f_max < f_min)
         r.fail("frequency_max",
                fmt::format("expected a number >= frequency_min ({}), got {}", f_min, f_max));
@@ -392,33 +405,74 @@ Override parse_override(const std::string& text) {
   Override o;
   o.pointer = text.substr(0, eq);
   const std::string value = text.substr(eq + 1);
-  o.value = json::parse(value, nullptr, /*allow_exceptions=*/false);
-  if (o.value.is_discarded()) o.value = value;  // a bare word is a string
+  try {
+    if (pointer_tokens(o.pointer).size() > static_cast<std::size_t>(kMaxJsonDepth))
+      throw InputError("--set", o.pointer,
+                       fmt::format("expected a pointer of at most {} keys", kMaxJsonDepth));
+  } catch (const std::invalid_argument& e) {
+    throw InputError("--set", o.pointer, std::string("expected a JSON pointer: ") + e.what());
+  }
+  if (!is_utf8(text)) throw InputError("--set", o.pointer, "expected UTF-8 text");
+  const std::optional<json> parsed = parse_json_value_or_word(value, "--set", o.pointer);
+  o.value = parsed ? *parsed : json(value);  // a bare word is a string
   return o;
 }
+
+namespace {
+
+// The array element `token` names: an index up to the size (the size, or
+// "-", appends). Anything past the end is an error rather than a resize, so
+// that /x/100000000 cannot allocate gigabytes.
+json& array_element(json& array, const std::string& token, const std::string& origin,
+                    const std::string& pointer) {
+  if (token == "-") return array.emplace_back(nullptr);
+  const bool digits =
+      !token.empty() && token.size() <= 9 &&
+      std::all_of(token.begin(), token.end(), [](char c) { return c >= '0' && c <= '9'; });
+  if (!digits || (token.size() > 1 && token[0] == '0'))
+    throw InputError(origin, pointer,
+                     fmt::format("cannot apply --set: \"{}\" is not an array index", token));
+  const std::size_t index = std::stoul(token);
+  if (index > array.size())
+    throw InputError(origin, pointer,
+                     fmt::format("cannot apply --set: index {} is past the end of an array of {} "
+                                 "(use {} or - to append)",
+                                 index, array.size(), array.size()));
+  if (index == array.size()) return array.emplace_back(nullptr);
+  return array[index];
+}
+
+}  // namespace
 
 void apply_overrides(json& document, const std::vector<Override>& overrides,
                      const std::string& origin) {
   // Missing intermediate objects are created: a misspelt key is still
   // caught, with its pointer, by the strict reader's unknown-key check.
   for (const Override& o : overrides) {
+    std::vector<std::string> tokens;
     try {
-      document[json::json_pointer(o.pointer)] = o.value;
-    } catch (const json::exception& e) {
+      tokens = pointer_tokens(o.pointer);
+    } catch (const std::invalid_argument& e) {
       throw InputError(origin, o.pointer, std::string("cannot apply --set: ") + e.what());
     }
-  }
-}
-
-json read_json_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", "cannot open the file for reading");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  try {
-    return json::parse(buffer.str());
-  } catch (const json::parse_error& e) {
-    throw InputError(path, "", fmt::format("not valid JSON (byte {}): {}", e.byte, e.what()));
+    if (tokens.size() > static_cast<std::size_t>(kMaxJsonDepth))
+      throw InputError(origin, o.pointer,
+                       fmt::format("expected a pointer of at most {} keys", kMaxJsonDepth));
+    json* node = &document;
+    for (const std::string& token : tokens) {
+      if (node->is_null()) *node = token == "0" || token == "-" ? json::array() : json::object();
+      if (node->is_object()) {
+        node = &(*node)[token];
+      } else if (node->is_array()) {
+        node = &array_element(*node, token, origin, o.pointer);
+      } else {
+        throw InputError(origin, o.pointer,
+                         fmt::format("cannot apply --set: \"{}\" is inside a {}, not an object "
+                                     "or array",
+                                     token, node->type_name()));
+      }
+    }
+    *node = o.value;
   }
 }
 
@@ -472,8 +526,12 @@ Scene scene_from_json(const json& document, const std::string& origin) {
   s.displacement.edge_length = s.shape.radius / 256.0;
   if (r.has("displacement")) {
     Reader d = r.object("displacement");
-    s.displacement.edge_length =
-        d.number_or("edge_length", s.displacement.edge_length, positive, "> 0 (scene units)");
+    // Longer than the radius is no tessellation of the surface (and would
+    // make the shadow-ray lift, e^2 kappa / 8, overflow for huge values).
+    const double radius = s.shape.radius;
+    s.displacement.edge_length = d.number_or(
+        "edge_length", s.displacement.edge_length, [&](double e) { return e > 0.0 && e <= radius; },
+        fmt::format("in (0, radius = {}] (scene units)", radius).c_str());
     d.finish();
   }
   r.finish();

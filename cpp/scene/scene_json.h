@@ -9,32 +9,24 @@
 #include <nlohmann/json.hpp>
 
 #include "scene/scene.h"
+#include "util/strict_json.h"
 
 namespace penumbra {
 
-// Bad input. what() is one line: "FILE: /json/pointer: expected ..., got ...".
-class InputError : public std::runtime_error {
- public:
-  InputError(const std::string& file, const std::string& pointer, const std::string& message);
-  const std::string& file() const { return file_; }
-  const std::string& pointer() const { return pointer_; }
-
- private:
-  std::string file_, pointer_;
-};
-
-// "POINTER=VALUE" as given to --set: VALUE is JSON, or a bare string.
+// "POINTER=VALUE" as given to --set: VALUE is JSON, or a bare string (UTF-8).
+// InputError (bad input, exit 2) for invalid pointers and over-deep values.
 struct Override {
   std::string pointer;
   nlohmann::json value;
 };
 Override parse_override(const std::string& text);
 
-// Applies overrides in order; `origin` names the source in errors.
+// Applies overrides in order; `origin` names the source in errors. Missing
+// objects on the way are created; an array index past the end is an error.
+// read_json_file (util/strict_json.h) reads the document strictly.
 void apply_overrides(nlohmann::json& document, const std::vector<Override>& overrides,
                      const std::string& origin);
 
-nlohmann::json read_json_file(const std::string& path);
 // Validates and converts. `origin` is the file name used in error messages.
 Scene scene_from_json(const nlohmann::json& document, const std::string& origin);
 Scene load_scene(const std::string& path, const std::vector<Override>& overrides = {});

@@ -1,0 +1,316 @@
+// Broken renderers and a damaged cache, through a real study: each fault must
+// end as a reported failed render (never cached, never a number in the
+// report), leave no process running, and a resume must redo exactly what is
+// missing. Fake renderers are shell scripts named by PENUMBRA_BLENDER.
+#include <gtest/gtest.h>
+
+#include "temp_dir_test.h"
+
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "render/image_io.h"
+#include "report/study.h"
+#include "util/strict_json.h"
+
+namespace penumbra {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+const std::string kSource = PENUMBRA_SOURCE_DIR;
+
+std::string read_text(const std::string& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Processes (not zombies) whose command line mentions `needle`.
+std::vector<int> processes_mentioning(const std::string& needle) {
+  std::vector<int> found;
+  for (const auto& e : fs::directory_iterator("/proc")) {
+    const std::string name = e.path().filename().string();
+    if (name.empty() || !std::all_of(name.begin(), name.end(), ::isdigit)) continue;
+    const int pid = std::stoi(name);
+    if (pid == ::getpid()) continue;
+    std::string cmdline = read_text(e.path().string() + "/cmdline");
+    std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
+    const std::string stat = read_text(e.path().string() + "/stat");
+    const auto close = stat.rfind(')');
+    const bool zombie =
+        close != std::string::npos && close + 2 < stat.size() && stat[close + 2] == 'Z';
+    if (!zombie && cmdline.find(needle) != std::string::npos) found.push_back(pid);
+  }
+  return found;
+}
+
+bool alive(int pid) {
+  const std::string stat = read_text("/proc/" + std::to_string(pid) + "/stat");
+  if (stat.empty()) return false;
+  const auto close = stat.rfind(')');
+  return !(close != std::string::npos && close + 2 < stat.size() && stat[close + 2] == 'Z');
+}
+
+// Polls for up to `seconds` (processes take a moment to die); no timing is asserted.
+template <typename F>
+bool eventually(F condition, double seconds = 10.0) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < end) {
+    if (condition()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return condition();
+}
+
+class Faults : public TempDirTest {
+ protected:
+  void TearDown() override {
+    ::unsetenv("PENUMBRA_BLENDER");
+    TempDirTest::TearDown();
+  }
+  // A fake Blender: answers --version, else runs `body` in its work folder
+  // (Penumbra expects render.exr there).
+  std::string fake_blender(const std::string& body, const std::string& version_body = "") {
+    const std::string p = path("fake-blender");
+    std::ofstream(p) << "#!/bin/sh\ncase \"$*\" in *--version*) "
+                     << (version_body.empty() ? "" : version_body + ";")
+                     << " echo 'Blender 3.4.1'; exit 0;; esac\n"
+                     << body << "\n";
+    ::chmod(p.c_str(), 0755);
+    ::setenv("PENUMBRA_BLENDER", p.c_str(), 1);
+    return p;
+  }
+  // An R G B A image of the study's size, filled with `value`.
+  std::string rgba_exr(const std::string& name, float value) const {
+    Image image;
+    image.width = image.height = 16;
+    image.channels = {"R", "G", "B", "A"};
+    image.pixels.assign(16 * 16 * 4, value);
+    for (std::size_t i = 3; i < image.pixels.size(); i += 4) image.pixels[i] = 1.0f;
+    write_exr(image, path(name));
+    return path(name);
+  }
+  // 1 variant: evaluator displacement + bump, Blender displacement + bump.
+  ::penumbra::Study study() const {
+    const json doc = {{"version", 1},
+                      {"name", "faults"},
+                      {"scenes", {kSource + "/scenes/calibration/sphere.json"}},
+                      {"set",
+                       {{"/camera/width", 16},
+                        {"/camera/height", 16},
+                        {"/camera/spp", 2},
+                        {"/displacement/edge_length", 0.05}}},
+                      {"methods", {"none"}},
+                      {"renderers", {"evaluator", "blender"}}};
+    std::ofstream(path("study.json")) << doc.dump(2);
+    return load_study(path("study.json"));
+  }
+  StudyOptions options(const std::string& out) const {
+    StudyOptions o;
+    o.output_dir = path(out);
+    o.jobs = 1;
+    o.figures = false;
+    o.timeout_s = 2.0;
+    return o;
+  }
+  std::size_t cached_images(const std::string& out) const {
+    std::size_t n = 0;
+    for (const auto& e : fs::directory_iterator(path(out) + "/cache"))
+      n += e.path().extension() == ".exr" ? 1 : 0;
+    return n;
+  }
+  // The fault's outcome: both Blender renders failed with `expected` in the
+  // message, neither was cached, the report lists them, nothing runs on.
+  void expect_blender_failed(const StudyRunStats& stats, const std::string& out,
+                             const std::string& expected) {
+    EXPECT_EQ(stats.failed, 2u);
+    EXPECT_EQ(stats.rendered, 2u);  // the evaluator's
+    ASSERT_EQ(stats.failures.size(), 2u);
+    for (const std::string& f : stats.failures) EXPECT_NE(f.find(expected), std::string::npos) << f;
+    EXPECT_EQ(cached_images(out), 2u);
+    const json report = read_json_file(path(out) + "/report.json");
+    EXPECT_EQ(report.at("failures").size(), 2u);
+    for (const json& c : report.at("comparisons")) EXPECT_NE(c.at("renderer"), "blender");
+    EXPECT_TRUE(eventually([&] { return processes_mentioning(dir_.string()).empty(); }))
+        << "processes left running";
+  }
+};
+
+TEST_F(Faults, ExitOneIsAFailedRenderNotCached) {
+  fake_blender("echo 'boom' >&2; exit 1");
+  expect_blender_failed(run_study(study(), options("out")), "out", "exited with status 1");
+}
+
+TEST_F(Faults, SegfaultIsAFailedRender) {
+  fake_blender("kill -SEGV $$");
+  expect_blender_failed(run_study(study(), options("out")), "out", "killed by signal 11");
+}
+
+TEST_F(Faults, GarbageImageIsAFailedRender) {
+  fake_blender("printf 'this is no OpenEXR file' > render.exr");
+  expect_blender_failed(run_study(study(), options("out")), "out", "cannot be read");
+}
+
+TEST_F(Faults, NanImageIsNeverCachedAndARerunRendersItAgain) {
+  const std::string nan = rgba_exr("nan.exr", std::numeric_limits<float>::quiet_NaN());
+  fake_blender("cp '" + nan + "' render.exr");
+  expect_blender_failed(run_study(study(), options("out")), "out", "NaN or Inf");
+  // The renderer is fixed: exactly the two failed renders are done again.
+  fake_blender("cp '" + rgba_exr("good.exr", 0.25f) + "' render.exr");
+  const StudyRunStats again = run_study(study(), options("out"));
+  EXPECT_TRUE(again.complete());
+  EXPECT_EQ(again.cached, 2u);
+  EXPECT_EQ(again.rendered, 2u);
+}
+
+TEST_F(Faults, HangingRendererAndItsChildAreKilledAtTheTimeout) {
+  fake_blender("echo $$ > '" + path("fake.pid") + "'; sleep 300 & echo $! > '" + path("child.pid") +
+               "'; sleep 300");
+  expect_blender_failed(run_study(study(), options("out")), "out", "timed out");
+  const int fake = std::stoi(read_text(path("fake.pid")));
+  const int child = std::stoi(read_text(path("child.pid")));
+  EXPECT_TRUE(eventually([&] { return !alive(fake) && !alive(child); }));
+}
+
+TEST_F(Faults, HangingVersionProbeObeysTheTimeout) {
+  fake_blender("exit 1", "echo $$ > '" + path("probe.pid") + "'; sleep 300");
+  const StudyRunStats stats = run_study(study(), options("out"));
+  EXPECT_EQ(stats.failed, 2u);
+  for (const std::string& f : stats.failures)
+    EXPECT_NE(f.find("--version` timed out after 2 s"), std::string::npos) << f;
+  EXPECT_TRUE(eventually([&] { return !alive(std::stoi(read_text(path("probe.pid")))); }));
+  EXPECT_TRUE(eventually([&] { return processes_mentioning(dir_.string()).empty(); }));
+}
+
+TEST_F(Faults, DamagedOrSwappedCacheEntriesAreRenderedAgainWithAWarning) {
+  ::penumbra::Study s = study();
+  s.renderers = {RendererKind::kEvaluator};
+  s.methods.push_back({"chiang2019", json(), "chiang2019"});
+  s.methods.push_back({"estevez2019", json(), "estevez2019"});
+  const StudyRunStats clean = run_study(s, options("out"));
+  ASSERT_TRUE(clean.complete());
+  ASSERT_EQ(clean.rendered, 4u);
+  const std::string report = read_text(path("out/report.json"));
+  std::vector<fs::path> entries;
+  for (const auto& e : fs::directory_iterator(path("out/cache")))
+    if (e.path().extension() == ".exr") entries.push_back(e.path());
+  std::sort(entries.begin(), entries.end());
+  ASSERT_EQ(entries.size(), 4u);
+  // Truncated, emptied, and two valid entries swapped.
+  std::string bytes = read_text(entries[0].string());
+  std::ofstream(entries[0], std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  std::ofstream(entries[1], std::ios::binary | std::ios::trunc);
+  fs::rename(entries[2], path("swap.tmp"));
+  fs::rename(entries[3], entries[2]);
+  fs::rename(path("swap.tmp"), entries[3]);
+  const StudyRunStats repaired = run_study(s, options("out"));
+  EXPECT_TRUE(repaired.complete());
+  EXPECT_EQ(repaired.rendered, 4u);
+  EXPECT_EQ(repaired.cached, 0u);
+  EXPECT_EQ(repaired.warnings.size(), 4u);
+  EXPECT_EQ(read_text(path("out/report.json")), report) << "the repaired report differs";
+  // A flipped byte in the pixel data of a valid entry.
+  bytes = read_text(entries[1].string());
+  bytes[bytes.size() - 40] = static_cast<char>(bytes[bytes.size() - 40] ^ 0x10);
+  std::ofstream(entries[1], std::ios::binary) << bytes;
+  const StudyRunStats flipped = run_study(s, options("out"));
+  EXPECT_EQ(flipped.rendered, 1u);
+  EXPECT_EQ(flipped.warnings.size(), 1u);
+  EXPECT_EQ(read_text(path("out/report.json")), report);
+}
+
+// Starts `penumbra run` on DIR/study.json as a real process, output in DIR/out.
+pid_t start_run(const std::string& dir) {
+  const std::string log = dir + "/run.log", study = dir + "/study.json", out = dir + "/out";
+  const pid_t penumbra = ::fork();
+  if (penumbra == 0) {
+    if (!std::freopen(log.c_str(), "w", stdout) || !std::freopen(log.c_str(), "a", stderr))
+      ::_exit(126);
+    ::execl(PENUMBRA_BINARY, PENUMBRA_BINARY, "run", study.c_str(), "-o", out.c_str(), "--jobs",
+            "1", "--no-figures", "--timeout", "600", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return penumbra;
+}
+
+class SignalledRun : public Faults {
+ protected:
+  // Runs the study with a Blender that hangs (and starts a child that hangs),
+  // sends `signal` to penumbra once the child runs; returns the wait status.
+  int run_and_signal(int signal) {
+    fs::remove_all(path("out"));
+    fs::remove(path("child.pid"));
+    fake_blender("echo $$ > '" + path("fake.pid") + "'; sleep 300 & echo $! > '" +
+                 path("child.pid") + "'; sleep 300");
+    study();  // writes study.json
+    const pid_t penumbra = start_run(dir_.string());
+    EXPECT_GT(penumbra, 0);
+    EXPECT_TRUE(eventually([&] { return fs::exists(path("child.pid")); }, 120.0))
+        << read_text(path("run.log"));
+    ::kill(penumbra, signal);
+    int status = 0;
+    ::waitpid(penumbra, &status, 0);
+    return status;
+  }
+  bool renderer_and_child_dead() const {
+    const int fake = std::stoi(read_text(path("fake.pid")));
+    const int child = std::stoi(read_text(path("child.pid")));
+    return eventually([&] { return !alive(fake) && !alive(child); });
+  }
+};
+
+TEST_F(SignalledRun, CtrlCOrSigtermEndsTheRendererRemovesItsWorkAndExits128PlusSignal) {
+  for (const int signal : {SIGINT, SIGTERM}) {
+    const int status = run_and_signal(signal);
+    ASSERT_TRUE(WIFEXITED(status)) << read_text(path("run.log"));
+    EXPECT_EQ(WEXITSTATUS(status), 128 + signal) << read_text(path("run.log"));
+    EXPECT_NE(read_text(path("run.log")).find("run the same command again to resume"),
+              std::string::npos);
+    EXPECT_TRUE(renderer_and_child_dead());
+    EXPECT_FALSE(fs::exists(path("out/report.json")));
+    for (const auto& e : fs::directory_iterator(path("out/cache")))
+      EXPECT_NE(e.path().filename().string().rfind(".penumbra", 0), 0u)
+          << "left behind: " << e.path();
+  }
+}
+
+TEST_F(SignalledRun, KilledRunLeavesNoRendererAndResumesWhereItStopped) {
+  run_and_signal(SIGKILL);
+  EXPECT_TRUE(renderer_and_child_dead()) << "the renderer outlived a kill -9 of penumbra";
+  bool work_left = false;
+  for (const auto& e : fs::directory_iterator(path("out/cache")))
+    work_left |= e.path().filename().string().rfind(".penumbra-work.", 0) == 0;
+  EXPECT_TRUE(work_left);  // kill -9 leaves it; the next run removes it
+
+  fake_blender("cp '" + rgba_exr("good.exr", 0.25f) + "' render.exr");
+  const StudyRunStats resumed = run_study(study(), options("out"));
+  EXPECT_TRUE(resumed.complete());
+  EXPECT_EQ(resumed.cached, 2u);    // the evaluator's, finished before the kill
+  EXPECT_EQ(resumed.rendered, 2u);  // Blender's, nothing twice
+  EXPECT_GE(resumed.stale_removed, 1u);
+  for (const auto& e : fs::directory_iterator(path("out/cache")))
+    EXPECT_NE(e.path().filename().string().rfind(".penumbra", 0), 0u) << e.path();
+  const StudyRunStats clean = run_study(study(), options("clean"));
+  EXPECT_EQ(read_text(path("clean/report.json")), read_text(path("out/report.json")));
+}
+
+}  // namespace
+}  // namespace penumbra
