@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <sstream>
 #include <string>
@@ -213,12 +214,24 @@ std::vector<json> base_scenes() {
 
 class Fuzz : public TempDirTest {};
 
+// The class of a rejection, for the tally the test prints.
+std::string reason_of(const std::string& error) {
+  for (const char* reason :
+       {"nested deeper", "duplicate key", "NUL byte", "number overflow", "--max-memory",
+        "unknown key", "not valid JSON", "expected a number", "expected 3 numbers",
+        "expected an integer", "expected one of", "expected an object", "missing required key",
+        "expected a string", "expected an array"})
+    if (error.find(reason) != std::string::npos) return reason;
+  return "other";
+}
+
 TEST_F(Fuzz, SceneMutantsRenderOrAreRejectedWithFileAndPointer) {
   const std::vector<json> bases = base_scenes();
   ASSERT_GE(bases.size(), 10u);
   Mutator mutator(20261123);
   const int kMutants = 5000;
   int rendered = 0, rejected = 0;
+  std::map<std::string, int> reasons;
   const std::string mutant = path("mutant.json"), output = path("out.exr");
   for (int m = 0; m < kMutants; ++m) {
     const std::string text = mutator.mutate(bases[static_cast<std::size_t>(m) % bases.size()]);
@@ -237,6 +250,7 @@ TEST_F(Fuzz, SceneMutantsRenderOrAreRejectedWithFileAndPointer) {
     } else {
       ++rejected;
       expect_bad_input_message(o, mutant, what);
+      ++reasons[reason_of(o.err)];
     }
     EXPECT_EQ(files_in(dir_), (std::vector<std::string>{"last-mutant.txt", "mutant.json"}))
         << what << ": something was left behind";
@@ -247,6 +261,7 @@ TEST_F(Fuzz, SceneMutantsRenderOrAreRejectedWithFileAndPointer) {
   RecordProperty("rejected", rejected);
   std::cout << "scene mutants: " << kMutants << ", rendered " << rendered << ", rejected "
             << rejected << "\n";
+  for (const auto& [reason, count] : reasons) std::cout << "  " << count << " " << reason << "\n";
   // The mutator must exercise both sides, or it tests nothing.
   EXPECT_GT(rendered, kMutants / 20);
   EXPECT_GT(rejected, kMutants / 4);

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <set>
@@ -262,17 +263,21 @@ Study load_study(const std::string& path) {
         fmt::format("expected {}, got {}", kStudyFormatVersion, describe_json(version)));
   Study s;
   s.file = path;
-  s.name = fs::path(path).stem().string();
   if (doc.contains("name")) {
     if (!doc["name"].is_string()) throw InputError(f, "/name", "expected a string");
     s.name = doc["name"].get<std::string>();
+    // The name becomes the default output folder results/NAME: a plain name only.
+    if (!plain_name(s.name))
+      throw InputError(f, "/name",
+                       fmt::format("expected a study name of 1 to 100 letters, digits, '-', '_' "
+                                   "or '.' (not starting with '.'), got \"{}\"",
+                                   s.name));
+  } else {  // the file's stem, made plain
+    s.name = fs::path(path).stem().string().substr(0, 100);
+    for (char& c : s.name)
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
+    if (s.name.empty() || s.name[0] == '.') s.name = "study" + s.name;
   }
-  // The name becomes the default output folder results/NAME: a plain name only.
-  if (!plain_name(s.name))
-    throw InputError(f, doc.contains("name") ? "/name" : "",
-                     fmt::format("expected a study name of 1 to 100 letters, digits, '-', '_' or "
-                                 "'.' (not starting with '.'), got \"{}\"",
-                                 s.name));
   const fs::path base = fs::path(path).parent_path();
   if (doc.contains("lowpoly")) s.lowpoly = read_lowpoly(doc["lowpoly"], f, base);
   // A study is a bump study, a low-poly study, or both.
@@ -771,6 +776,12 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     else
       todo.push_back(i);
   }
+  // The cache must hold what is to be rendered (uncompressed EXR sizes).
+  ResourceEstimate needed;
+  for (std::size_t i : todo)
+    needed.output_bytes += estimate_resources(jobs[i].renderer, jobs[i].scene).output_bytes;
+  check_resources(needed, std::numeric_limits<double>::infinity(), study.file,
+                  (out / "cache").string());
   std::mutex mutex;
   std::size_t finished = 0;
   long started_new = 0;
