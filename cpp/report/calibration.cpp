@@ -13,6 +13,7 @@
 #include "render/image_io.h"
 #include "renderers/parallel.h"
 #include "scene/scene_json.h"
+#include "util/files.h"
 
 namespace penumbra {
 namespace fs = std::filesystem;
@@ -120,6 +121,7 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
   if (ec || !fs::is_directory(renders_dir))
     throw OutputError(
         fmt::format("{}: cannot create the folder: {}", renders_dir.string(), ec.message()));
+  remove_stale_temporaries(renders_dir.string());  // left by a killed earlier calibration
   std::vector<Override> overrides;
   for (const std::string& s : options.sets) overrides.push_back(parse_override(s));
 
