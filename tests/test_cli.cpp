@@ -75,7 +75,60 @@ TEST_F(Cli, RenderWritesExrWithAnalysisChannelsAndPreview) {
   for (const char* c : {"R", "G", "B", "A", "analysis.theta", "analysis.deviation", "analysis.G"})
     EXPECT_GE(image.channel_index(c), 0) << c;
   EXPECT_TRUE(fs::exists(path("out.png")));
+  // The preview is over black, as documented: no alpha channel.
+  EXPECT_EQ(read_image(path("out.png")).channels.size(), 3u);
   expect_only({"out.exr", "out.png"});
+}
+
+TEST_F(Cli, GlobalOptionsWorkAfterTheSubcommand) {
+  const Result r = run({"render", kScenes + "/sphere-grating.json", "-o", path("out.exr"),
+                        "--width", "8", "--height", "8", "--threads", "1"});
+  EXPECT_EQ(r.code, kExitOk) << r.err;
+}
+
+TEST_F(Cli, UnknownSubcommandIsNamedWithTheValidOnes) {
+  const Result r = run({"rendr", "x.json"});
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.err.find("unknown subcommand \"rendr\" (expected one of: methods, render, export"),
+            std::string::npos)
+      << r.err;
+}
+
+TEST_F(Cli, EveryHelpListsEveryExitCode) {
+  for (const char* command : {"render", "export", "compare", "calibrate", "run", "contour"}) {
+    const Result r = run({command, "--help"});
+    EXPECT_EQ(r.code, kExitOk) << command;
+    for (const char* code : {"0 success", "1 a run failed", "2 bad input", "3 a comparison",
+                             "128+N stopped by signal"})
+      EXPECT_NE(r.out.find(code), std::string::npos) << command << " --help lacks " << code;
+  }
+}
+
+TEST_F(Cli, RendererRefusesAMethodItDoesNotShipBeforeRunning) {
+  const Result r = run({"render", kScenes + "/sphere-grating.json", "-o", path("out.exr"),
+                        "--renderer", "povray", "--method", "chiang2019"});
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.err.find("povray does not offer the method \"chiang2019\""), std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("running"), std::string::npos) << r.err;
+  expect_only({});  // not even a log
+}
+
+TEST_F(Cli, ExportTakesTheRenderShortcuts) {
+  const Result r = run({"export", "--to", "povray", kScenes + "/sphere-grating.json", "-o",
+                        path("pov"), "--width", "24", "--height", "20"});
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  EXPECT_NE(r.out.find("down to 24x20"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, CompareTextShowsSsimLikeTheJson) {
+  ASSERT_EQ(run({"render", kScenes + "/sphere-grating.json", "-o", path("a.exr"), "--width", "16",
+                 "--height", "16"})
+                .code,
+            kExitOk);
+  const Result text = run({"compare", path("a.exr"), path("a.exr")});
+  EXPECT_EQ(text.code, kExitOk) << text.err;
+  EXPECT_NE(text.out.find("SSIM"), std::string::npos) << text.out;
 }
 
 TEST_F(Cli, BadSceneExitsTwoWithOneLineAndNoOutput) {

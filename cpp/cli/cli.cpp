@@ -97,16 +97,53 @@ void check_extension(const std::string& path, const char* extension, const char*
                                  path, extension, ext));
 }
 
+// Refuses, before anything runs, a method or offset the renderer does not ship
+// (the exporters refuse them too, but only after the mesh is built).
+void check_offered(RendererKind renderer, const Scene& scene) {
+  const auto methods = methods_offered(to_string(renderer), scene.representation);
+  const TerminatorMethod method = scene.terminator.method.method;
+  if (std::find(methods.begin(), methods.end(), method) == methods.end()) {
+    std::string ids;
+    for (TerminatorMethod m : methods)
+      ids += (ids.empty() ? "" : ", ") + std::string(method_info(m).id);
+    throw ExportError(fmt::format(
+        "{} does not offer the method \"{}\" for the {} representation "
+        "(it offers: {})",
+        to_string(renderer), method_info(method).id, to_string(scene.representation), ids));
+  }
+  const auto offsets = offsets_offered(to_string(renderer));
+  if (std::find(offsets.begin(), offsets.end(), scene.offset.method) == offsets.end())
+    throw ExportError(fmt::format("{} does not offer the shadow-ray offset \"{}\"",
+                                  to_string(renderer), offset_method_info(scene.offset.method).id));
+}
+
+// Scene shortcuts shared by render and export: each is --set on one pointer.
+struct SceneArgs {
+  std::string method, offset, representation;
+  int segments = 0, width = 0, height = 0, spp = 0;
+  std::vector<std::string> sets;
+};
+
+void add_scene_options(CLI::App* cmd, SceneArgs& a) {
+  cmd->add_option("--method", a.method, "terminator method id (see `penumbra methods`)");
+  cmd->add_option("--offset", a.offset,
+                  "shadow-ray origin method of a low-poly mesh (see `penumbra methods`)");
+  cmd->add_option("--segments", a.segments,
+                  "tessellate the shape: segments around the axis "
+                  "(sets /shape/tessellation/segments)")
+      ->check(CLI::Range(3, 65536));
+  cmd->add_option("--representation", a.representation, "smooth, bump or displacement");
+  cmd->add_option("--width", a.width, "image width in pixels")->check(CLI::PositiveNumber);
+  cmd->add_option("--height", a.height, "image height in pixels")->check(CLI::PositiveNumber);
+  cmd->add_option("--spp", a.spp, "samples per pixel")->check(CLI::PositiveNumber);
+  cmd->add_option("--set", a.sets, "override a scene value: /json/pointer=VALUE (repeatable)");
+}
+
 struct RenderArgs {
   std::string scene;
   std::string output;
   std::string preview;
-  std::string method;
-  std::string offset;
-  int segments = 0;
-  std::string representation;
-  int width = 0, height = 0, spp = 0;
-  std::vector<std::string> sets;
+  SceneArgs scene_args;
   bool quiet = false;
   std::string renderer = "evaluator";
   double timeout = 600.0;
@@ -124,7 +161,7 @@ struct ExportArgs {
   std::string to;
   std::string scene;
   std::string output;
-  std::vector<std::string> sets;
+  SceneArgs scene_args;
 };
 
 std::string parameter_domain(const MethodParameter& p) {
@@ -191,7 +228,7 @@ int command_methods(bool as_json, std::ostream& out) {
   return kExitOk;
 }
 
-std::vector<Override> collect_overrides(const RenderArgs& a) {
+std::vector<Override> collect_overrides(const SceneArgs& a) {
   std::vector<Override> overrides;
   if (!a.method.empty()) overrides.push_back({"/terminator/method", a.method});
   if (!a.offset.empty()) overrides.push_back({"/offset/method", a.offset});
@@ -233,7 +270,7 @@ int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
   if (!renderer)
     throw UsageError(
         fmt::format("--renderer: expected evaluator, povray or blender, got \"{}\"", a.renderer));
-  const std::vector<Override> overrides = collect_overrides(a);
+  const std::vector<Override> overrides = collect_overrides(a.scene_args);
   json document = read_json_file(a.scene);
   const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
   apply_overrides(document, overrides, origin);
@@ -257,6 +294,7 @@ int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
     if (g_interrupted.load()) throw RenderCancelled("interrupted");
     progress(f);
   };
+  if (*renderer != RendererKind::kEvaluator) check_offered(*renderer, scene);
   if (*renderer != RendererKind::kEvaluator && !a.quiet)
     err << fmt::format("running {} (log {}) ...\n", to_string(*renderer), settings.log_path);
   const RendererRun run = render_with(*renderer, scene, settings);
@@ -297,8 +335,7 @@ int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
 }
 
 int command_export(const ExportArgs& a, std::ostream& out) {
-  std::vector<Override> overrides;
-  for (const std::string& s : a.sets) overrides.push_back(parse_override(s));
+  const std::vector<Override> overrides = collect_overrides(a.scene_args);
   json document = read_json_file(a.scene);
   const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
   apply_overrides(document, overrides, origin);
@@ -421,6 +458,7 @@ int command_compare(const CompareArgs& a, std::ostream& out) {
     out << fmt::format("  RMSE                          {:.6g} W m^-2 sr^-1\n", im.rmse);
     out << fmt::format("  max error                     {:.6g} W m^-2 sr^-1\n", im.max_error);
     out << fmt::format("  mean error (test-reference)   {:+.6g} W m^-2 sr^-1\n", im.mean_error);
+    out << fmt::format("  SSIM (Gaussian 11x11)         {:.6f}\n", im.ssim);
     out << fmt::format("  NaN/Inf values                {}\n", im.nonfinite);
     if (over)
       out << fmt::format("FAIL: profile RMSE {:.6f} above --max-profile-rmse {}\n", pm.rmse_overall,
@@ -638,15 +676,34 @@ int command_bench(int size, int spp, std::ostream& out) {
 
 }  // namespace
 
+// Unlike idiff, whose exit 2 is a failed comparison, Penumbra's 2 is bad input
+// and 3 a failed comparison, so that scripts can tell the two apart.
+constexpr const char* kExitCodes =
+    "Exit status: 0 success; 1 a run failed (renderer or internal error, NaN or Inf in a "
+    "render); 2 bad input (usage, scene or study file, output path, a render over --max-memory); "
+    "3 a comparison missed its bound or an image holds NaN/Inf (compare, calibrate); 128+N "
+    "stopped by signal N (130 Ctrl-C, 143 SIGTERM), nothing half-written.";
+
+// "penumbra rendr": name the unknown subcommand and list the real ones
+// (CLI11 only says the argument was not expected).
+std::optional<std::string> unknown_subcommand(CLI::App& app, int argc, const char* const* argv) {
+  if (argc < 2 || argv[1][0] == '-') return std::nullopt;
+  std::string names;
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    if (sub->get_name() == argv[1]) return std::nullopt;
+    names += (names.empty() ? "" : ", ") + sub->get_name();
+  }
+  return fmt::format("unknown subcommand \"{}\" (expected one of: {})", printable(argv[1], 60),
+                     names);
+}
+
 int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
   CLI::App app{"Penumbra: shadow-terminator laboratory (reference evaluator)", "penumbra"};
   app.require_subcommand(1);
   app.set_version_flag("--version", kPenumbraVersion);
-  app.footer(
-      "Exit status: 0 success; 1 a run failed (renderer or internal error, NaN or Inf in a "
-      "render); 2 bad input (usage, scene or study file, output path, a render over "
-      "--max-memory); 3 a comparison missed its bound or an image holds NaN/Inf (compare, "
-      "calibrate); 128+N stopped by signal N (130 Ctrl-C, 143 SIGTERM), nothing half-written.");
+  app.footer(kExitCodes);
+  // Global options (--threads) are accepted after the subcommand too.
+  app.fallthrough();
   int threads = 0;
   app.add_option("--threads", threads, "worker threads (default: all cores)")
       ->check(CLI::Range(1, 1024));
@@ -656,25 +713,12 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   methods->add_flag("--json", methods_json, "print a JSON array");
 
   RenderArgs r;
-  CLI::App* render_cmd = app.add_subcommand("render", "render a scene with the evaluator");
+  CLI::App* render_cmd = app.add_subcommand(
+      "render", "render a scene with the evaluator, POV-Ray or Blender Cycles (--renderer)");
   render_cmd->add_option("scene", r.scene, "scene JSON file")->required();
   render_cmd->add_option("-o,--output", r.output, "output OpenEXR file")->required();
   render_cmd->add_option("--preview", r.preview, "also write an sRGB PNG preview");
-  render_cmd->add_option("--method", r.method, "terminator method id (see `penumbra methods`)");
-  render_cmd->add_option("--offset", r.offset,
-                         "shadow-ray origin method of a low-poly mesh (see `penumbra methods`)");
-  render_cmd
-      ->add_option("--segments", r.segments,
-                   "tessellate the shape: segments around the axis "
-                   "(sets /shape/tessellation/segments)")
-      ->check(CLI::Range(3, 65536));
-  render_cmd->add_option("--representation", r.representation, "smooth, bump or displacement");
-  render_cmd->add_option("--width", r.width, "image width in pixels")->check(CLI::PositiveNumber);
-  render_cmd->add_option("--height", r.height, "image height in pixels")
-      ->check(CLI::PositiveNumber);
-  render_cmd->add_option("--spp", r.spp, "samples per pixel")->check(CLI::PositiveNumber);
-  render_cmd->add_option("--set", r.sets,
-                         "override a scene value: /json/pointer=VALUE (repeatable)");
+  add_scene_options(render_cmd, r.scene_args);
   render_cmd->add_flag("-q,--quiet", r.quiet, "no progress or summary");
 
   render_cmd->add_option("--renderer", r.renderer, "evaluator (default), povray or blender");
@@ -694,7 +738,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       ->check(CLI::IsMember({"povray", "blender"}));
   export_cmd->add_option("scene", x.scene, "scene JSON file")->required();
   export_cmd->add_option("-o,--output", x.output, "output folder")->required();
-  export_cmd->add_option("--set", x.sets, "override a scene value: /json/pointer=VALUE");
+  add_scene_options(export_cmd, x.scene_args);
 
   CompareArgs c;
   CLI::App* compare_cmd = app.add_subcommand(
@@ -773,6 +817,11 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   bench->add_option("--size", bench_size, "image size in pixels")->check(CLI::Range(16, 4096));
   bench->add_option("--spp", bench_spp, "samples per pixel")->check(CLI::Range(1, 1024));
 
+  for (CLI::App* sub : app.get_subcommands({})) sub->footer(kExitCodes);
+  if (const auto unknown = unknown_subcommand(app, argc, argv)) {
+    err << "penumbra: error: " << *unknown << " (see penumbra --help)\n";
+    return kExitBadInput;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

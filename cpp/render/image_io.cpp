@@ -99,9 +99,10 @@ void write_preview_png(const Image& image, const std::string& path) {
                        OIIO::TypeDesc::FLOAT);
   spec.channelnames = image.channels;
   OIIO::ImageBuf source(spec, const_cast<float*>(image.pixels.data()));
-  const int rgba[] = {0, 1, 2, 3};
-  OIIO::ImageBuf linear = OIIO::ImageBufAlgo::channels(source, 4, rgba);
-  // The preview is composited over black, so premultiplied RGB is what shows.
+  const int rgb[] = {0, 1, 2};
+  // Composited over black: premultiplied RGB is exactly that, and the PNG
+  // carries no alpha (a viewer would otherwise show a transparent background).
+  OIIO::ImageBuf linear = OIIO::ImageBufAlgo::channels(source, 3, rgb);
   OIIO::ImageBuf encoded = OIIO::ImageBufAlgo::colorconvert(linear, "linear", "sRGB", false);
   if (encoded.has_error())
     throw std::runtime_error(

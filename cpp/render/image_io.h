@@ -25,7 +25,8 @@ void check_writable(const std::string& path);
 // Linear 32-bit float OpenEXR, ZIP compressed, with string metadata.
 void write_exr(const Image& image, const std::string& path,
                const std::vector<std::pair<std::string, std::string>>& metadata = {});
-// 8-bit sRGB PNG of R, G, B, A for a person to look at (values clamped to [0,1]).
+// 8-bit sRGB PNG of R, G, B over black (no alpha) for a person to look at
+// (values clamped to [0,1]).
 void write_preview_png(const Image& image, const std::string& path);
 // An 8-bit RGB PNG of display values (no colour conversion), row-major from the top.
 void write_png_rgb8(const std::string& path, int width, int height,
