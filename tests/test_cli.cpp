@@ -131,6 +131,40 @@ TEST_F(Cli, CompareTextShowsSsimLikeTheJson) {
   EXPECT_NE(text.out.find("SSIM"), std::string::npos) << text.out;
 }
 
+TEST_F(Cli, CompareWritesTheDifferenceAndWarnsAboutDifferentScenes) {
+  for (const char* scene : {"sphere-grating", "cylinder-grating"})
+    ASSERT_EQ(
+        run({"render", kScenes + "/" + scene + ".json", "-o", path(std::string(scene) + ".exr"),
+             "--width", "16", "--height", "16", "--spp", "1"})
+            .code,
+        kExitOk);
+  const Result r = run({"compare", path("sphere-grating.exr"), path("cylinder-grating.exr"), "-o",
+                        path("diff.exr")});
+  EXPECT_EQ(r.code, kExitOk) << r.err;
+  EXPECT_NE(r.err.find("show different scenes"), std::string::npos) << r.err;
+  const Image a = read_image(path("sphere-grating.exr")),
+              b = read_image(path("cylinder-grating.exr"));
+  const Image d = read_image(path("diff.exr"));
+  ASSERT_EQ(d.width, 16);
+  const int r_d = d.channel_index("R"), r_a = a.channel_index("R"), r_b = b.channel_index("R");
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x)
+      EXPECT_FLOAT_EQ(d.at(x, y, r_d), b.at(x, y, r_b) - a.at(x, y, r_a));
+  // The same scene: no warning.
+  const Result same = run({"compare", path("sphere-grating.exr"), path("sphere-grating.exr")});
+  EXPECT_EQ(same.err.find("warning"), std::string::npos) << same.err;
+}
+
+TEST_F(Cli, CompareNamesTheImageThatLacksAChannel) {
+  ASSERT_EQ(run({"render", kScenes + "/sphere-grating.json", "-o", path("a.exr"), "--width", "8",
+                 "--height", "8", "--preview", path("p.png")})
+                .code,
+            kExitOk);
+  const Result r = run({"compare", path("a.exr"), path("p.png")});
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.err.find(path("p.png") + ": no A channel"), std::string::npos) << r.err;
+}
+
 TEST_F(Cli, BadSceneExitsTwoWithOneLineAndNoOutput) {
   std::ofstream(path("bad.json")) << R"({"version": 1, "camera": {}})";
   const Result r = run({"render", path("bad.json"), "-o", path("out.exr")});

@@ -18,6 +18,7 @@
 #include <thread>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <CLI/CLI.hpp>
@@ -152,6 +153,7 @@ struct RenderArgs {
 
 struct CompareArgs {
   std::string reference, test;
+  std::string difference;  // -o: the difference image
   bool json = false;
   double scale = 0.0;
   double max_rmse = -1.0;
@@ -388,7 +390,7 @@ Image with_channels_of(const Image& image, const Image& geometry) {
   const char* names[4] = {"R", "G", "B", "A"};
   for (int c = 0; c < 4; ++c) {
     const int from = image.channel_index(names[c]);
-    if (from < 0) throw UsageError(fmt::format("an image has no {} channel", names[c]));
+    if (from < 0) throw UsageError(fmt::format("the test image has no {} channel", names[c]));
     for (int y = 0; y < out.height; ++y)
       for (int x = 0; x < out.width; ++x)
         out.pixels[(std::size_t(y) * out.width + x) * nc + c] = image.at(x, y, from);
@@ -406,9 +408,65 @@ double radiance_scale_of(const std::string& path) {
   return radiance_scale(scene);
 }
 
-int command_compare(const CompareArgs& a, std::ostream& out) {
+void require_rgba(const Image& image, const std::string& path) {
+  for (const char* name : {"R", "G", "B", "A"})
+    if (image.channel_index(name) < 0)
+      throw UsageError(fmt::format("{}: no {} channel (compare needs R, G, B and A; it has {})",
+                                   path, name, fmt::join(image.channels, ", ")));
+}
+
+// What must match for two renders to be comparable: the same camera, light,
+// shape and height function (representation and method may differ). Returns
+// the first differing pointer, or "" when they match or either lacks metadata.
+std::string scene_difference(const std::string& reference, const std::string& test) {
+  const std::string a = read_image_attribute(reference, "penumbra:scene");
+  const std::string b = read_image_attribute(test, "penumbra:scene");
+  if (a.empty() || b.empty()) return "";
+  auto comparable = [](const json& scene) {
+    json out = json::object();
+    for (const char* key : {"camera", "light", "shape", "height"})
+      if (scene.contains(key)) out[key] = scene[key];
+    if (out.contains("shape")) out["shape"].erase("tessellation");
+    return out;
+  };
+  const json diff = json::diff(comparable(parse_json_text(a, reference + " (penumbra:scene)")),
+                               comparable(parse_json_text(b, test + " (penumbra:scene)")));
+  return diff.empty() ? "" : diff[0].at("path").get<std::string>();
+}
+
+// R, G, B: test - reference (W m^-2 sr^-1); A: the smaller coverage.
+Image difference_image(const Image& test, const Image& reference) {
+  Image out;
+  out.width = test.width, out.height = test.height;
+  out.channels = {"R", "G", "B", "A"};
+  out.pixels.resize(std::size_t(out.width) * out.height * 4);
+  int t[4], r[4];
+  const char* names[4] = {"R", "G", "B", "A"};
+  for (int c = 0; c < 4; ++c)
+    t[c] = test.channel_index(names[c]), r[c] = reference.channel_index(names[c]);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x) {
+      float* p = &out.pixels[(std::size_t(y) * out.width + x) * 4];
+      for (int c = 0; c < 3; ++c) p[c] = test.at(x, y, t[c]) - reference.at(x, y, r[c]);
+      p[3] = std::min(test.at(x, y, t[3]), reference.at(x, y, r[3]));
+    }
+  return out;
+}
+
+int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err) {
+  if (!a.difference.empty()) {
+    check_extension(a.difference, ".exr", "-o");
+    check_writable(a.difference);
+  }
   const Image reference = read_image_checked(a.reference);
   const Image test = read_image_checked(a.test);
+  require_rgba(reference, a.reference);
+  require_rgba(test, a.test);
+  if (const std::string where = scene_difference(a.reference, a.test); !where.empty())
+    err << fmt::format(
+        "penumbra: warning: {} and {} show different scenes (penumbra:scene differs at {}); the "
+        "metrics compare unrelated images\n",
+        a.reference, a.test, where);
   const double scale = a.scale > 0.0 ? a.scale : radiance_scale_of(a.reference);
   if (reference.width != test.width || reference.height != test.height)
     throw UsageError(fmt::format("{} is {}x{} but {} is {}x{}", a.reference, reference.width,
@@ -426,6 +484,10 @@ int command_compare(const CompareArgs& a, std::ostream& out) {
   const ImageMetrics im = compare_images(test, reference);
   const bool nonfinite = im.nonfinite > 0;
   const bool over = a.max_rmse >= 0.0 && !(pm.rmse_overall <= a.max_rmse);
+  if (!a.difference.empty())
+    write_exr(difference_image(test, reference), a.difference,
+              {{"penumbra:difference", a.test + " - " + a.reference},
+               {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
   if (a.json) {
     out << json{{"reference", a.reference},
                 {"test", a.test},
@@ -747,6 +809,9 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       ->required();
   compare_cmd->add_option("test", c.test, "EXR to compare")->required();
   compare_cmd->add_flag("--json", c.json, "print JSON");
+  compare_cmd->add_option("-o,--output", c.difference,
+                          "write the difference image (test - reference, R G B; A the smaller "
+                          "coverage) as OpenEXR");
   compare_cmd
       ->add_option("--scale", c.scale,
                    "albedo*E/pi in W m^-2 sr^-1 (default: from the reference's metadata)")
@@ -838,7 +903,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     if (*methods) return command_methods(methods_json, out);
     if (*render_cmd) return command_render(r, out, err);
     if (*export_cmd) return command_export(x, out);
-    if (*compare_cmd) return command_compare(c, out);
+    if (*compare_cmd) return command_compare(c, out, err);
     if (*calibrate_cmd) return command_calibrate(cal, cal_quiet, out, err);
     if (*run_cmd) return command_run(run_args, out, err);
     if (*contour_cmd) return command_contour(contour_methods, contour_step, contour_output, out);
