@@ -62,6 +62,11 @@ extern "C" void end_group_on_parent_death(int) {
 [[noreturn]] void guard_process(char* const* args, const char* cwd, int log, int status_fd,
                                 pid_t penumbra) {
   ::setpgid(0, 0);
+  // A thread's blocked signals survive fork and exec: start with none blocked,
+  // so that the death signal and the renderer's SIGTERM arrive.
+  sigset_t none;
+  ::sigemptyset(&none);
+  ::sigprocmask(SIG_SETMASK, &none, nullptr);
   struct sigaction action {};
   action.sa_handler = end_group_on_parent_death;
   ::sigemptyset(&action.sa_mask);
