@@ -602,7 +602,7 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
     };
     o.log = [&](const std::string& line) {
       if (line.find("FAILED") != std::string::npos || line.find("renders:") != std::string::npos ||
-          line.find("WARNING") != std::string::npos) {
+          line.find("WARNING") != std::string::npos || line.rfind("figures:", 0) == 0) {
         std::lock_guard<std::mutex> lock(mutex);
         err << "\r" << line << "\n" << std::flush;
       }

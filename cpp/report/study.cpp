@@ -1137,8 +1137,9 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   };
   json per_scene = json::array();
   std::vector<std::string> scene_names;
-  for (const Variant& v : variants)
-    if (std::find(scene_names.begin(), scene_names.end(), v.scene) == scene_names.end())
+  for (const Variant& v : variants)  // the bump section's scenes: low-poly ones have no methods
+    if (!v.lowpoly &&
+        std::find(scene_names.begin(), scene_names.end(), v.scene) == scene_names.end())
       scene_names.push_back(v.scene);
   for (const std::string& s : scene_names)
     per_scene.push_back({{"scene", s}, {"methods", rank(s)}});
@@ -1211,6 +1212,11 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   write_text_file((out / "metrics.csv").string(), csv);
 
   if (options.figures) {
+    if (options.log)
+      options.log(
+          fmt::format("figures: drawing the figures and report.html (harness/report.py, "
+                      "log {}) ...",
+                      (out / "report.log").string()));
     run_plot_script({"report", fs::absolute(out).string()}, (out / "report.log").string(),
                     options.python, options.timeout_s);
     stats.report_html = (out / "report.html").string();
