@@ -38,17 +38,6 @@ RTCRay to_embree(const Ray& ray, double t_min, double t_max) {
   r.tnear = static_cast<float>(t_min);
   r.tfar = static_cast<float>(std::min(t_max, double(std::numeric_limits<float>::max())));
   r.mask = ~0u;
-  // Embree aborts the process on a ray it considers invalid; the scene reader
-  // bounds every input, and this turns anything that still slips through
-  // into an error instead.
-  const bool finite = std::isfinite(r.org_x) && std::isfinite(r.org_y) && std::isfinite(r.org_z) &&
-                      std::isfinite(r.dir_x) && std::isfinite(r.dir_y) && std::isfinite(r.dir_z) &&
-                      std::isfinite(r.tnear) && r.tnear >= 0.0f && !std::isnan(r.tfar);
-  if (!finite)
-    throw std::runtime_error(fmt::format(
-        "a ray that is not finite in float (origin {} {} {}, direction {} {} {}, tnear {}): the "
-        "scene's values are out of range",
-        r.org_x, r.org_y, r.org_z, r.dir_x, r.dir_y, r.dir_z, r.tnear));
   return r;
 }
 
@@ -76,6 +65,15 @@ EmbreeMesh::EmbreeMesh(const TriangleMesh& mesh) : impl_(std::make_unique<Impl>(
     rtcReleaseGeometry(geometry);
     throw std::runtime_error(
         fmt::format("Embree: cannot allocate the buffers of {} triangles", mesh.triangle_count()));
+  }
+  // Embree aborts the process on non-finite geometry; the scene reader bounds
+  // every input, and this turns anything that still slips through into an
+  // error, once per mesh rather than per ray.
+  if (!std::all_of(mesh.positions.begin(), mesh.positions.end(),
+                   [](float v) { return std::isfinite(v); })) {
+    rtcReleaseGeometry(geometry);
+    throw std::runtime_error(
+        "Embree: a mesh vertex is not finite in float (scene values out of range)");
   }
   std::copy(mesh.positions.begin(), mesh.positions.end(), positions);
   std::copy(mesh.triangles.begin(), mesh.triangles.end(), indices);

@@ -68,11 +68,20 @@ long long strict_integer(const json& v, long long lo, long long hi) {
   return i >= lo && i <= hi ? i : -1;
 }
 
+bool plain_char(char c) {
+  return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.';
+}
+
 bool plain_name(const std::string& name) {
   if (name.empty() || name.size() > 100 || name[0] == '.') return false;
-  return std::all_of(name.begin(), name.end(), [](char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.';
-  });
+  return std::all_of(name.begin(), name.end(), plain_char);
+}
+
+// Labels carry method parameters ("shading-offset(s=0.3)"): keep file names plain.
+std::string file_safe(const std::string& label) {
+  std::string out;
+  for (char c : label) out += plain_char(c) ? c : '_';
+  return out;
 }
 
 std::string method_label(const std::string& id, const json& parameters) {
@@ -246,6 +255,60 @@ LowPolyPart read_lowpoly(const json& doc, const std::string& f, const fs::path& 
   return part;
 }
 
+// Plots: a metric over two different axes of the study.
+std::vector<StudyPlot> read_plots(const json& plots, const std::string& f,
+                                  const std::vector<StudyAxis>& axes) {
+  if (!plots.is_array()) throw InputError(f, "/plots", "expected an array");
+  std::vector<StudyPlot> out;
+  for (std::size_t i = 0; i < plots.size(); ++i) {
+    const std::string p = fmt::format("/plots/{}", i);
+    if (!plots[i].is_object()) throw InputError(f, p, "expected an object");
+    reject_unknown(plots[i], {"metric", "x", "y", "kind", "renderer"}, f, p);
+    StudyPlot plot;
+    const json& metric = require(plots[i], "metric", f, p);
+    static const std::set<std::string> metrics{"profile.rmse_terminator",
+                                               "profile.rmse_overall",
+                                               "profile.max_error_terminator",
+                                               "profile.max_step",
+                                               "profile.position_error_deg",
+                                               "profile.width_deg",
+                                               "profile.lit_bias",
+                                               "image.rmse",
+                                               "image.ssim",
+                                               "image.max_error"};
+    if (!metric.is_string() || !metrics.count(metric.get<std::string>())) {
+      std::string names;
+      for (const std::string& m : metrics) names += (names.empty() ? "" : ", ") + m;
+      throw InputError(f, p + "/metric", "expected one of " + names);
+    }
+    plot.metric = metric.get<std::string>();
+    auto axis_index = [&](const char* key) {
+      const json& v = require(plots[i], key, f, p);
+      for (std::size_t a = 0; a < axes.size(); ++a)
+        if (v.is_string() && v.get<std::string>() == axes[a].pointer) return static_cast<int>(a);
+      throw InputError(f, child(p, key), "expected the pointer of one of the study's axes");
+    };
+    plot.x = axis_index("x");
+    plot.y = axis_index("y");
+    if (plot.x == plot.y)
+      throw InputError(f, p + "/y", "expected an axis other than x (a plot needs two axes)");
+    if (plots[i].contains("kind")) {
+      const json& k = plots[i]["kind"];
+      if (!k.is_string() || (k != "contour" && k != "heatmap"))
+        throw InputError(f, p + "/kind", "expected \"contour\" or \"heatmap\"");
+      plot.kind = k.get<std::string>();
+    }
+    if (plots[i].contains("renderer")) {
+      const json& r = plots[i]["renderer"];
+      if (!r.is_string() || !renderer_from_id(r.get<std::string>()))
+        throw InputError(f, p + "/renderer", "expected \"evaluator\", \"povray\" or \"blender\"");
+      plot.renderer = r.get<std::string>();
+    }
+    out.push_back(plot);
+  }
+  return out;
+}
+
 }  // namespace
 
 Study load_study(const std::string& path) {
@@ -273,9 +336,7 @@ Study load_study(const std::string& path) {
                                    "or '.' (not starting with '.'), got \"{}\"",
                                    s.name));
   } else {  // the file's stem, made plain
-    s.name = fs::path(path).stem().string().substr(0, 100);
-    for (char& c : s.name)
-      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
+    s.name = file_safe(fs::path(path).stem().string().substr(0, 100));
     if (s.name.empty() || s.name[0] == '.') s.name = "study" + s.name;
   }
   const fs::path base = fs::path(path).parent_path();
@@ -294,57 +355,7 @@ Study load_study(const std::string& path) {
           "expected an integer in [1, 65536], got " + describe_json(doc["blender_spp"]));
     s.blender_spp = static_cast<int>(spp);
   }
-  if (doc.contains("plots")) {
-    const json& plots = doc["plots"];
-    if (!plots.is_array()) throw InputError(f, "/plots", "expected an array");
-    for (std::size_t i = 0; i < plots.size(); ++i) {
-      const std::string p = fmt::format("/plots/{}", i);
-      if (!plots[i].is_object()) throw InputError(f, p, "expected an object");
-      reject_unknown(plots[i], {"metric", "x", "y", "kind", "renderer"}, f, p);
-      StudyPlot plot;
-      const json& metric = require(plots[i], "metric", f, p);
-      static const std::set<std::string> metrics{"profile.rmse_terminator",
-                                                 "profile.rmse_overall",
-                                                 "profile.max_error_terminator",
-                                                 "profile.max_step",
-                                                 "profile.position_error_deg",
-                                                 "profile.width_deg",
-                                                 "profile.lit_bias",
-                                                 "image.rmse",
-                                                 "image.ssim",
-                                                 "image.max_error"};
-      if (!metric.is_string() || !metrics.count(metric.get<std::string>())) {
-        std::string names;
-        for (const std::string& m : metrics) names += (names.empty() ? "" : ", ") + m;
-        throw InputError(f, p + "/metric", "expected one of " + names);
-      }
-      plot.metric = metric.get<std::string>();
-      auto axis_index = [&](const char* key) {
-        const json& v = require(plots[i], key, f, p);
-        for (std::size_t a = 0; a < s.axes.size(); ++a)
-          if (v.is_string() && v.get<std::string>() == s.axes[a].pointer)
-            return static_cast<int>(a);
-        throw InputError(f, child(p, key), "expected the pointer of one of the study's axes");
-      };
-      plot.x = axis_index("x");
-      plot.y = axis_index("y");
-      if (plot.x == plot.y)
-        throw InputError(f, p + "/y", "expected an axis other than x (a plot needs two axes)");
-      if (plots[i].contains("kind")) {
-        const json& k = plots[i]["kind"];
-        if (!k.is_string() || (k != "contour" && k != "heatmap"))
-          throw InputError(f, p + "/kind", "expected \"contour\" or \"heatmap\"");
-        plot.kind = k.get<std::string>();
-      }
-      if (plots[i].contains("renderer")) {
-        const json& r = plots[i]["renderer"];
-        if (!r.is_string() || !renderer_from_id(r.get<std::string>()))
-          throw InputError(f, p + "/renderer", "expected \"evaluator\", \"povray\" or \"blender\"");
-        plot.renderer = r.get<std::string>();
-      }
-      s.plots.push_back(plot);
-    }
-  }
+  if (doc.contains("plots")) s.plots = read_plots(doc["plots"], f, s.axes);
   return s;
 }
 
@@ -372,6 +383,7 @@ struct Job {
   Scene scene;
   std::string key, label;
   std::string origin;  // the scene file and variant, for error messages
+  ResourceEstimate resources;
 };
 
 struct Variant {
@@ -380,15 +392,6 @@ struct Variant {
   std::vector<json> axis_values;
   std::vector<std::size_t> jobs;
 };
-
-// Labels carry method parameters ("shading-offset(s=0.3)"): keep file names plain.
-std::string file_safe(const std::string& label) {
-  std::string out;
-  for (char c : label)
-    out +=
-        (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.') ? c : '_';
-  return out;
-}
 
 std::string value_text(const json& v) {
   if (v.is_number_float()) return fmt::format("{:g}", v.get<double>());
@@ -665,8 +668,10 @@ Plan plan_study(const Study& study, const std::map<RendererKind, std::string>& v
   Plan plan;
   add_bump_variants(study, versions, plan);
   if (study.lowpoly) add_lowpoly_variants(study, versions, plan);
-  for (const Job& job : plan.jobs)
-    check_resources(estimate_resources(job.renderer, job.scene), max_memory_bytes, job.origin);
+  for (Job& job : plan.jobs) {
+    job.resources = estimate_resources(job.renderer, job.scene);
+    check_resources(job.resources, max_memory_bytes, job.origin);
+  }
   return plan;
 }
 
@@ -697,6 +702,167 @@ std::optional<Image> verified_cache_entry(const std::string& path, const std::st
     return std::nullopt;
   }
   return image;
+}
+
+void warn(const StudyOptions& options, StudyRunStats& stats, const std::string& text) {
+  stats.warnings.push_back(text);
+  if (options.log) options.log("WARNING: " + text);
+}
+
+// The state of every job after the render phase.
+struct Renders {
+  std::vector<std::string> errors;
+  std::vector<char> done, attempted;
+  std::vector<Image> images;
+  std::vector<long> same_as;  // a job with an earlier job's key takes its result
+  explicit Renders(std::size_t n)
+      : errors(n), done(n, 0), attempted(n, 0), images(n), same_as(n, -1) {}
+};
+
+// Takes what the cache holds (verified entries only; damaged ones are removed
+// with a warning) and returns the jobs still to render. Jobs with the same key
+// (a ground truth shared by every tessellation level) are rendered once.
+std::vector<std::size_t> use_cache(const std::vector<Job>& jobs, const fs::path& out,
+                                   const StudyOptions& options, Renders& r, StudyRunStats& stats) {
+  std::vector<std::size_t> todo;
+  std::map<std::string, std::size_t> first_with_key;
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    const fs::path cached = out / "cache" / (jobs[i].key + ".exr");
+    if (fs::exists(cached)) {
+      std::string reason;
+      if (std::optional<Image> image =
+              verified_cache_entry(cached.string(), jobs[i].key, &reason)) {
+        r.images[i] = std::move(*image);
+        r.done[i] = 1;
+        ++stats.cached;
+        continue;
+      }
+      warn(options, stats,
+           fmt::format("cache entry {} of {} is damaged: {}; rendering it again", cached.string(),
+                       jobs[i].label, reason));
+      std::error_code ignored;
+      fs::remove(cached, ignored);
+    }
+    if (const auto [it, inserted] = first_with_key.try_emplace(jobs[i].key, i); !inserted)
+      r.same_as[i] = static_cast<long>(it->second);
+    else
+      todo.push_back(i);
+  }
+  return todo;
+}
+
+// Renders `job` and writes it into the cache with its key and checksum;
+// returns the image. Throws RendererError (RenderCancelled when interrupted).
+Image render_into_cache(const Job& job, const fs::path& out, const StudyOptions& options,
+                        int threads, const std::string& renderer_version) {
+  RenderSettings settings;
+  settings.timeout_s = options.timeout_s;
+  settings.threads = threads;
+  settings.log_path = (out / "cache" / (job.key + ".log")).string();
+  std::error_code ignored;
+  fs::remove(settings.log_path, ignored);
+  RendererRun run = render_with(job.renderer, job.scene, settings);
+  write_exr(run.image, (out / "cache" / (job.key + ".exr")).string(),
+            {{"penumbra:version", kPenumbraVersion},
+             {"penumbra:renderer", to_string(job.renderer)},
+             {"penumbra:renderer_version", renderer_version},
+             {"penumbra:scene", job.scene_json.dump()},
+             {"penumbra:method", job.method},
+             {"penumbra:representation", to_string(job.representation)},
+             {"penumbra:radiance_unit", "W m^-2 sr^-1"},
+             {"penumbra:key", job.key},
+             {"penumbra:checksum", image_checksum(run.image)}});
+  if (job.renderer == RendererKind::kEvaluator) fs::remove(settings.log_path, ignored);
+  return std::move(run.image);
+}
+
+// Renders `todo` in parallel, with progress, until done, interrupted or
+// --max-renders is reached.
+void render_todo(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo,
+                 const fs::path& out, const StudyOptions& options,
+                 const std::map<RendererKind, std::string>& versions,
+                 const std::map<RendererKind, std::string>& unavailable, Renders& r,
+                 StudyRunStats& stats) {
+  std::mutex mutex;
+  std::size_t finished = 0;
+  long started_new = 0;
+  double busy_seconds = 0.0;
+  const int threads = std::max(
+      1, static_cast<int>(std::thread::hardware_concurrency()) / std::max(1, options.jobs));
+  run_parallel(options.jobs, todo.size(), [&](std::size_t t) {
+    const std::size_t i = todo[t];
+    const Job& job = jobs[i];
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if ((options.interrupted && options.interrupted->load()) ||
+          (options.max_new_renders >= 0 && started_new >= options.max_new_renders))
+        return;
+      ++started_new;
+      r.attempted[i] = 1;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    std::string error;
+    try {
+      if (const auto missing = unavailable.find(job.renderer); missing != unavailable.end())
+        throw RendererError(missing->second);
+      r.images[i] =
+          render_into_cache(job, out, options, threads, version_of(versions, job.renderer));
+    } catch (const RenderCancelled&) {  // interrupted: neither done nor failed; a resume renders it
+      std::lock_guard<std::mutex> lock(mutex);
+      r.attempted[i] = 0;
+      return;
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::lock_guard<std::mutex> lock(mutex);
+    ++finished;
+    busy_seconds += seconds;
+    const std::string first_line = error.substr(0, error.find('\n'));
+    if (error.empty()) {
+      r.done[i] = 1;
+      ++stats.rendered;
+    } else {
+      r.errors[i] = error;
+      ++stats.failed;
+      stats.failures.push_back(job.label + ": " + first_line);
+    }
+    const double eta = busy_seconds / double(finished) * double(todo.size() - finished) /
+                       std::max(1, options.jobs);
+    if (options.progress) options.progress(stats.cached + finished, jobs.size(), eta);
+    if (options.log)
+      options.log(fmt::format("[{}/{}] {} {} ({:.1f} s){}", stats.cached + finished, jobs.size(),
+                              error.empty() ? "rendered" : "FAILED", job.label, seconds,
+                              error.empty() ? "" : ": " + first_line));
+  });
+}
+
+// The render phase: the cache, then what it lacks; counts what never started.
+Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
+                    const fs::path& out, const StudyOptions& options,
+                    const std::map<RendererKind, std::string>& versions,
+                    const std::map<RendererKind, std::string>& unavailable, StudyRunStats& stats) {
+  Renders r(jobs.size());
+  const std::vector<std::size_t> todo = use_cache(jobs, out, options, r, stats);
+  // The cache must hold what is to be rendered (uncompressed EXR sizes).
+  ResourceEstimate needed;
+  for (std::size_t i : todo) needed.output_bytes += jobs[i].resources.output_bytes;
+  check_resources(needed, std::numeric_limits<double>::infinity(), study_file,
+                  (out / "cache").string());
+  if (options.log)
+    options.log(fmt::format("{} renders: {} cached, {} to do, {} in parallel", jobs.size(),
+                            stats.cached, todo.size(), options.jobs));
+  render_todo(jobs, todo, out, options, versions, unavailable, r, stats);
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (r.same_as[i] >= 0) {
+      const auto j = static_cast<std::size_t>(r.same_as[i]);
+      r.done[i] = r.done[j], r.attempted[i] = r.attempted[j], r.errors[i] = r.errors[j];
+      r.images[i] = r.images[j];
+    }
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (!r.done[i] && !r.attempted[i]) ++stats.not_started;
+  return r;
 }
 
 }  // namespace
@@ -738,135 +904,17 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     // What a killed earlier run (kill -9) left half-written.
     stats.stale_removed += remove_stale_temporaries((out / sub).string());
   }
-  auto warn = [&](const std::string& text) {
-    stats.warnings.push_back(text);
-    if (options.log) options.log("WARNING: " + text);
-  };
   if (stats.stale_removed > 0)
-    warn(fmt::format("removed {} temporary files and work folders of killed runs",
+    warn(options, stats,
+         fmt::format("removed {} temporary files and work folders of killed runs",
                      stats.stale_removed));
 
   // Render what the cache lacks.
-  std::vector<std::string> errors(jobs.size());
-  std::vector<char> done(jobs.size(), 0), attempted(jobs.size(), 0);
-  std::vector<Image> images(jobs.size());
-  std::vector<std::size_t> todo;
-  // Jobs with the same key (a ground truth shared by every tessellation
-  // level) are rendered once; the others take its result.
-  std::map<std::string, std::size_t> first_with_key;
-  std::vector<long> same_as(jobs.size(), -1);
-  for (std::size_t i = 0; i < jobs.size(); ++i) {
-    const fs::path cached = out / "cache" / (jobs[i].key + ".exr");
-    if (fs::exists(cached)) {
-      std::string reason;
-      if (std::optional<Image> image =
-              verified_cache_entry(cached.string(), jobs[i].key, &reason)) {
-        images[i] = std::move(*image);
-        done[i] = 1;
-        ++stats.cached;
-        continue;
-      }
-      warn(fmt::format("cache entry {} of {} is damaged: {}; rendering it again", cached.string(),
-                       jobs[i].label, reason));
-      std::error_code ignored;
-      fs::remove(cached, ignored);
-    }
-    if (const auto [it, inserted] = first_with_key.try_emplace(jobs[i].key, i); !inserted)
-      same_as[i] = static_cast<long>(it->second);
-    else
-      todo.push_back(i);
-  }
-  // The cache must hold what is to be rendered (uncompressed EXR sizes).
-  ResourceEstimate needed;
-  for (std::size_t i : todo)
-    needed.output_bytes += estimate_resources(jobs[i].renderer, jobs[i].scene).output_bytes;
-  check_resources(needed, std::numeric_limits<double>::infinity(), study.file,
-                  (out / "cache").string());
-  std::mutex mutex;
-  std::size_t finished = 0;
-  long started_new = 0;
-  double busy_seconds = 0.0;
-  const int threads = std::max(
-      1, static_cast<int>(std::thread::hardware_concurrency()) / std::max(1, options.jobs));
-  if (options.log)
-    options.log(fmt::format("{} renders: {} cached, {} to do, {} in parallel", jobs.size(),
-                            stats.cached, todo.size(), options.jobs));
-  run_parallel(options.jobs, todo.size(), [&](std::size_t t) {
-    const std::size_t i = todo[t];
-    const Job& job = jobs[i];
-    {
-      std::lock_guard<std::mutex> lock(mutex);
-      if ((options.interrupted && options.interrupted->load()) ||
-          (options.max_new_renders >= 0 && started_new >= options.max_new_renders))
-        return;
-      ++started_new;
-      attempted[i] = 1;
-    }
-    const auto t0 = std::chrono::steady_clock::now();
-    std::string error;
-    bool cancelled = false;
-    if (unavailable.count(job.renderer)) {
-      error = unavailable[job.renderer];
-    } else {
-      RenderSettings settings;
-      settings.timeout_s = options.timeout_s;
-      settings.threads = threads;
-      settings.log_path = (out / "cache" / (job.key + ".log")).string();
-      try {
-        std::error_code ignored;
-        fs::remove(settings.log_path, ignored);
-        RendererRun run = render_with(job.renderer, job.scene, settings);
-        write_exr(run.image, (out / "cache" / (job.key + ".exr")).string(),
-                  {{"penumbra:version", kPenumbraVersion},
-                   {"penumbra:renderer", to_string(job.renderer)},
-                   {"penumbra:renderer_version", version_of(versions, job.renderer)},
-                   {"penumbra:scene", job.scene_json.dump()},
-                   {"penumbra:method", job.method},
-                   {"penumbra:representation", to_string(job.representation)},
-                   {"penumbra:radiance_unit", "W m^-2 sr^-1"},
-                   {"penumbra:key", job.key},
-                   {"penumbra:checksum", image_checksum(run.image)}});
-        images[i] = std::move(run.image);
-        if (job.renderer == RendererKind::kEvaluator) fs::remove(settings.log_path, ignored);
-      } catch (const RenderCancelled&) {
-        cancelled = true;
-      } catch (const std::exception& e) {
-        error = e.what();
-      }
-    }
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::lock_guard<std::mutex> lock(mutex);
-    if (cancelled) {  // interrupted: neither done nor failed; a resume renders it
-      attempted[i] = 0;
-      return;
-    }
-    ++finished;
-    busy_seconds += seconds;
-    if (error.empty()) {
-      done[i] = 1;
-      ++stats.rendered;
-    } else {
-      errors[i] = error;
-      ++stats.failed;
-      stats.failures.push_back(job.label + ": " + error.substr(0, error.find('\n')));
-    }
-    const double per = busy_seconds / double(finished);
-    const double eta = per * double(todo.size() - finished) / std::max(1, options.jobs);
-    if (options.progress) options.progress(stats.cached + finished, jobs.size(), eta);
-    if (options.log)
-      options.log(fmt::format("[{}/{}] {} {} ({:.1f} s){}", stats.cached + finished, jobs.size(),
-                              error.empty() ? "rendered" : "FAILED", job.label, seconds,
-                              error.empty() ? "" : ": " + error.substr(0, error.find('\n'))));
-  });
-  for (std::size_t i = 0; i < jobs.size(); ++i)
-    if (same_as[i] >= 0) {
-      const auto j = static_cast<std::size_t>(same_as[i]);
-      done[i] = done[j], attempted[i] = attempted[j], errors[i] = errors[j];
-      images[i] = images[j];
-    }
-  for (std::size_t i = 0; i < jobs.size(); ++i)
-    if (!done[i] && !attempted[i]) ++stats.not_started;
+  const Renders rendered =
+      render_jobs(study.file, jobs, out, options, versions, unavailable, stats);
+  const std::vector<std::string>& errors = rendered.errors;
+  const std::vector<char>& done = rendered.done;
+  const std::vector<Image>& images = rendered.images;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (stats.not_started > 0) return stats;  // interrupted: no report from a partial study
 
