@@ -1,6 +1,7 @@
 // The command line: exit codes, messages, and no half-written output.
 #include <gtest/gtest.h>
 
+#include "cli_test.h"
 #include "temp_dir_test.h"
 
 #include <filesystem>
@@ -21,18 +22,10 @@ namespace fs = std::filesystem;
 
 const std::string kScenes = std::string(PENUMBRA_SOURCE_DIR) + "/scenes";
 
-struct Result {
-  int code;
-  std::string out, err;
-};
+using Result = CliResult;
 
 Result run(std::vector<std::string> args) {
-  args.insert(args.begin(), "penumbra");
-  std::vector<const char*> argv;
-  for (const std::string& a : args) argv.push_back(a.c_str());
-  std::ostringstream out, err;
-  const int code = run_cli(static_cast<int>(argv.size()), argv.data(), out, err);
-  return {code, out.str(), err.str()};
+  return run_penumbra(std::move(args));
 }
 
 class Cli : public TempDirTest {

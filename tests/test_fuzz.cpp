@@ -6,6 +6,7 @@
 // crash or an abort fails the whole test binary; a hang hits CTest's timeout.
 #include <gtest/gtest.h>
 
+#include "cli_test.h"
 #include "temp_dir_test.h"
 
 #include <sys/stat.h>
@@ -35,20 +36,10 @@ using nlohmann::json;
 
 const std::string kSource = PENUMBRA_SOURCE_DIR;
 
-struct Outcome {
-  int code = -1;
-  std::string out, err;
-};
+using Outcome = CliResult;
 
 Outcome cli(std::vector<std::string> args) {
-  args.insert(args.begin(), "penumbra");
-  std::vector<const char*> argv;
-  for (const std::string& a : args) argv.push_back(a.c_str());
-  std::ostringstream out, err;
-  Outcome o;
-  o.code = run_cli(static_cast<int>(argv.size()), argv.data(), out, err);
-  o.out = out.str(), o.err = err.str();
-  return o;
+  return run_penumbra(std::move(args));
 }
 
 void write_text(const std::string& p, const std::string& text) {
