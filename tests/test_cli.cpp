@@ -13,7 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/cli.h"
-#include "render/image_io.h"
+#include "image/image_io.h"
 
 namespace penumbra {
 namespace {
@@ -82,8 +82,10 @@ TEST_F(Cli, GlobalOptionsWorkAfterTheSubcommand) {
 TEST_F(Cli, UnknownSubcommandIsNamedWithTheValidOnes) {
   const Result r = run({"rendr", "x.json"});
   EXPECT_EQ(r.code, kExitBadInput);
-  EXPECT_NE(r.err.find("unknown subcommand \"rendr\" (expected one of: methods, render, export"),
-            std::string::npos)
+  EXPECT_NE(
+      r.err.find(
+          "unknown subcommand \"rendr\" (expected one of: methods, renderers, render, export"),
+      std::string::npos)
       << r.err;
 }
 

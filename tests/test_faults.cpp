@@ -24,8 +24,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "render/image_io.h"
-#include "report/study.h"
+#include "image/image_io.h"
+#include "study/study.h"
 #include "util/strict_json.h"
 
 namespace penumbra {
@@ -202,9 +202,9 @@ TEST_F(Faults, HangingVersionProbeObeysTheTimeout) {
 
 TEST_F(Faults, DamagedOrSwappedCacheEntriesAreRenderedAgainWithAWarning) {
   ::penumbra::Study s = study();
-  s.renderers = {RendererKind::kEvaluator};
-  s.methods.push_back({"chiang2019", json(), "chiang2019"});
-  s.methods.push_back({"estevez2019", json(), "estevez2019"});
+  s.bump.renderers = {RendererKind::kEvaluator};
+  s.bump.methods.push_back({"chiang2019", json(), "chiang2019"});
+  s.bump.methods.push_back({"estevez2019", json(), "estevez2019"});
   const StudyRunStats clean = run_study(s, options("out"));
   ASSERT_TRUE(clean.complete());
   ASSERT_EQ(clean.rendered, 4u);

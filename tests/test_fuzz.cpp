@@ -25,7 +25,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/cli.h"
-#include "render/image_io.h"
+#include "image/image_io.h"
 #include "util/strict_json.h"
 
 namespace penumbra {

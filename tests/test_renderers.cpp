@@ -19,11 +19,11 @@
 
 #include "analysis/metrics.h"
 #include "export/export.h"
-#include "render/image_io.h"
-#include "renderers/process.h"
+#include "image/image_io.h"
 #include "renderers/renderers.h"
-#include "report/calibration.h"
 #include "scene/scene_json.h"
+#include "study/calibration.h"
+#include "util/process.h"
 
 namespace penumbra {
 namespace {
@@ -426,11 +426,10 @@ TEST(LowPolyExport, RenderersRefuseWhatTheyCannotExpress) {
   refused(cycles, bumped, {"bump on a tessellated shape"});
 
   // What each renderer offers, for studies.
-  EXPECT_EQ(offsets_offered("povray"), std::vector<OffsetMethod>{OffsetMethod::kNone});
-  EXPECT_EQ(offsets_offered("blender"),
+  EXPECT_EQ(offsets_offered(RendererKind::kPovray), std::vector<OffsetMethod>{OffsetMethod::kNone});
+  EXPECT_EQ(offsets_offered(RendererKind::kBlender),
             (std::vector<OffsetMethod>{OffsetMethod::kNone, OffsetMethod::kCyclesGeometryOffset}));
-  EXPECT_EQ(offsets_offered("evaluator").size(), all_offset_methods().size());
-  EXPECT_TRUE(offsets_offered("no-such-renderer").empty());
+  EXPECT_EQ(offsets_offered(RendererKind::kEvaluator).size(), all_offset_methods().size());
   // Accepted offsets export: POV-Ray gets the mesh's own triangles.
   const Scene smooth = lowpoly_sphere({});
   const std::string sdl = export_povray(smooth).sdl;

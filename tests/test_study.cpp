@@ -17,10 +17,11 @@
 
 #include "analysis/contour.h"
 #include "analysis/metrics.h"
-#include "render/image_io.h"
-#include "renderers/process.h"
-#include "report/study.h"
+#include "image/image_io.h"
 #include "scene/scene_json.h"
+#include "study/report_files.h"
+#include "study/study.h"
+#include "util/process.h"
 
 namespace penumbra {
 namespace {

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "render/evaluator.h"
+#include "image/image.h"
 #include "scene/scene.h"
 
 namespace penumbra {

@@ -1,129 +1,24 @@
 #include "cli/cli.h"
 
-#include <signal.h>
-#include <sys/resource.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <array>
-#include <atomic>
-#include <cctype>
-#include <chrono>
-#include <cmath>
-#include <cstdio>
-#include <filesystem>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <thread>
 
 #include <fmt/format.h>
-#include <fmt/ranges.h>
 #include <tbb/global_control.h>
-#include <tbb/info.h>
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 
-#include "analysis/contour.h"
-#include "analysis/metrics.h"
-#include "analysis/metrics_json.h"
+#include "cli/commands.h"
 #include "export/export.h"
-#include "render/evaluator.h"
-#include "render/image_io.h"
-#include "renderers/process.h"
-#include "renderers/renderers.h"
-#include "report/calibration.h"
-#include "report/study.h"
+#include "image/image_io.h"
 #include "scene/scene_json.h"
-#include "util/files.h"
+#include "util/data_files.h"
+#include "util/strict_json.h"
 
 namespace penumbra {
+
 namespace {
-
-using nlohmann::json;
-namespace fs = std::filesystem;
-
-constexpr const char* kSourceDir = PENUMBRA_SOURCE_DIR;
-
-// A command-line value that parses but makes no sense.
-class UsageError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-std::atomic<bool> g_interrupted{false};
-std::atomic<int> g_signal{0};
-extern "C" void on_stop_signal(int signal) {
-  g_signal.store(signal);
-  g_interrupted.store(true);
-  cancel_processes();  // ends running renderers and everything they started
-}
-
-// While alive, SIGINT, SIGTERM and SIGHUP stop the command cleanly: running
-// renderers are ended, nothing half-written is left, and the exit status is
-// 128 + the signal (130 for Ctrl-C).
-class StopSignals {
- public:
-  StopSignals() {
-    g_interrupted.store(false);
-    g_signal.store(0);
-    reset_cancel_processes();
-    struct sigaction action {};
-    action.sa_handler = on_stop_signal;
-    sigemptyset(&action.sa_mask);
-    for (std::size_t i = 0; i < kSignals.size(); ++i)
-      ::sigaction(kSignals[i], &action, &previous_[i]);
-  }
-  ~StopSignals() {
-    for (std::size_t i = 0; i < kSignals.size(); ++i)
-      ::sigaction(kSignals[i], &previous_[i], nullptr);
-    reset_cancel_processes();
-  }
-  StopSignals(const StopSignals&) = delete;
-  StopSignals& operator=(const StopSignals&) = delete;
-  static int exit_code() { return 128 + (g_signal.load() ? g_signal.load() : SIGINT); }
-
- private:
-  static constexpr std::array<int, 3> kSignals{SIGINT, SIGTERM, SIGHUP};
-  std::array<struct sigaction, 3> previous_{};
-};
-
-// The output formats: the EXR carries 7 float channels; the preview is a PNG.
-void check_extension(const std::string& path, const char* extension, const char* option) {
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
-  if (ext != extension)
-    throw UsageError(fmt::format("{} {}: expected a file name ending in {} (got \"{}\")", option,
-                                 path, extension, ext));
-}
-
-// Refuses, before anything runs, a method or offset the renderer does not ship
-// (the exporters refuse them too, but only after the mesh is built).
-void check_offered(RendererKind renderer, const Scene& scene) {
-  const auto methods = methods_offered(to_string(renderer), scene.representation);
-  const TerminatorMethod method = scene.terminator.method.method;
-  if (std::find(methods.begin(), methods.end(), method) == methods.end()) {
-    std::string ids;
-    for (TerminatorMethod m : methods)
-      ids += (ids.empty() ? "" : ", ") + std::string(method_info(m).id);
-    throw ExportError(fmt::format(
-        "{} does not offer the method \"{}\" for the {} representation "
-        "(it offers: {})",
-        to_string(renderer), method_info(method).id, to_string(scene.representation), ids));
-  }
-  const auto offsets = offsets_offered(to_string(renderer));
-  if (std::find(offsets.begin(), offsets.end(), scene.offset.method) == offsets.end())
-    throw ExportError(fmt::format("{} does not offer the shadow-ray offset \"{}\"",
-                                  to_string(renderer), offset_method_info(scene.offset.method).id));
-}
-
-// Scene shortcuts shared by render and export: each is --set on one pointer.
-struct SceneArgs {
-  std::string method, offset, representation;
-  int segments = 0, width = 0, height = 0, spp = 0;
-  std::vector<std::string> sets;
-};
 
 void add_scene_options(CLI::App* cmd, SceneArgs& a) {
   cmd->add_option("--method", a.method, "terminator method id (see `penumbra methods`)");
@@ -140,606 +35,20 @@ void add_scene_options(CLI::App* cmd, SceneArgs& a) {
   cmd->add_option("--set", a.sets, "override a scene value: /json/pointer=VALUE (repeatable)");
 }
 
-struct RenderArgs {
-  std::string scene;
-  std::string output;
-  std::string preview;
-  SceneArgs scene_args;
-  bool quiet = false;
-  std::string renderer = "evaluator";
-  double timeout = 600.0;
-  double max_memory_gib = kDefaultMaxMemoryBytes / kGiB;
-};
-
-struct CompareArgs {
-  std::string reference, test;
-  std::string difference;  // -o: the difference image
-  bool json = false;
-  double scale = 0.0;
-  double max_rmse = -1.0;
-};
-
-struct ExportArgs {
-  std::string to;
-  std::string scene;
-  std::string output;
-  SceneArgs scene_args;
-};
-
-std::string parameter_domain(const MethodParameter& p) {
-  return fmt::format("{} in [{}, {}] {}, default {}", p.name, p.min_value, p.max_value, p.unit,
-                     p.default_value);
-}
-
-json parameters_json(std::span<const MethodParameter> list) {
-  json parameters = json::array();
-  for (const MethodParameter& p : list)
-    parameters.push_back({{"name", p.name},
-                          {"unit", p.unit},
-                          {"min", p.min_value},
-                          {"max", p.max_value},
-                          {"default", p.default_value},
-                          {"description", p.description}});
-  return parameters;
-}
-
-int command_methods(bool as_json, std::ostream& out) {
-  if (as_json) {
-    json list = json::array();
-    for (const MethodInfo& m : all_methods()) {
-      const json parameters = parameters_json(m.parameters);
-      list.push_back({{"id", m.id},
-                      {"kind", "terminator"},
-                      {"source", m.source},
-                      {"summary", m.summary},
-                      {"parameters", parameters},
-                      {"identity_without_deviation", m.identity_without_deviation},
-                      {"note", m.identity_note}});
-    }
-    for (const OffsetMethodInfo& m : all_offset_methods()) {
-      const json parameters = parameters_json(m.parameters);
-      list.push_back({{"id", m.id},
-                      {"kind", "offset"},
-                      {"source", m.source},
-                      {"summary", m.summary},
-                      {"parameters", parameters}});
-    }
-    out << list.dump(2) << "\n";
-    return kExitOk;
-  }
-  out << fmt::format("{:<24} {:<40} {}\n", "id", "parameters", "source");
-  for (const MethodInfo& m : all_methods()) {
-    std::string parameters = "-";
-    for (const MethodParameter& p : m.parameters) parameters = parameter_domain(p);
-    out << fmt::format("{:<24} {:<40} {}\n", m.id, parameters, m.source);
-    out << fmt::format("{:<24} {}\n", "", m.summary);
-    if (!m.identity_without_deviation) out << fmt::format("{:<24} note: {}\n", "", m.identity_note);
-  }
-  out << "\nAll factors lie in [0,1] and multiply the light's contribution to the lobes chosen by "
-         "/terminator/lobes.\n";
-  out << fmt::format(
-      "\nShadow-ray origin methods (/offset/method; low-poly meshes only):\n{:<24} "
-      "{:<40} {}\n",
-      "id", "parameters", "source");
-  for (const OffsetMethodInfo& m : all_offset_methods()) {
-    std::string parameters = "-";
-    for (const MethodParameter& p : m.parameters) parameters = parameter_domain(p);
-    out << fmt::format("{:<24} {:<40} {}\n", m.id, parameters, m.source);
-    out << fmt::format("{:<24} {}\n", "", m.summary);
-  }
-  return kExitOk;
-}
-
-std::vector<Override> collect_overrides(const SceneArgs& a) {
-  std::vector<Override> overrides;
-  if (!a.method.empty()) overrides.push_back({"/terminator/method", a.method});
-  if (!a.offset.empty()) overrides.push_back({"/offset/method", a.offset});
-  if (a.segments > 0) overrides.push_back({"/shape/tessellation/segments", a.segments});
-  if (!a.representation.empty()) overrides.push_back({"/representation", a.representation});
-  if (a.width > 0) overrides.push_back({"/camera/width", a.width});
-  if (a.height > 0) overrides.push_back({"/camera/height", a.height});
-  if (a.spp > 0) overrides.push_back({"/camera/spp", a.spp});
-  for (const std::string& s : a.sets) overrides.push_back(parse_override(s));
-  return overrides;
-}
-
-class ProgressLine {
- public:
-  ProgressLine(std::ostream& err, bool enabled, std::string label)
-      : err_(err), enabled_(enabled && ::isatty(STDERR_FILENO)), label_(std::move(label)) {}
-  void operator()(double fraction) const {
-    if (enabled_) err_ << fmt::format("\r{} {:5.1f}%", label_, 100.0 * fraction) << std::flush;
-  }
-  void finish() const {
-    if (enabled_) err_ << "\r" << std::string(label_.size() + 8, ' ') << "\r" << std::flush;
-  }
-
- private:
-  std::ostream& err_;
-  bool enabled_;
-  std::string label_;
-};
-
-// The log of an external render sits beside its output: out.exr -> out.povray.log.
-std::string log_path_for(const std::string& output, RendererKind renderer) {
-  fs::path p(output);
-  p.replace_extension(std::string(".") + to_string(renderer) + ".log");
-  return p.string();
-}
-
-int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
-  const std::optional<RendererKind> renderer = renderer_from_id(a.renderer);
-  if (!renderer)
-    throw UsageError(
-        fmt::format("--renderer: expected evaluator, povray or blender, got \"{}\"", a.renderer));
-  const std::vector<Override> overrides = collect_overrides(a.scene_args);
-  json document = read_json_file(a.scene);
-  const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
-  apply_overrides(document, overrides, origin);
-  const Scene scene = scene_from_json(document, origin);
-  check_extension(a.output, ".exr", "-o");
-  if (!a.preview.empty()) check_extension(a.preview, ".png", "--preview");
-  check_writable(a.output);
-  if (!a.preview.empty()) check_writable(a.preview);
-  const fs::path folder =
-      fs::path(a.output).parent_path().empty() ? fs::path(".") : fs::path(a.output).parent_path();
-  check_resources(estimate_resources(*renderer, scene), a.max_memory_gib * kGiB, origin,
-                  folder.string());
-  remove_stale_temporaries(folder.string());
-
-  const StopSignals stop;
-  const ProgressLine progress(err, !a.quiet, "rendering " + a.output);
-  RenderSettings settings;
-  settings.timeout_s = a.timeout;
-  settings.log_path = log_path_for(a.output, *renderer);
-  settings.progress.progress = [&](double f) {
-    if (g_interrupted.load()) throw RenderCancelled("interrupted");
-    progress(f);
-  };
-  if (*renderer != RendererKind::kEvaluator) check_offered(*renderer, scene);
-  if (*renderer != RendererKind::kEvaluator && !a.quiet)
-    err << fmt::format("running {} (log {}) ...\n", to_string(*renderer), settings.log_path);
-  const RendererRun run = render_with(*renderer, scene, settings);
-  progress.finish();
-  const Image& image = run.image;
-  const RenderStats& stats = run.stats;
-
-  write_exr(image, a.output,
-            {{"penumbra:version", kPenumbraVersion},
-             {"penumbra:renderer", to_string(*renderer)},
-             {"penumbra:scene", document.dump()},
-             {"penumbra:method", std::string(method_info(scene.terminator.method.method).id)},
-             {"penumbra:offset", std::string(offset_method_info(scene.offset.method).id)},
-             {"penumbra:representation", to_string(scene.representation)},
-             {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
-  if (!a.preview.empty()) write_preview_png(image, a.preview);
-  if (!a.quiet && *renderer != RendererKind::kEvaluator) {
-    out << fmt::format(
-        "wrote {} ({}x{}, {} spp, {}, method {}, {}): {} {:.2f} s wall, evaluator geometry pass "
-        "{:.2f} s\n",
-        a.output, image.width, image.height, scene.camera.spp, to_string(scene.representation),
-        method_info(scene.terminator.method.method).id, to_string(*renderer), to_string(*renderer),
-        run.seconds, run.geometry_seconds);
-  } else if (!a.quiet) {
-    out << fmt::format(
-        "wrote {} ({}x{}, {} spp, {}, method {}): {:.3f} s, {:.2f} M camera samples/s", a.output,
-        image.width, image.height, scene.camera.spp, to_string(scene.representation),
-        method_info(scene.terminator.method.method).id, stats.seconds,
-        double(stats.camera_samples) / stats.seconds / 1e6);
-    if (stats.triangles)
-      out << fmt::format(", {} triangles built in {:.3f} s", stats.triangles, stats.build_seconds);
-    if (scene.tessellation)
-      out << fmt::format(", offset {}", offset_method_info(scene.offset.method).id);
-    out << "\n";
-    if (!a.preview.empty()) out << "wrote " << a.preview << "\n";
-  }
-  return kExitOk;
-}
-
-int command_export(const ExportArgs& a, std::ostream& out) {
-  const std::vector<Override> overrides = collect_overrides(a.scene_args);
-  json document = read_json_file(a.scene);
-  const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
-  apply_overrides(document, overrides, origin);
-  const Scene scene = scene_from_json(document, origin);
-  std::error_code ec;
-  fs::create_directories(a.output, ec);
-  if (ec || !fs::is_directory(a.output))
-    throw OutputError(fmt::format("{}: cannot create the output folder: {}", a.output,
-                                  ec ? ec.message() : "not a folder"));
-  if (a.to == "povray") {
-    const PovrayExport job = export_povray(scene);
-    const std::string path = (fs::path(a.output) / "scene.pov").string();
-    write_text_file(path, job.sdl);
-    out << fmt::format(
-        "wrote {} (render {}x{} without anti-aliasing, box-filter {}x{} down to "
-        "{}x{}; the command line is in its first lines)\n",
-        path, job.width * job.supersample_x, job.height * job.supersample_y, job.supersample_x,
-        job.supersample_y, job.width, job.height);
-    return kExitOk;
-  }
-  const BlenderExport job = export_blender(scene);
-  const fs::path dir(a.output);
-  const TriangleMesh& m = job.mesh;
-  write_binary_file((dir / kBlenderPositionsFile).string(), m.positions.data(),
-                    m.positions.size() * sizeof(float));
-  write_binary_file((dir / kBlenderNormalsFile).string(), m.normals.data(),
-                    m.normals.size() * sizeof(float));
-  write_binary_file((dir / kBlenderTrianglesFile).string(), m.triangles.data(),
-                    m.triangles.size() * sizeof(unsigned));
-  write_text_file((dir / kBlenderJobFile).string(), job.job_json);
-  out << fmt::format(
-      "wrote {} and its mesh ({} vertices, {} triangles); render with\n  blender -b "
-      "--factory-startup -noaudio --python-exit-code 1 --python {}/harness/blender_render.py -- "
-      "{} out.exr\n",
-      (dir / kBlenderJobFile).string(), m.vertex_count(), m.triangle_count(), kSourceDir,
-      (dir / kBlenderJobFile).string());
-  return kExitOk;
-}
-
-// albedo * E / pi of the scene stored in a Penumbra EXR.
-Image read_image_checked(const std::string& path) {
-  if (!fs::is_regular_file(path)) throw UsageError(fmt::format("{}: no such file", path));
-  return read_image(path);
-}
-
-// Copies the analysis channels of `geometry` onto `image` (same size).
-Image with_channels_of(const Image& image, const Image& geometry) {
-  Image out = geometry;
-  const std::size_t nc = out.channels.size();
-  const char* names[4] = {"R", "G", "B", "A"};
-  for (int c = 0; c < 4; ++c) {
-    const int from = image.channel_index(names[c]);
-    if (from < 0) throw UsageError(fmt::format("the test image has no {} channel", names[c]));
-    for (int y = 0; y < out.height; ++y)
-      for (int x = 0; x < out.width; ++x)
-        out.pixels[(std::size_t(y) * out.width + x) * nc + c] = image.at(x, y, from);
-  }
-  return out;
-}
-
-double radiance_scale_of(const std::string& path) {
-  const std::string text = read_image_attribute(path, "penumbra:scene");
-  if (text.empty())
-    throw UsageError(fmt::format(
-        "{}: no penumbra:scene metadata to take albedo * E / pi from; give --scale", path));
-  const std::string origin = path + " (penumbra:scene metadata)";
-  const Scene scene = scene_from_json(parse_json_text(text, origin), origin);
-  return radiance_scale(scene);
-}
-
-void require_rgba(const Image& image, const std::string& path) {
-  for (const char* name : {"R", "G", "B", "A"})
-    if (image.channel_index(name) < 0)
-      throw UsageError(fmt::format("{}: no {} channel (compare needs R, G, B and A; it has {})",
-                                   path, name, fmt::join(image.channels, ", ")));
-}
-
-// What must match for two renders to be comparable: the same camera, light,
-// shape and height function (representation and method may differ). Returns
-// the first differing pointer, or "" when they match or either lacks metadata.
-std::string scene_difference(const std::string& reference, const std::string& test) {
-  const std::string a = read_image_attribute(reference, "penumbra:scene");
-  const std::string b = read_image_attribute(test, "penumbra:scene");
-  if (a.empty() || b.empty()) return "";
-  auto comparable = [](const json& scene) {
-    json out = json::object();
-    for (const char* key : {"camera", "light", "shape", "height"})
-      if (scene.contains(key)) out[key] = scene[key];
-    if (out.contains("shape")) out["shape"].erase("tessellation");
-    return out;
-  };
-  const json diff = json::diff(comparable(parse_json_text(a, reference + " (penumbra:scene)")),
-                               comparable(parse_json_text(b, test + " (penumbra:scene)")));
-  return diff.empty() ? "" : diff[0].at("path").get<std::string>();
-}
-
-// R, G, B: test - reference (W m^-2 sr^-1); A: the smaller coverage.
-Image difference_image(const Image& test, const Image& reference) {
-  Image out;
-  out.width = test.width, out.height = test.height;
-  out.channels = {"R", "G", "B", "A"};
-  out.pixels.resize(std::size_t(out.width) * out.height * 4);
-  int t[4], r[4];
-  const char* names[4] = {"R", "G", "B", "A"};
-  for (int c = 0; c < 4; ++c)
-    t[c] = test.channel_index(names[c]), r[c] = reference.channel_index(names[c]);
-  for (int y = 0; y < out.height; ++y)
-    for (int x = 0; x < out.width; ++x) {
-      float* p = &out.pixels[(std::size_t(y) * out.width + x) * 4];
-      for (int c = 0; c < 3; ++c) p[c] = test.at(x, y, t[c]) - reference.at(x, y, r[c]);
-      p[3] = std::min(test.at(x, y, t[3]), reference.at(x, y, r[3]));
-    }
-  return out;
-}
-
-int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err) {
-  if (!a.difference.empty()) {
-    check_extension(a.difference, ".exr", "-o");
-    check_writable(a.difference);
-  }
-  const Image reference = read_image_checked(a.reference);
-  const Image test = read_image_checked(a.test);
-  require_rgba(reference, a.reference);
-  require_rgba(test, a.test);
-  if (const std::string where = scene_difference(a.reference, a.test); !where.empty())
-    err << fmt::format(
-        "penumbra: warning: {} and {} show different scenes (penumbra:scene differs at {}); the "
-        "metrics compare unrelated images\n",
-        a.reference, a.test, where);
-  const double scale = a.scale > 0.0 ? a.scale : radiance_scale_of(a.reference);
-  if (reference.width != test.width || reference.height != test.height)
-    throw UsageError(fmt::format("{} is {}x{} but {} is {}x{}", a.reference, reference.width,
-                                 reference.height, a.test, test.width, test.height));
-  if (reference.channel_index("analysis.theta") < 0)
-    throw UsageError(
-        fmt::format("{}: no analysis.theta channel (render it with penumbra)", a.reference));
-  const ProfileOptions options;
-  const Profile pr = terminator_profile(reference, scale, options);
-  // theta comes from the reference: both images show the same base points.
-  Image test_with_theta = test;
-  if (test.channel_index("analysis.theta") < 0) test_with_theta = with_channels_of(test, reference);
-  const Profile pt = terminator_profile(test_with_theta, scale, options);
-  const ProfileMetrics pm = compare_profiles(pt, pr, options);
-  const ImageMetrics im = compare_images(test, reference);
-  const bool nonfinite = im.nonfinite > 0;
-  const bool over = a.max_rmse >= 0.0 && !(pm.rmse_overall <= a.max_rmse);
-  if (!a.difference.empty())
-    write_exr(difference_image(test, reference), a.difference,
-              {{"penumbra:difference", a.test + " - " + a.reference},
-               {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
-  if (a.json) {
-    out << json{{"reference", a.reference},
-                {"test", a.test},
-                {"radiance_scale", scale},
-                {"radiance_scale_unit", "W m^-2 sr^-1 (albedo * E / pi)"},
-                {"profile", profile_metrics_json(pm)},
-                {"image", image_metrics_json(im)},
-                {"pass", !nonfinite && !over}}
-               .dump(2)
-        << "\n";
-  } else {
-    out << fmt::format("reference {}\ntest      {}\n", a.reference, a.test);
-    out << fmt::format(
-        "profile (1-degree theta bins, fraction of albedo*E/pi = {:.6g} W m^-2 "
-        "sr^-1; {} common bins):\n",
-        scale, pm.common_bins);
-    out << fmt::format("  RMSE terminator [60,100) deg  {:.6f}\n", pm.rmse_terminator);
-    out << fmt::format("  RMSE overall                  {:.6f}\n", pm.rmse_overall);
-    out << fmt::format("  max error terminator          {:.6f}\n", pm.max_error);
-    out << fmt::format("  largest bin step              {:.6f} (reference {:.6f})\n", pm.max_step,
-                       pm.reference_max_step);
-    out << fmt::format(
-        "  terminator position (L<{})  {:.3f} deg (reference {:.3f}, error {:+.3f})\n", kDarkLevel,
-        pm.position, pm.reference_position, pm.position_error);
-    out << fmt::format("  transition width 90%->10%     {:.3f} deg (reference {:.3f})\n", pm.width,
-                       pm.reference_width);
-    out << fmt::format("  lit-region bias (<60 deg)     {:+.6f}\n", pm.lit_bias);
-    out << fmt::format("image (pixels fully covered in both: {}):\n", im.pixels);
-    out << fmt::format("  mask IoU (alpha>=0.5)         {:.6f}\n", im.mask_iou);
-    out << fmt::format("  RMSE                          {:.6g} W m^-2 sr^-1\n", im.rmse);
-    out << fmt::format("  max error                     {:.6g} W m^-2 sr^-1\n", im.max_error);
-    out << fmt::format("  mean error (test-reference)   {:+.6g} W m^-2 sr^-1\n", im.mean_error);
-    out << fmt::format("  SSIM (Gaussian 11x11)         {:.6f}\n", im.ssim);
-    out << fmt::format("  NaN/Inf values                {}\n", im.nonfinite);
-    if (over)
-      out << fmt::format("FAIL: profile RMSE {:.6f} above --max-profile-rmse {}\n", pm.rmse_overall,
-                         a.max_rmse);
-  }
-  return nonfinite || over ? kExitThreshold : kExitOk;
-}
-
-int command_calibrate(const CalibrationOptions& options, bool quiet, std::ostream& out,
-                      std::ostream& err) {
-  CalibrationOptions o = options;
-  if (!quiet) o.log = [&](const std::string& line) { err << line << "\n" << std::flush; };
-  const CalibrationResult result = run_calibration(o);
-  write_calibration_reports(result, o.output_dir);
-  out << calibration_table(result);
-  out << fmt::format("wrote {0}/calibration.md, {0}/calibration.json, {0}/calibration.csv\n",
-                     o.output_dir);
-  if (!result.all_rendered()) {
-    err << "penumbra: failed: some renders did not finish (see above and the logs in "
-        << o.output_dir << "/renders)\n";
-    return kExitFailure;
-  }
-  if (!result.all_pass()) {
-    err << "penumbra: calibration bounds missed (FAIL rows above)\n";
-    return kExitThreshold;
-  }
-  return kExitOk;
-}
-
-std::string duration_text(double s) {
-  if (!std::isfinite(s) || s < 0) return "?";
-  const long t = std::lround(s);
-  return t >= 60 ? fmt::format("{}m{:02d}s", t / 60, t % 60) : fmt::format("{}s", t);
-}
-
-struct RunArgs {
-  std::string study, output;
-  int jobs = 0;
-  double timeout = 600.0;
-  long max_renders = -1;
-  bool no_figures = false, quiet = false, dry_run = false;
-  double max_memory_gib = kDefaultMaxMemoryBytes / kGiB;
-};
-
-int print_dry_run(const Study& study, const StudyRunStats& stats, const std::string& dir,
-                  std::ostream& out) {
-  std::string per;
-  for (const auto& [renderer, count] : stats.planned)
-    per += fmt::format("{}{} {}", per.empty() ? "" : ", ", count, renderer);
-  out << fmt::format(
-      "study {}: {} renders ({}); {} found in {}/cache, {} to render; nothing written (dry run)\n",
-      study.name, stats.renders, per, stats.cached, dir, stats.renders - stats.cached);
-  return kExitOk;
-}
-
-int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
-  const Study study = load_study(a.study);
-  StudyOptions o;
-  o.output_dir = a.output.empty() ? "results/" + study.name : a.output;
-  o.jobs =
-      a.jobs > 0 ? a.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  o.timeout_s = a.timeout;
-  o.max_new_renders = a.max_renders;
-  o.figures = !a.no_figures;
-  o.interrupted = &g_interrupted;
-  o.dry_run = a.dry_run;
-  o.max_memory_bytes = a.max_memory_gib * kGiB;
-  const bool tty = ::isatty(STDERR_FILENO);
-  std::mutex mutex;
-  if (!a.quiet && tty) {
-    o.progress = [&](std::size_t done, std::size_t total, double eta) {
-      std::lock_guard<std::mutex> lock(mutex);
-      const int width = 30;
-      const int fill =
-          static_cast<int>(width * double(done) / double(std::max<std::size_t>(total, 1)));
-      err << fmt::format("\r[{}{}] {}/{} renders, ETA {}   ", std::string(fill, '#'),
-                         std::string(width - fill, '.'), done, total, duration_text(eta))
-          << std::flush;
-    };
-    o.log = [&](const std::string& line) {
-      if (line.find("FAILED") != std::string::npos || line.find("renders:") != std::string::npos ||
-          line.find("WARNING") != std::string::npos || line.rfind("figures:", 0) == 0) {
-        std::lock_guard<std::mutex> lock(mutex);
-        err << "\r" << line << "\n" << std::flush;
-      }
-    };
-  } else if (!a.quiet) {
-    o.log = [&](const std::string& line) {
-      std::lock_guard<std::mutex> lock(mutex);
-      err << "penumbra run: " << line << "\n" << std::flush;
-    };
-  }
-  const StopSignals stop;
-  const StudyRunStats stats = run_study(study, o);
-  if (a.dry_run) return print_dry_run(study, stats, o.output_dir, out);
-  if (!a.quiet && tty) err << "\n";
-  out << fmt::format(
-      "study {}: {} renders ({} rendered now, {} from the cache, {} failed, {} not started) in "
-      "{:.1f} s\n",
-      study.name, stats.renders, stats.rendered, stats.cached, stats.failed, stats.not_started,
-      stats.seconds);
-  for (const std::string& f : stats.failures) out << "  failed: " << f << "\n";
-  if (stats.not_started > 0) {
-    out << fmt::format(
-        "stopped before the end; run the same command again to resume (finished "
-        "renders are cached in {}/cache)\n",
-        o.output_dir);
-    return g_interrupted.load() ? StopSignals::exit_code() : kExitFailure;
-  }
-  out << fmt::format("wrote {0}/report.json, {0}/metrics.csv{1}\n", o.output_dir,
-                     stats.report_html.empty() ? "" : ", figures/ and report.html");
-  if (!stats.report_html.empty()) out << "report: " << stats.report_html << "\n";
-  return stats.failed > 0 ? kExitFailure : kExitOk;
-}
-
-int command_contour(const std::vector<std::string>& ids, double step, const std::string& output,
-                    std::ostream& out) {
-  std::vector<MethodSettings> methods;
-  for (const std::string& id : ids) {
-    const auto m = method_from_id(id);
-    if (!m)
-      throw UsageError(fmt::format("--method: unknown method \"{}\" (see penumbra methods)", id));
-    methods.push_back({*m, 0.0});
-  }
-  std::error_code ec;
-  fs::create_directories(output, ec);
-  if (ec || !fs::is_directory(output))
-    throw OutputError(fmt::format("{}: cannot create the output folder", output));
-  const ContourGrid grid = make_contour_grid(methods, step);
-  json methods_json = json::array();
-  std::string csv = "method,light_deg,deviation_deg,G\n";
-  for (std::size_t k = 0; k < methods.size(); ++k) {
-    methods_json.push_back({{"id", ids[k]}, {"G", grid.g[k]}});
-    for (std::size_t i = 0; i < grid.deviation_deg.size(); ++i)
-      for (std::size_t j = 0; j < grid.light_deg.size(); ++j)
-        csv += fmt::format("{},{},{},{}\n", ids[k], grid.light_deg[j], grid.deviation_deg[i],
-                           grid.g[k][i][j]);
-  }
-  const json doc = {{"format", "penumbra-contour"},
-                    {"version", 1},
-                    {"geometry",
-                     "Ng = z, wi = (sin light, 0, cos light), Ns = (sin deviation, 0, "
-                     "cos deviation), wo = Ng; angles in degrees; G dimensionless"},
-                    {"light_deg", grid.light_deg},
-                    {"deviation_deg", grid.deviation_deg},
-                    {"methods", methods_json}};
-  const fs::path dir(output);
-  write_text_file((dir / "contour.json").string(), doc.dump(1) + "\n");
-  write_text_file((dir / "contour.csv").string(), csv);
-  run_plot_script(
-      {"contour", fs::absolute(dir / "contour.json").string(), fs::absolute(dir).string()},
-      (dir / "contour.log").string());
-  out << fmt::format(
-      "wrote {0}/contour.json, {0}/contour.csv and contour plots (PNG, SVG, PDF) "
-      "in {0}\n",
-      output);
-  return kExitOk;
-}
-
-double peak_rss_mib() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return double(usage.ru_maxrss) / 1024.0;  // Linux reports KiB
-}
-
-// The benchmark scene of the evaluator issue: a 512x512, 16 spp bump cylinder.
-json bench_scene(int size, int spp) {
-  return {
-      {"version", 1},
-      {"name", "bench-cylinder-grating"},
-      {"camera",
-       {{"position", {0, 0, -5}},
-        {"direction", {0, 0, 1}},
-        {"right", {2.5, 0, 0}},
-        {"up", {0, 2.5, 0}},
-        {"width", size},
-        {"height", size},
-        {"spp", spp},
-        {"seed", 1}}},
-      {"light", {{"type", "distant"}, {"direction", {-1, 0, -0.2}}, {"irradiance", kPi}}},
-      {"shape", {{"type", "cylinder"}, {"radius", 1.0}, {"height", 2.0}}},
-      {"material", {{"albedo", 0.8}}},
-      {"height",
-       {{"type", "grating"}, {"amplitude", 0.01}, {"frequency", 8.0}, {"direction", {1, 0, 0}}}},
-      {"representation", "bump"}};
-}
-
-int command_bench(int size, int spp, std::ostream& out) {
-  out << fmt::format(
-      "penumbra bench: {}x{}, {} spp, bump cylinder (grating, A = 0.01), {} threads\n", size, size,
-      spp, tbb::info::default_concurrency());
-  out << fmt::format("{:<24} {:>10} {:>16}\n", "method", "wall s", "M samples/s");
-  for (const MethodInfo& m : all_methods()) {
-    json document = bench_scene(size, spp);
-    document["terminator"] = {{"method", m.id}};
-    const Scene scene = scene_from_json(document, "<bench>");
-    RenderStats stats;
-    render(scene, {}, &stats);
-    out << fmt::format("{:<24} {:>10.3f} {:>16.2f}\n", m.id, stats.seconds,
-                       double(stats.camera_samples) / stats.seconds / 1e6);
-  }
-  const double rss_before = peak_rss_mib();
-  json document = bench_scene(size, spp);
-  document["representation"] = "displacement";
-  const Scene scene = scene_from_json(document, "<bench>");
-  RenderStats stats;
-  render(scene, {}, &stats);
-  out << fmt::format(
-      "displacement (edge {:.5f}): {} triangles, build {:.3f} s, total {:.3f} s wall, {:.2f} M "
-      "samples/s; peak RSS {:.0f} MiB (before: {:.0f} MiB)\n",
-      scene.displacement.edge_length, stats.triangles, stats.build_seconds, stats.seconds,
-      double(stats.camera_samples) / stats.seconds / 1e6, peak_rss_mib(), rss_before);
-  return kExitOk;
+// The external renderers' ids, for `export --to`.
+std::vector<std::string> external_renderer_ids() {
+  std::vector<std::string> ids;
+  for (const RendererInfo& info : renderer_table())
+    if (info.kind != RendererKind::kEvaluator) ids.push_back(info.id);
+  return ids;
 }
 
 }  // namespace
 
 // Unlike idiff, whose exit 2 is a failed comparison, Penumbra's 2 is bad input
 // and 3 a failed comparison, so that scripts can tell the two apart.
+namespace {
+
 constexpr const char* kExitCodes =
     "Exit status: 0 success; 1 a run failed (renderer or internal error, NaN or Inf in a "
     "render); 2 bad input (usage, scene or study file, output path, a render over --max-memory); "
@@ -759,6 +68,8 @@ std::optional<std::string> unknown_subcommand(CLI::App& app, int argc, const cha
                      names);
 }
 
+}  // namespace
+
 int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
   CLI::App app{"Penumbra: shadow-terminator laboratory (reference evaluator)", "penumbra"};
   app.require_subcommand(1);
@@ -774,6 +85,11 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   CLI::App* methods = app.add_subcommand("methods", "list the terminator methods");
   methods->add_flag("--json", methods_json, "print a JSON array");
 
+  bool renderers_json = false;
+  CLI::App* renderers = app.add_subcommand(
+      "renderers", "list the renderers: package, version probe, methods and offsets offered");
+  renderers->add_flag("--json", renderers_json, "print a JSON array");
+
   RenderArgs r;
   CLI::App* render_cmd = app.add_subcommand(
       "render", "render a scene with the evaluator, POV-Ray or Blender Cycles (--renderer)");
@@ -783,7 +99,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   add_scene_options(render_cmd, r.scene_args);
   render_cmd->add_flag("-q,--quiet", r.quiet, "no progress or summary");
 
-  render_cmd->add_option("--renderer", r.renderer, "evaluator (default), povray or blender");
+  render_cmd->add_option("--renderer", r.renderer,
+                         "renderer id: " + renderer_choices() +
+                             " (default evaluator; see "
+                             "`penumbra renderers`)");
   render_cmd->add_option("--timeout", r.timeout, "seconds an external renderer may run")
       ->check(CLI::PositiveNumber);
   render_cmd
@@ -797,7 +116,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       app.add_subcommand("export", "write a scene for POV-Ray (.pov) or Blender (job + mesh)");
   export_cmd->add_option("--to", x.to, "povray or blender")
       ->required()
-      ->check(CLI::IsMember({"povray", "blender"}));
+      ->check(CLI::IsMember(external_renderer_ids()));
   export_cmd->add_option("scene", x.scene, "scene JSON file")->required();
   export_cmd->add_option("-o,--output", x.output, "output folder")->required();
   add_scene_options(export_cmd, x.scene_args);
@@ -822,7 +141,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       ->check(CLI::NonNegativeNumber);
 
   CalibrationOptions cal;
-  cal.scenes_dir = std::string(kSourceDir) + "/scenes/calibration";
+  cal.scenes_dir = data_file("scenes/calibration");
   cal.output_dir = "results/calibration";
   cal.jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   bool cal_quiet = false;
@@ -865,6 +184,12 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       ->capture_default_str();
   run_cmd->add_flag("-q,--quiet", run_args.quiet, "no progress");
 
+  std::string report_folder;
+  CLI::App* report_cmd = app.add_subcommand(
+      "report", "redraw the figures and report.html of a study folder from its report.json");
+  report_cmd->add_option("folder", report_folder, "study output folder (holds report.json)")
+      ->required();
+
   std::vector<std::string> contour_methods;
   std::string contour_output = "results/contour";
   double contour_step = 1.0;
@@ -901,6 +226,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
                                                   threads);
   try {
     if (*methods) return command_methods(methods_json, out);
+    if (*renderers) return command_renderers(renderers_json, out);
+    if (*report_cmd) return command_report(report_folder, out);
     if (*render_cmd) return command_render(r, out, err);
     if (*export_cmd) return command_export(x, out);
     if (*compare_cmd) return command_compare(c, out, err);

@@ -57,40 +57,9 @@ json camera_json(const Camera& c) {
 
 }  // namespace
 
-std::vector<TerminatorMethod> methods_offered(const std::string& renderer,
-                                              Representation representation) {
-  if (renderer == "evaluator") {
-    std::vector<TerminatorMethod> all;
-    for (const MethodInfo& m : all_methods()) all.push_back(m.method);
-    return all;
-  }
-  if (renderer == "povray") return {TerminatorMethod::kNone};
-  if (renderer == "blender") {
-    if (representation == Representation::kBump)
-      return {TerminatorMethod::kNone, TerminatorMethod::kChiang2019,
-              TerminatorMethod::kShadingOffset};
-    return {TerminatorMethod::kNone, TerminatorMethod::kShadingOffset};
-  }
-  return {};
-}
-
-std::vector<OffsetMethod> offsets_offered(const std::string& renderer) {
-  if (renderer == "evaluator") {
-    std::vector<OffsetMethod> all;
-    for (const OffsetMethodInfo& m : all_offset_methods()) all.push_back(m.method);
-    return all;
-  }
-  if (renderer == "povray") return {OffsetMethod::kNone};
-  if (renderer == "blender") return {OffsetMethod::kNone, OffsetMethod::kCyclesGeometryOffset};
-  return {};
-}
-
 BlenderExport export_blender(const Scene& scene) {
   const TerminatorMethod method = scene.terminator.method.method;
-  bool offered = false;
-  for (TerminatorMethod m : methods_offered("blender", scene.representation))
-    offered = offered || m == method;
-  if (!offered)
+  if (!offers(RendererKind::kBlender, scene.representation, method))
     throw ExportError(fmt::format(
         "Blender Cycles 3.4 offers `none`, `chiang2019` (bump only) and `shading-offset`; "
         "`{}` is not available for the {} representation",
@@ -109,8 +78,7 @@ BlenderExport export_blender(const Scene& scene) {
     throw ExportError("Blender export: props are evaluator-only (remove /props)");
   // Cycles' object "Geometry Offset" is its only shadow-ray offset; 0 turns
   // it off, which is `none`.
-  if (scene.offset.method != OffsetMethod::kNone &&
-      scene.offset.method != OffsetMethod::kCyclesGeometryOffset)
+  if (!offers(RendererKind::kBlender, scene.offset.method))
     throw ExportError(fmt::format(
         "Blender Cycles 3.4 offers the shadow-ray offsets `none` and `cycles-geometry-offset`; "
         "`{}` is not available",

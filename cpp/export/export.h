@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/grid_mesh.h"
+#include "scene/renderer_table.h"
 #include "scene/scene.h"
 
 namespace penumbra {
@@ -78,16 +79,6 @@ inline constexpr const char* kBlenderTrianglesFile = "triangles.u32";
 inline Vec3 to_blender(const Vec3& p) {
   return {p.x, p.z, p.y};
 }
-
-// Which methods each external renderer offers, for reports: "povray",
-// "blender". Empty when the renderer cannot render the representation.
-std::vector<TerminatorMethod> methods_offered(const std::string& renderer,
-                                              Representation representation);
-
-// Which shadow-ray offsets (scene /offset) each renderer offers: "evaluator"
-// all, "povray" `none` (shadow rays start at the hit), "blender" `none` and
-// `cycles-geometry-offset`. Empty for an unknown renderer.
-std::vector<OffsetMethod> offsets_offered(const std::string& renderer);
 
 // A scene name reduced to [A-Za-z0-9 _.+-], at most 80 characters, for comments.
 std::string comment_safe(const std::string& text);

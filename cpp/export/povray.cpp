@@ -96,7 +96,7 @@ std::vector<std::string> PovrayExport::arguments(const std::string& input,
 }
 
 PovrayExport export_povray(const Scene& scene) {
-  if (scene.terminator.method.method != TerminatorMethod::kNone)
+  if (!offers(RendererKind::kPovray, scene.representation, scene.terminator.method.method))
     throw ExportError(
         fmt::format("POV-Ray has no shadow-terminator method; it renders only `none` (got `{}`)",
                     method_info(scene.terminator.method.method).id));
@@ -110,7 +110,7 @@ PovrayExport export_povray(const Scene& scene) {
     throw ExportError("POV-Ray export: props are evaluator-only (remove /props)");
   // POV-Ray starts shadow rays at the hit itself: the smooth-shading
   // terminator cannot be moved there (reference sheet, section 6).
-  if (scene.offset.method != OffsetMethod::kNone)
+  if (!offers(RendererKind::kPovray, scene.offset.method))
     throw ExportError(
         fmt::format("POV-Ray has no shadow-ray offset; it offers only `none` (got offset `{}`)",
                     offset_method_info(scene.offset.method).id));

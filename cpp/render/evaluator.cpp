@@ -22,12 +22,6 @@ const std::vector<std::string>& evaluator_channels() {
   return channels;
 }
 
-int Image::channel_index(const std::string& name) const {
-  for (std::size_t i = 0; i < channels.size(); ++i)
-    if (channels[i] == name) return static_cast<int>(i);
-  return -1;
-}
-
 namespace {
 
 using Clock = std::chrono::steady_clock;

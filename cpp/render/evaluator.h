@@ -9,21 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "image/image.h"
 #include "scene/scene.h"
 
 namespace penumbra {
-
-// Interleaved float image with named channels.
-struct Image {
-  int width = 0, height = 0;
-  std::vector<std::string> channels;
-  std::vector<float> pixels;  // width * height * channels.size()
-
-  int channel_index(const std::string& name) const;
-  float at(int x, int y, int channel) const {
-    return pixels[(std::size_t(y) * width + x) * channels.size() + channel];
-  }
-};
 
 // Channels of every evaluator render, in this order:
 //   R, G, B      radiance (W m^-2 sr^-1), box-filtered over the pixel

@@ -12,70 +12,16 @@
 #include <fmt/format.h>
 
 #include "export/export.h"
-#include "render/image_io.h"
-#include "renderers/process.h"
+#include "image/image_io.h"
+#include "renderers/code_digest.h"
+#include "util/data_files.h"
 #include "util/files.h"
+#include "util/hash.h"
+#include "util/process.h"
 #include "util/strict_json.h"
 
 namespace penumbra {
 namespace fs = std::filesystem;
-
-const char* to_string(RendererKind r) {
-  switch (r) {
-    case RendererKind::kEvaluator:
-      return "evaluator";
-    case RendererKind::kPovray:
-      return "povray";
-    case RendererKind::kBlender:
-      return "blender";
-  }
-  return "?";
-}
-
-std::optional<RendererKind> renderer_from_id(const std::string& id) {
-  for (RendererKind r : all_renderers())
-    if (id == to_string(r)) return r;
-  return std::nullopt;
-}
-
-const std::vector<RendererKind>& all_renderers() {
-  static const std::vector<RendererKind> all{RendererKind::kEvaluator, RendererKind::kPovray,
-                                             RendererKind::kBlender};
-  return all;
-}
-
-const char* debian_package(RendererKind r) {
-  switch (r) {
-    case RendererKind::kPovray:
-      return "povray";
-    case RendererKind::kBlender:
-      return "blender";
-    case RendererKind::kEvaluator:
-      break;
-  }
-  return "";
-}
-
-Image box_downsample(const Image& image, int nx, int ny) {
-  if (nx == 1 && ny == 1) return image;
-  Image out;
-  out.width = image.width / nx;
-  out.height = image.height / ny;
-  out.channels = image.channels;
-  const std::size_t nc = image.channels.size();
-  out.pixels.assign(std::size_t(out.width) * out.height * nc, 0.0f);
-  const double weight = 1.0 / (nx * ny);
-  for (int y = 0; y < out.height; ++y)
-    for (int x = 0; x < out.width; ++x)
-      for (std::size_t c = 0; c < nc; ++c) {
-        double sum = 0.0;  // fixed order: the same bits every time
-        for (int sy = 0; sy < ny; ++sy)
-          for (int sx = 0; sx < nx; ++sx)
-            sum += image.at(x * nx + sx, y * ny + sy, static_cast<int>(c));
-        out.pixels[(std::size_t(y) * out.width + x) * nc + c] = static_cast<float>(sum * weight);
-      }
-  return out;
-}
 
 namespace {
 
@@ -84,15 +30,16 @@ int thread_count(const RenderSettings& s) {
 }
 
 std::string executable_for(RendererKind r, const RenderSettings& s) {
+  const RendererInfo& info = renderer_info(r);
   std::string name = s.executable;
-  const char* env = r == RendererKind::kPovray ? "PENUMBRA_POVRAY" : "PENUMBRA_BLENDER";
-  if (name.empty() && std::getenv(env)) name = std::getenv(env);
-  if (name.empty()) name = debian_package(r);
+  const char* env = std::getenv(info.executable_variable);
+  if (name.empty() && env) name = env;
+  if (name.empty()) name = info.executable;
   const std::optional<std::string> found = find_executable(name);
   if (!found)
     throw RendererError(fmt::format(
         "{}: `{}` not found (install the Debian package `{}`: apt-get install {}; or set {})",
-        to_string(r), name, debian_package(r), debian_package(r), env));
+        info.id, name, info.debian_package, info.debian_package, info.executable_variable));
   return *found;
 }
 
@@ -100,7 +47,7 @@ std::string blender_script(const RenderSettings& s) {
   std::string script = s.blender_script;
   if (script.empty() && std::getenv("PENUMBRA_BLENDER_SCRIPT"))
     script = std::getenv("PENUMBRA_BLENDER_SCRIPT");
-  if (script.empty()) script = std::string(PENUMBRA_SOURCE_DIR) + "/harness/blender_render.py";
+  if (script.empty()) script = data_file("harness/blender_render.py");
   if (!fs::is_regular_file(script))
     throw RendererError(fmt::format("blender: the harness script {} is missing", script));
   return fs::absolute(script).string();
@@ -174,8 +121,7 @@ void check_output(RendererKind r, const Image& image, const Scene& scene) {
   for (const char* name : {"R", "G", "B", "A"})
     if (image.channel_index(name) < 0)
       throw RendererError(fmt::format("{} returned no {} channel", to_string(r), name));
-  const std::size_t bad = static_cast<std::size_t>(std::count_if(
-      image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); }));
+  const std::size_t bad = count_nonfinite(image);
   if (bad > 0)
     throw RendererError(
         fmt::format("{} returned {} NaN or Inf values (of {}); the image is not used or cached",
@@ -183,28 +129,13 @@ void check_output(RendererKind r, const Image& image, const Scene& scene) {
 }
 
 // Alpha and colour from the renderer, analysis channels from the evaluator.
+// Renderers store colour premultiplied over a black background.
 Image merge_with_geometry(const Image& colour, const Image& geometry, RendererKind r) {
-  if (colour.width != geometry.width || colour.height != geometry.height)
-    throw RendererError(fmt::format("{} wrote a {}x{} image, expected {}x{}", to_string(r),
-                                    colour.width, colour.height, geometry.width, geometry.height));
-  int source[4];
-  const char* names[4] = {"R", "G", "B", "A"};
-  for (int c = 0; c < 4; ++c) {
-    source[c] = colour.channel_index(names[c]);
-    if (source[c] < 0)
-      throw RendererError(fmt::format("{} output has no {} channel", to_string(r), names[c]));
+  try {
+    return with_channels_from(geometry, colour, rgba_channels());
+  } catch (const ImageMismatch& e) {
+    throw RendererError(fmt::format("{} output: {}", to_string(r), e.what()));
   }
-  Image out = geometry;
-  const std::size_t nc = out.channels.size();
-  for (int y = 0; y < out.height; ++y)
-    for (int x = 0; x < out.width; ++x)
-      for (int c = 0; c < 4; ++c) {
-        const float v = colour.at(x, y, source[c]);
-        // Renderers store colour premultiplied and may leave junk where alpha
-        // is 0; black background by definition.
-        out.pixels[(std::size_t(y) * out.width + x) * nc + c] = v;
-      }
-  return out;
 }
 
 RendererRun geometry_pass(const Scene& scene, const RenderSettings& settings) {
@@ -366,6 +297,25 @@ void check_resources(const ResourceEstimate& estimate, double max_memory_bytes,
                                   gib(double(space.available)), gib(estimate.output_bytes)));
 }
 
+std::string pixel_code_digest(RendererKind renderer, const RenderSettings& settings) {
+  const CodeDigests& d = build_code_digests();
+  switch (renderer) {
+    case RendererKind::kEvaluator:
+      return d.evaluator;
+    case RendererKind::kPovray:
+      return fmt::format("{}-{}", d.evaluator, d.povray);
+    case RendererKind::kBlender: {
+      const std::string script = blender_script(settings);
+      std::ifstream in(script, std::ios::binary);
+      const std::string text((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
+      if (!in && !in.eof()) throw RendererError(fmt::format("blender: cannot read {}", script));
+      return fmt::format("{}-{}-{:016x}", d.evaluator, d.blender, fnv1a(text));
+    }
+  }
+  throw std::logic_error("unknown renderer");
+}
+
 std::string renderer_version(RendererKind renderer, const RenderSettings& settings) {
   if (renderer == RendererKind::kEvaluator) return std::string("penumbra ") + kPenumbraVersion;
   const std::string exe = executable_for(renderer, settings);
@@ -382,7 +332,7 @@ std::string renderer_version(RendererKind renderer, const RenderSettings& settin
     std::ifstream in(pattern);
     std::string l;
     while (std::getline(in, l))
-      if (l.find("POV-Ray 3") != std::string::npos || l.rfind("Blender ", 0) == 0) {
+      if (l.find(renderer_info(renderer).version_marker) != std::string::npos) {
         line = l;
         break;
       }

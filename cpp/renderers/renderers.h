@@ -11,17 +11,10 @@
 #include <vector>
 
 #include "render/evaluator.h"
+#include "scene/renderer_table.h"
 #include "scene/scene.h"
 
 namespace penumbra {
-
-enum class RendererKind { kEvaluator, kPovray, kBlender };
-
-const char* to_string(RendererKind r);
-std::optional<RendererKind> renderer_from_id(const std::string& id);
-const std::vector<RendererKind>& all_renderers();
-// The Debian package that provides an external renderer.
-const char* debian_package(RendererKind r);
 
 // An external renderer is missing, failed, or timed out. what() says which,
 // names the log and quotes its last lines.
@@ -64,6 +57,11 @@ struct RendererRun {
 // image of the wrong size, without R G B A, or with NaN or Inf values).
 RendererRun render_with(RendererKind renderer, const Scene& scene, const RenderSettings& settings);
 
+// A digest of the code and scripts that produce `renderer`'s pixels (see
+// renderers/code_digest.h); part of cache keys. For Blender it covers the
+// script that settings (or PENUMBRA_BLENDER_SCRIPT) select.
+std::string pixel_code_digest(RendererKind renderer, const RenderSettings& settings);
+
 // "POV-Ray 3.7.0.10" / "Blender 3.4.1" / "penumbra 0.3.0": the first line
 // the renderer prints for --version; part of cache keys. The probe is killed
 // after min(60 s, settings.timeout_s).
@@ -89,9 +87,5 @@ ResourceEstimate estimate_resources(RendererKind renderer, const Scene& scene);
 // (if not empty) has less free space than the output may take.
 void check_resources(const ResourceEstimate& estimate, double max_memory_bytes,
                      const std::string& origin, const std::string& output_folder = "");
-
-// Mean over each nx x ny block of pixels: the box filter that turns a
-// supersampled render into the final image.
-Image box_downsample(const Image& image, int nx, int ny);
 
 }  // namespace penumbra

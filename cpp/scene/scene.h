@@ -16,11 +16,11 @@
 #include "core/terminator.h"
 #include "core/tessellation.h"
 #include "core/vec.h"
+#include "util/version.h"
 
 namespace penumbra {
 
 inline constexpr int kSceneFormatVersion = 1;
-inline constexpr const char* kPenumbraVersion = "0.4.0";
 inline constexpr int kMaxImageSize = 16384;
 // Input domains that keep every quantity finite in float (Embree, images):
 // coordinates and lengths within +-1e6 scene units (shapes are meant to be

@@ -1,6 +1,11 @@
 // Independent renders in parallel: `jobs` worker threads take tasks in index
 // order. Each task must catch its own exceptions (a failed render is a result
 // to report, not a reason to stop the others).
+//
+// Plain threads rather than TBB (which the evaluator uses): tasks are long
+// renders that mostly wait on an external process, and a TBB arena would
+// also cap the evaluator's own parallel loops inside each task. Tasks start
+// in index order, which keeps "stop after N renders" deterministic.
 #pragma once
 
 #include <algorithm>

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "render/evaluator.h"
+#include "image/image.h"
 
 namespace penumbra {
 

@@ -1,18 +1,16 @@
-#include "report/calibration.h"
+#include "study/calibration.h"
 
 #include <cmath>
 #include <filesystem>
 #include <map>
-#include <mutex>
-#include <thread>
 
 #include <fmt/format.h>
 
 #include "analysis/metrics_json.h"
 #include "export/export.h"
-#include "render/image_io.h"
-#include "renderers/parallel.h"
+#include "image/image_io.h"
 #include "scene/scene_json.h"
+#include "study/execute.h"
 #include "util/files.h"
 
 namespace penumbra {
@@ -114,18 +112,13 @@ json CalibrationResult::to_json() const {
           {"rows", rows_json}};
 }
 
-CalibrationResult run_calibration(const CalibrationOptions& options) {
-  const fs::path out(options.output_dir), renders_dir = out / "renders";
-  std::error_code ec;
-  fs::create_directories(renders_dir, ec);
-  if (ec || !fs::is_directory(renders_dir))
-    throw OutputError(
-        fmt::format("{}: cannot create the folder: {}", renders_dir.string(), ec.message()));
-  remove_stale_temporaries(renders_dir.string());  // left by a killed earlier calibration
+namespace {
+
+// The fixed plan: every case on both shapes. Parses everything before the
+// first render, so bad input fails fast.
+std::vector<Spec> calibration_specs(const CalibrationOptions& options) {
   std::vector<Override> overrides;
   for (const std::string& s : options.sets) overrides.push_back(parse_override(s));
-
-  // Parse everything before the first render: bad input fails fast.
   std::vector<Spec> specs;
   const struct {
     Representation representation;
@@ -174,49 +167,60 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
     }
   }
 
-  CalibrationResult result;
+  return specs;
+}
+
+// Renders every case in parallel into `renders_dir` (failures are kept as
+// rows' "missing", not thrown).
+std::vector<Image> render_specs(const std::vector<Spec>& specs, const CalibrationOptions& options,
+                                const fs::path& renders_dir, CalibrationResult& result) {
   result.renders.resize(specs.size());
   std::vector<Image> images(specs.size());
-  std::mutex log_mutex;
-  const int threads = std::max(
-      1, static_cast<int>(std::thread::hardware_concurrency()) / std::max(1, options.jobs));
-  run_parallel(options.jobs, specs.size(), [&](std::size_t i) {
-    const Spec& spec = specs[i];
+  ExecuteOptions eo;
+  eo.jobs = options.jobs;
+  eo.log = options.log;
+  const ExecuteResult executed = execute_tasks(
+      specs.size(), eo,
+      [&](std::size_t i) {
+        const Spec& spec = specs[i];
+        CalibrationRender& r = result.renders[i];
+        RenderSettings settings;
+        settings.timeout_s = options.timeout_s;
+        settings.threads = threads_per_job(options.jobs);
+        settings.log_path = (renders_dir / (spec.label + ".log")).string();
+        std::error_code ignored;
+        fs::remove(settings.log_path, ignored);  // a log per attempt, not appended forever
+        RendererRun run = render_with(spec.renderer, spec.scene, settings);
+        r.seconds = run.seconds;
+        r.evaluator_seconds =
+            spec.renderer == RendererKind::kEvaluator ? run.seconds : run.geometry_seconds;
+        r.file = (renders_dir / (spec.label + ".exr")).string();
+        write_exr(run.image, r.file,
+                  {{"penumbra:version", kPenumbraVersion},
+                   {"penumbra:renderer", to_string(spec.renderer)},
+                   {"penumbra:method", spec.method},
+                   {"penumbra:representation", to_string(spec.representation)},
+                   {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
+        images[i] = std::move(run.image);
+      },
+      [&](std::size_t i) {
+        return fmt::format("{} with {}", specs[i].label, to_string(specs[i].renderer));
+      });
+  for (std::size_t i = 0; i < specs.size(); ++i) {
     CalibrationRender& r = result.renders[i];
-    r.label = spec.label;
-    r.renderer = to_string(spec.renderer);
-    r.file = (renders_dir / (spec.label + ".exr")).string();
-    RenderSettings settings;
-    settings.timeout_s = options.timeout_s;
-    settings.threads = threads;
-    settings.log_path = (renders_dir / (spec.label + ".log")).string();
-    try {
-      std::error_code ignored;
-      fs::remove(settings.log_path, ignored);  // a log per attempt, not appended forever
-      RendererRun run = render_with(spec.renderer, spec.scene, settings);
-      r.seconds = run.seconds;
-      r.evaluator_seconds =
-          spec.renderer == RendererKind::kEvaluator ? run.seconds : run.geometry_seconds;
-      write_exr(run.image, r.file,
-                {{"penumbra:version", kPenumbraVersion},
-                 {"penumbra:renderer", r.renderer},
-                 {"penumbra:method", spec.method},
-                 {"penumbra:representation", to_string(spec.representation)},
-                 {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
-      images[i] = std::move(run.image);
-    } catch (const std::exception& e) {
-      r.error = e.what();
+    r.label = specs[i].label;
+    r.renderer = to_string(specs[i].renderer);
+    if (!executed.done[i]) {
+      r.error = executed.errors[i].empty() ? "not rendered (interrupted)" : executed.errors[i];
       r.file.clear();
     }
-    if (options.log) {
-      std::lock_guard<std::mutex> lock(log_mutex);
-      options.log(
-          r.error.empty()
-              ? fmt::format("rendered {} with {} in {:.2f} s", spec.label, r.renderer, r.seconds)
-              : fmt::format("FAILED {} with {}: {}", spec.label, r.renderer, r.error));
-    }
-  });
+  }
+  return images;
+}
 
+// Compares the cases and checks each against its bound.
+void calibration_rows(const std::vector<Spec>& specs, const std::vector<Image>& images,
+                      CalibrationResult& result) {
   std::map<std::string, std::size_t> index;
   for (std::size_t i = 0; i < specs.size(); ++i) index[specs[i].label] = i;
   auto compare = [&](const std::string& shape, Representation rep, const std::string& test_method,
@@ -301,6 +305,22 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
             at_most("profile RMSE (fraction of albedo*E/pi)", row.profile.rmse_overall, 0.01));
     }
   }
+}
+
+}  // namespace
+
+CalibrationResult run_calibration(const CalibrationOptions& options) {
+  const fs::path out(options.output_dir), renders_dir = out / "renders";
+  const std::vector<Spec> specs = calibration_specs(options);
+  std::error_code ec;
+  fs::create_directories(renders_dir, ec);
+  if (ec || !fs::is_directory(renders_dir))
+    throw OutputError(
+        fmt::format("{}: cannot create the folder: {}", renders_dir.string(), ec.message()));
+  remove_stale_temporaries(renders_dir.string());  // left by a killed earlier calibration
+  CalibrationResult result;
+  const std::vector<Image> images = render_specs(specs, options, renders_dir, result);
+  calibration_rows(specs, images, result);
   return result;
 }
 

@@ -1,4 +1,4 @@
-#include "renderers/process.h"
+#include "util/process.h"
 
 #include <fcntl.h>
 #include <signal.h>

@@ -1,0 +1,96 @@
+// The subcommands of `penumbra`, as functions of parsed arguments: cli.cpp
+// declares the options (CLI11) and maps exceptions to exit codes.
+#pragma once
+
+#include <signal.h>
+
+#include <array>
+#include <ostream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cli/cli.h"
+#include "renderers/renderers.h"
+#include "study/calibration.h"
+
+namespace penumbra {
+
+// A command-line value that parses but makes no sense (exit 2).
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// While alive, SIGINT, SIGTERM and SIGHUP stop the command cleanly: running
+// renderers are ended, nothing half-written is left, and the exit status is
+// 128 + the signal (130 for Ctrl-C).
+class StopSignals {
+ public:
+  StopSignals();
+  ~StopSignals();
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+  static int exit_code();
+
+ private:
+  std::array<struct sigaction, 3> previous_{};
+};
+
+// Scene shortcuts shared by render and export: each is --set on one pointer.
+struct SceneArgs {
+  std::string method, offset, representation;
+  int segments = 0, width = 0, height = 0, spp = 0;
+  std::vector<std::string> sets;
+};
+
+struct RenderArgs {
+  std::string scene;
+  std::string output;
+  std::string preview;
+  SceneArgs scene_args;
+  bool quiet = false;
+  std::string renderer = "evaluator";
+  double timeout = 600.0;
+  double max_memory_gib = kDefaultMaxMemoryBytes / kGiB;
+};
+
+struct CompareArgs {
+  std::string reference, test;
+  std::string difference;  // -o: the difference image
+  bool json = false;
+  double scale = 0.0;
+  double max_rmse = -1.0;
+};
+
+struct ExportArgs {
+  std::string to;
+  std::string scene;
+  std::string output;
+  SceneArgs scene_args;
+};
+
+struct RunArgs {
+  std::string study, output;
+  int jobs = 0;
+  double timeout = 600.0;
+  long max_renders = -1;
+  bool no_figures = false, quiet = false, dry_run = false;
+  double max_memory_gib = kDefaultMaxMemoryBytes / kGiB;
+};
+
+int command_methods(bool as_json, std::ostream& out);
+int command_renderers(bool as_json, std::ostream& out);
+int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err);
+int command_export(const ExportArgs& a, std::ostream& out);
+int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err);
+int command_calibrate(const CalibrationOptions& options, bool quiet, std::ostream& out,
+                      std::ostream& err);
+int command_run(const RunArgs& a, std::ostream& out, std::ostream& err);
+// Redraws the figures and report.html of a study folder from its report.json.
+int command_report(const std::string& folder, std::ostream& out);
+int command_contour(const std::vector<std::string>& ids, double step, const std::string& output,
+                    std::ostream& out);
+int command_bench(int size, int spp, std::ostream& out);
+
+}  // namespace penumbra

@@ -1,0 +1,22 @@
+// Digests of the source files that produce a render's pixels, computed at
+// build time (cpp/renderers/code_digest.cmake regenerates them whenever one
+// of those files changes). They are part of every cache key, so editing a
+// method or an exporter re-renders exactly the entries it can change:
+//   evaluator  core math, scene reader, images, evaluator: every renderer's
+//              entry holds the evaluator's analysis channels, so all depend on it;
+//   povray     the POV-Ray exporter (POV-Ray entries only);
+//   blender    the Blender exporter (Blender entries only; the script itself
+//              is hashed when it is used, see pixel_code_digest).
+#pragma once
+
+namespace penumbra {
+
+struct CodeDigests {
+  const char* evaluator;
+  const char* povray;
+  const char* blender;
+};
+
+const CodeDigests& build_code_digests();
+
+}  // namespace penumbra

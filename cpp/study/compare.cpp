@@ -1,0 +1,155 @@
+#include "study/compare.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <map>
+
+#include "image/image_io.h"
+#include "study/names.h"
+
+namespace penumbra {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Signed difference test - reference in units of albedo*E/pi, on a diverging
+// map saturating at +-0.25: red brighter, blue darker, white equal; grey
+// where either image has no object.
+void write_difference_png(const Image& test, const Image& reference, double scale,
+                          const std::string& path) {
+  std::vector<unsigned char> rgb(std::size_t(test.width) * test.height * 3);
+  const int a1 = test.channel_index("A"), a2 = reference.channel_index("A");
+  const int r1 = test.channel_index("R"), r2 = reference.channel_index("R");
+  for (int y = 0; y < test.height; ++y)
+    for (int x = 0; x < test.width; ++x) {
+      unsigned char* p = &rgb[(std::size_t(y) * test.width + x) * 3];
+      if (test.at(x, y, a1) < 0.5f || reference.at(x, y, a2) < 0.5f) {
+        p[0] = p[1] = p[2] = 96;
+        continue;
+      }
+      const double d = (test.at(x, y, r1) - reference.at(x, y, r2)) / scale;
+      const double v = std::clamp(d / 0.25, -1.0, 1.0);
+      const auto c = [](double t) { return static_cast<unsigned char>(std::lround(255.0 * t)); };
+      if (v >= 0)
+        p[0] = 255, p[1] = c(1 - v), p[2] = c(1 - v);
+      else
+        p[0] = c(1 + v), p[1] = c(1 + v), p[2] = 255;
+    }
+  write_png_rgb8(path, test.width, test.height, rgb);
+}
+
+const char* truth_name(SectionKind kind) {
+  return kind == SectionKind::kBump ? "displacement" : "analytic";
+}
+
+RenderRow render_row(const Plan& plan, const RenderedImages& r, std::size_t i,
+                     const fs::path& out) {
+  const Job& job = plan.jobs[i];
+  const double scale = radiance_scale(job.scene);
+  RenderRow row;
+  row.job = i;
+  const std::string stem = file_safe(job.label);
+  row.image = "images/" + stem + ".png";
+  write_preview_png(r.images[i], (out / row.image).string());
+  const long truth = plan.truth(job.variant, job.renderer);
+  if (!job.truth && truth >= 0 && r.done[truth]) {
+    row.difference = "images/" + stem + "-diff.png";
+    write_difference_png(r.images[i], r.images[truth], scale, (out / row.difference).string());
+  }
+  row.profile = terminator_profile(r.images[i], scale, ProfileOptions{});
+  return row;
+}
+
+// The test job against the same renderer's truth, and the evaluator's.
+void add_comparisons(const Plan& plan, const RenderedImages& r, std::size_t i, Comparisons& c) {
+  const Job& job = plan.jobs[i];
+  const SectionKind kind = plan.variants[job.variant].section;
+  std::vector<std::pair<RendererKind, long>> refs{
+      {job.renderer, plan.truth(job.variant, job.renderer)}};
+  if (job.renderer != RendererKind::kEvaluator)
+    refs.push_back({RendererKind::kEvaluator, plan.truth(job.variant, RendererKind::kEvaluator)});
+  const double scale = radiance_scale(job.scene);
+  const ProfileOptions po;
+  for (const auto& [ref_renderer, ref] : refs) {
+    if (ref < 0 || !r.done[ref]) continue;
+    ComparisonRow row;
+    row.variant = job.variant, row.job = i, row.reference_job = static_cast<std::size_t>(ref);
+    row.renderer = job.renderer, row.reference_renderer = ref_renderer;
+    row.method = job.method;
+    row.reference = std::string(to_string(ref_renderer)) + ":" + truth_name(kind);
+    row.profile = compare_profiles(terminator_profile(r.images[i], scale, po),
+                                   terminator_profile(r.images[ref], scale, po), po);
+    row.image = compare_images(r.images[i], r.images[ref]);
+    if (kind == SectionKind::kLowPoly)
+      row.shadow = compare_shadows(r.images[i], r.images[ref], scale);
+    c.nonfinite += row.image.nonfinite;
+    c.rows.push_back(std::move(row));
+  }
+}
+
+// Mean of `metric` (and `second`) per method over the evaluator's rows
+// against the evaluator's truth that `metric` and `second` define, sorted by
+// the mean, then the method label.
+std::vector<RankEntry> rank_rows(const Plan& plan, const std::vector<ComparisonRow>& rows,
+                                 SectionKind kind, const std::string& scene,
+                                 const std::function<double(const ComparisonRow&)>& metric,
+                                 const std::function<double(const ComparisonRow&)>& second) {
+  std::map<std::string, RankEntry> sums;
+  for (const ComparisonRow& row : rows) {
+    const Variant& v = plan.variants[row.variant];
+    if (v.section != kind || row.renderer != RendererKind::kEvaluator ||
+        row.reference_renderer != RendererKind::kEvaluator)
+      continue;
+    if (!scene.empty() && v.scene != scene) continue;
+    const double m = metric(row), s = second(row);
+    if (!std::isfinite(m) || !std::isfinite(s)) continue;
+    RankEntry& e = sums[row.method];
+    e.method = row.method;
+    e.mean += m, e.second += s, ++e.count;
+  }
+  std::vector<RankEntry> order;
+  for (auto& [method, e] : sums) {
+    e.mean /= e.count, e.second /= e.count;
+    order.push_back(e);
+  }
+  std::sort(order.begin(), order.end(), [](const RankEntry& a, const RankEntry& b) {
+    return a.mean != b.mean ? a.mean < b.mean : a.method < b.method;
+  });
+  return order;
+}
+
+}  // namespace
+
+Comparisons compare_study(const Plan& plan, const RenderedImages& renders,
+                          const std::string& study_folder) {
+  const fs::path out(study_folder);
+  Comparisons c;
+  c.renders.resize(plan.variants.size());
+  for (std::size_t v = 0; v < plan.variants.size(); ++v)
+    for (std::size_t i : plan.variants[v].jobs) {
+      if (!renders.done[i]) continue;
+      c.renders[v].push_back(render_row(plan, renders, i, out));
+      if (!plan.jobs[i].truth) add_comparisons(plan, renders, i, c);
+    }
+  return c;
+}
+
+std::vector<RankEntry> rank_bump(const Plan& plan, const std::vector<ComparisonRow>& rows,
+                                 const std::string& scene) {
+  return rank_rows(
+      plan, rows, SectionKind::kBump, scene,
+      [](const ComparisonRow& r) { return r.profile.rmse_terminator; },
+      [](const ComparisonRow&) { return 0.0; });
+}
+
+std::vector<RankEntry> rank_lowpoly(const Plan& plan, const std::vector<ComparisonRow>& rows,
+                                    const std::string& scene) {
+  return rank_rows(
+      plan, rows, SectionKind::kLowPoly, scene,
+      [](const ComparisonRow& r) { return r.shadow->darkened_fraction; },
+      [](const ComparisonRow& r) { return r.profile.rmse_terminator; });
+}
+
+}  // namespace penumbra

@@ -1,0 +1,71 @@
+// Comparing a study's renders: every test render against its section's
+// ground truth, the same renderer's and the evaluator's, as typed rows; the
+// rankings are computed from those rows.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "analysis/metrics.h"
+#include "image/image.h"
+#include "study/plan.h"
+
+namespace penumbra {
+
+// The images of a study's jobs after the render phase (done[i]: images[i] is valid).
+struct RenderedImages {
+  std::vector<char> done;
+  std::vector<Image> images;
+};
+
+// A render as the report lists it.
+struct RenderRow {
+  std::size_t job = 0;
+  std::string image;       // preview PNG, relative to the study folder
+  std::string difference;  // difference PNG against the truth, "" if none
+  Profile profile;
+};
+
+// One test render against one ground truth.
+struct ComparisonRow {
+  std::size_t variant = 0, job = 0, reference_job = 0;
+  RendererKind renderer = RendererKind::kEvaluator;            // of the test
+  RendererKind reference_renderer = RendererKind::kEvaluator;  // of the truth
+  std::string method;                                          // label of the method or offset
+  std::string reference;  // "evaluator:displacement", "blender:analytic"
+  ProfileMetrics profile;
+  ImageMetrics image;
+  std::optional<ShadowMetrics> shadow;  // low-poly rows
+};
+
+struct Comparisons {
+  std::vector<std::vector<RenderRow>> renders;  // per variant, done jobs only
+  std::vector<ComparisonRow> rows;              // in job order, then reference order
+  std::size_t nonfinite = 0;                    // NaN or Inf values seen (a failure)
+};
+
+// Compares every done test job with its truths and writes the preview and
+// difference PNGs into `study_folder`/images.
+Comparisons compare_study(const Plan& plan, const RenderedImages& renders,
+                          const std::string& study_folder);
+
+// One method's mean over the rows a ranking selects.
+struct RankEntry {
+  std::string method;
+  double mean = 0.0;    // the ranking metric
+  double second = 0.0;  // low-poly: the mean terminator RMSE beside it
+  int count = 0;
+};
+
+// Bump methods: the evaluator against the evaluator's displacement, by the
+// mean terminator-region profile RMSE, over `scene` ("" for all).
+std::vector<RankEntry> rank_bump(const Plan& plan, const std::vector<ComparisonRow>& rows,
+                                 const std::string& scene);
+// Offsets: the evaluator against its analytic render, by the mean fraction of
+// lit pixels each darkens.
+std::vector<RankEntry> rank_lowpoly(const Plan& plan, const std::vector<ComparisonRow>& rows,
+                                    const std::string& scene);
+
+}  // namespace penumbra

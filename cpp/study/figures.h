@@ -1,0 +1,24 @@
+// The figures and report.html, drawn by harness/report.py (matplotlib and a
+// Jinja2 template) from report.json alone, so they can be redrawn without
+// rendering (`penumbra report DIR`).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace penumbra {
+
+// Runs harness/report.py (found beside the binary, util/data_files.h) with
+// `arguments`, its output in `log_path`. Python: `python`, else
+// PENUMBRA_PYTHON, else /usr/bin/python3 (Debian's, which has
+// python3-matplotlib and python3-jinja2), else python3. RendererError when it
+// is missing, fails or times out.
+void run_plot_script(const std::vector<std::string>& arguments, const std::string& log_path,
+                     const std::string& python = "", double timeout_s = 600.0);
+
+// Draws the figures and report.html of the study folder `folder` (which holds
+// report.json); returns the path of report.html.
+std::string draw_report(const std::string& folder, const std::string& python = "",
+                        double timeout_s = 600.0);
+
+}  // namespace penumbra

@@ -1,0 +1,182 @@
+#include "study/plan.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include <fmt/format.h>
+
+#include "scene/scene_json.h"
+#include "util/strict_json.h"
+
+namespace penumbra {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+long Plan::find(std::size_t v, RendererKind r, const std::string& method) const {
+  for (std::size_t i : variants[v].jobs)
+    if (jobs[i].renderer == r && jobs[i].method == method) return static_cast<long>(i);
+  return -1;
+}
+
+long Plan::truth(std::size_t v, RendererKind r) const {
+  for (std::size_t i : variants[v].jobs)
+    if (jobs[i].renderer == r && jobs[i].truth) return static_cast<long>(i);
+  return -1;
+}
+
+namespace {
+
+std::string value_text(const json& v) {
+  if (v.is_number_float()) return fmt::format("{:g}", v.get<double>());
+  return v.dump();
+}
+
+// Combination `c` of the axes (mixed radix, the first axis fastest) as
+// overrides after `set`; records the values and extends the label of `v`.
+std::vector<Override> axis_combination(const std::vector<Override>& set,
+                                       const std::vector<StudyAxis>& axes, std::size_t c,
+                                       Variant* v) {
+  std::vector<Override> overrides = set;
+  for (const StudyAxis& a : axes) {
+    const json& value = a.values[c % a.values.size()];
+    c /= a.values.size();
+    overrides.push_back({a.pointer, value});
+    v->axis_values.push_back(value);
+    v->label += fmt::format(", {}={}", a.label, value_text(value));
+  }
+  return overrides;
+}
+
+// ---- what differs between the sections ----------------------------------------
+
+// The overrides that make a variant's scene the truth (m == nullptr) or the
+// test of method m.
+std::vector<Override> section_overrides(SectionKind kind, const StudyMethod* m) {
+  if (kind == SectionKind::kBump) {
+    std::vector<Override> o{
+        {"/representation", to_string(m ? Representation::kBump : Representation::kDisplacement)},
+        {"/terminator/method", m ? m->id : "none"}};
+    if (m && m->parameters.is_object()) o.push_back({"/terminator/parameters", m->parameters});
+    return o;
+  }
+  json offset = {{"method", m ? m->id : "none"}};
+  if (m && m->parameters.is_object())
+    for (const auto& [k, value] : m->parameters.items()) offset[k] = value;
+  std::vector<Override> o{{"/offset", offset}};
+  if (!m) o.push_back({"/shape/tessellation", nullptr});  // the analytic surface
+  return o;
+}
+
+bool section_offers(SectionKind kind, RendererKind r, const StudyMethod& m) {
+  if (kind == SectionKind::kBump) return offers(r, Representation::kBump, *method_from_id(m.id));
+  return offers(r, *offset_method_from_id(m.id));
+}
+
+std::string job_label(SectionKind kind, const Variant& v, const Job& job) {
+  if (kind == SectionKind::kBump)
+    return fmt::format("{}-{}-{}-{}", v.id, to_string(job.renderer), to_string(job.representation),
+                       job.method);
+  return fmt::format("{}-{}-{}", v.id, to_string(job.renderer), job.method);
+}
+
+// Why renderer r cannot render this scene at all ("" when it can).
+std::string cannot_render(RendererKind r, const json& scene) {
+  const RendererInfo& info = renderer_info(r);
+  if (!info.props && scene.contains("props") && !scene["props"].empty()) return info.props_why_not;
+  return "";
+}
+
+// ---- expansion ------------------------------------------------------------------
+
+struct VariantContext {
+  const Section& section;
+  const json& base;
+  const std::vector<Override>& overrides;
+  const std::string& origin;
+  int blender_spp;
+};
+
+void add_job(const VariantContext& c, RendererKind r, const StudyMethod* m, Variant& v,
+             std::size_t variant_index, Plan& plan) {
+  json doc = c.base;
+  std::vector<Override> all = c.overrides;
+  for (Override& o : section_overrides(c.section.kind, m)) all.push_back(std::move(o));
+  if (r == RendererKind::kBlender) all.push_back({"/camera/spp", c.blender_spp});
+  apply_overrides(doc, all, c.origin);
+  Job job;
+  job.variant = variant_index;
+  job.renderer = r;
+  job.truth = m == nullptr;
+  job.scene = scene_from_json(doc, c.origin);
+  job.representation = job.scene.representation;
+  job.method = m ? m->label : c.section.kind == SectionKind::kBump ? "none" : "analytic";
+  doc.erase("name");  // a name is not content
+  job.scene_json = std::move(doc);
+  job.origin = c.origin;
+  job.label = job_label(c.section.kind, v, job);
+  v.jobs.push_back(plan.jobs.size());
+  plan.jobs.push_back(std::move(job));
+}
+
+void add_renderer_jobs(const VariantContext& c, RendererKind r, Variant& v, std::size_t index,
+                       Plan& plan) {
+  json scene = c.base;
+  apply_overrides(scene, c.overrides, c.origin);
+  if (const std::string why = cannot_render(r, scene); !why.empty()) {
+    const SkippedRenderer skipped{c.section.kind, r, v.scene, why};
+    if (std::find(plan.skipped.begin(), plan.skipped.end(), skipped) == plan.skipped.end())
+      plan.skipped.push_back(skipped);
+    return;
+  }
+  add_job(c, r, nullptr, v, index, plan);
+  for (const StudyMethod& m : c.section.methods)
+    if (section_offers(c.section.kind, r, m)) add_job(c, r, &m, v, index, plan);
+}
+
+void add_section(const Study& study, const Section& section, Plan& plan) {
+  const bool bump = section.kind == SectionKind::kBump;
+  std::vector<Override> set;
+  for (const auto& [pointer, value] : section.set.items()) set.push_back({pointer, value});
+  std::size_t combinations = 1;
+  for (const StudyAxis& a : section.axes) combinations *= a.values.size();
+  std::size_t count = 0;
+  for (const std::string& scene_file : section.scenes) {
+    const json base = read_json_file(scene_file);
+    const std::string scene_name = fs::path(scene_file).stem().string();
+    for (std::size_t c = 0; c < combinations; ++c) {
+      Variant v;
+      v.section = section.kind;
+      v.id = fmt::format("{}{:03d}", bump ? 'v' : 'l', count++);
+      v.scene = scene_name;
+      v.label = scene_name;
+      const std::vector<Override> overrides = axis_combination(set, section.axes, c, &v);
+      const std::string origin = fmt::format("{} (study {}, {} {})", scene_file, study.file,
+                                             bump ? "variant" : "low-poly variant", v.id);
+      const VariantContext context{section, base, overrides, origin, study.blender_spp};
+      const std::size_t index = plan.variants.size();
+      for (RendererKind r : section.renderers) add_renderer_jobs(context, r, v, index, plan);
+      plan.variants.push_back(std::move(v));
+    }
+  }
+}
+
+}  // namespace
+
+Plan plan_study(const Study& study, double max_memory_bytes) {
+  const double count = planned_render_count(study);
+  if (count > double(kMaxStudyRenders))
+    throw InputError(study.file, study.bump.axes.empty() ? "/scenes" : "/axes",
+                     fmt::format("expected a study of at most {} renders, it expands to {:.3g} "
+                                 "(scenes x axis values x renderers x methods); split it",
+                                 kMaxStudyRenders, count));
+  Plan plan;
+  add_section(study, study.bump, plan);
+  if (study.lowpoly) add_section(study, *study.lowpoly, plan);
+  for (Job& job : plan.jobs) {
+    job.resources = estimate_resources(job.renderer, job.scene);
+    check_resources(job.resources, max_memory_bytes, job.origin);
+  }
+  return plan;
+}
+
+}  // namespace penumbra

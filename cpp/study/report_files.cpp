@@ -1,0 +1,348 @@
+#include "study/report_files.h"
+
+#include <filesystem>
+#include <functional>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "analysis/metrics_json.h"
+#include "core/tessellation.h"
+#include "image/image_io.h"
+#include "scene/scene_json.h"
+#include "study/cache.h"
+
+namespace penumbra {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// ---- CSV ----------------------------------------------------------------------
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+// An undefined quantity (NaN) is an empty field.
+std::string number(double v) {
+  return std::isfinite(v) ? fmt::format("{}", v) : std::string();
+}
+std::string count(std::size_t n) {
+  return fmt::format("{}", n);
+}
+
+struct Column {
+  const char* name;
+  std::function<std::string(const ComparisonRow&)> value;
+};
+
+const std::vector<Column>& bump_columns() {
+  static const std::vector<Column> columns{
+      {"profile_rmse_terminator", [](auto& r) { return number(r.profile.rmse_terminator); }},
+      {"profile_rmse_overall", [](auto& r) { return number(r.profile.rmse_overall); }},
+      {"profile_max_error_terminator", [](auto& r) { return number(r.profile.max_error); }},
+      {"profile_max_step", [](auto& r) { return number(r.profile.max_step); }},
+      {"reference_max_step", [](auto& r) { return number(r.profile.reference_max_step); }},
+      {"position_deg", [](auto& r) { return number(r.profile.position); }},
+      {"reference_position_deg", [](auto& r) { return number(r.profile.reference_position); }},
+      {"position_error_deg", [](auto& r) { return number(r.profile.position_error); }},
+      {"width_deg", [](auto& r) { return number(r.profile.width); }},
+      {"reference_width_deg", [](auto& r) { return number(r.profile.reference_width); }},
+      {"lit_bias", [](auto& r) { return number(r.profile.lit_bias); }},
+      {"common_bins", [](auto& r) { return count(r.profile.common_bins); }},
+      {"image_mask_iou", [](auto& r) { return number(r.image.mask_iou); }},
+      {"image_rmse", [](auto& r) { return number(r.image.rmse); }},
+      {"image_ssim", [](auto& r) { return number(r.image.ssim); }},
+      {"image_max_error", [](auto& r) { return number(r.image.max_error); }},
+      {"image_mean_error", [](auto& r) { return number(r.image.mean_error); }},
+      {"image_pixels", [](auto& r) { return count(r.image.pixels); }},
+      {"image_nonfinite", [](auto& r) { return count(r.image.nonfinite); }},
+  };
+  return columns;
+}
+
+const std::vector<Column>& lowpoly_columns() {
+  static const std::vector<Column> columns{
+      {"darkened_fraction", [](auto& r) { return number(r.shadow->darkened_fraction); }},
+      {"max_darkening", [](auto& r) { return number(r.shadow->max_darkening); }},
+      {"lost_shadow_fraction", [](auto& r) { return number(r.shadow->lost_shadow_fraction); }},
+      {"shadow_shift_px", [](auto& r) { return number(r.shadow->shadow_shift_px); }},
+      {"shadowed_pixels", [](auto& r) { return count(r.shadow->shadowed_pixels); }},
+      {"test_shadowed_pixels", [](auto& r) { return count(r.shadow->test_shadowed_pixels); }},
+      {"profile_rmse_terminator", [](auto& r) { return number(r.profile.rmse_terminator); }},
+      {"profile_rmse_overall", [](auto& r) { return number(r.profile.rmse_overall); }},
+      {"profile_max_step", [](auto& r) { return number(r.profile.max_step); }},
+      {"position_error_deg", [](auto& r) { return number(r.profile.position_error); }},
+      {"lit_bias", [](auto& r) { return number(r.profile.lit_bias); }},
+      {"image_rmse", [](auto& r) { return number(r.image.rmse); }},
+      {"image_ssim", [](auto& r) { return number(r.image.ssim); }},
+      {"image_mask_iou", [](auto& r) { return number(r.image.mask_iou); }},
+      {"image_nonfinite", [](auto& r) { return count(r.image.nonfinite); }},
+  };
+  return columns;
+}
+
+// Header and rows: study, variant, scene, one column per axis, renderer,
+// method (or offset), reference, then `columns`.
+std::string comparison_csv(const ReportInputs& in, const Section& section,
+                           const std::vector<Column>& columns) {
+  const bool bump = section.kind == SectionKind::kBump;
+  std::string csv = "study,variant,scene";
+  for (const StudyAxis& a : section.axes) csv += "," + csv_field(a.pointer);
+  csv += bump ? ",renderer,method,reference" : ",renderer,offset,reference";
+  for (const Column& c : columns) csv += std::string(",") + c.name;
+  csv += "\n";
+  for (const ComparisonRow& row : in.comparisons.rows) {
+    const Variant& var = in.plan.variants[row.variant];
+    if (var.section != section.kind) continue;
+    csv += fmt::format("{},{},{}", csv_field(in.study.name), var.id, csv_field(var.scene));
+    for (const json& value : var.axis_values) csv += "," + csv_field(value.dump());
+    csv += fmt::format(",{},{},{}", to_string(row.renderer), csv_field(row.method), row.reference);
+    for (const Column& c : columns) csv += "," + c.value(row);
+    csv += "\n";
+  }
+  return csv;
+}
+
+// ---- report.json ----------------------------------------------------------------
+
+json axes_json(const std::vector<StudyAxis>& axes) {
+  json out = json::array();
+  for (const StudyAxis& a : axes)
+    out.push_back({{"pointer", a.pointer}, {"label", a.label}, {"values", a.values}});
+  return out;
+}
+
+json render_json(const ReportInputs& in, const RenderRow& r) {
+  const Job& job = in.plan.jobs[r.job];
+  json out = {{"renderer", to_string(job.renderer)},
+              {"image", r.image},
+              {"difference", r.difference.empty() ? json() : json(r.difference)},
+              {"exr", RenderCache::relative_exr(job.key)},
+              {"profile", profile_json(r.profile)}};
+  if (in.plan.variants[job.variant].section == SectionKind::kBump) {
+    out["representation"] = to_string(job.representation);
+    out["method"] = job.method;
+  } else {
+    out["offset"] = job.method;
+    out["triangles"] =
+        job.scene.tessellation
+            ? json(tessellated_triangle_count(job.scene.shape, *job.scene.tessellation))
+            : json();
+  }
+  return out;
+}
+
+json variants_json(const ReportInputs& in, SectionKind kind) {
+  json out = json::array();
+  for (std::size_t v = 0; v < in.plan.variants.size(); ++v) {
+    const Variant& var = in.plan.variants[v];
+    if (var.section != kind) continue;
+    json renders = json::array();
+    for (const RenderRow& r : in.comparisons.renders[v]) renders.push_back(render_json(in, r));
+    out.push_back({{"id", var.id},
+                   {"scene", var.scene},
+                   {"label", var.label},
+                   {"axis_values", var.axis_values},
+                   {"renders", renders}});
+  }
+  return out;
+}
+
+json comparisons_json(const ReportInputs& in, SectionKind kind) {
+  json out = json::array();
+  for (const ComparisonRow& row : in.comparisons.rows) {
+    const Variant& var = in.plan.variants[row.variant];
+    if (var.section != kind) continue;
+    json c = {{"variant", var.id},
+              {"scene", var.scene},
+              {"axis_values", var.axis_values},
+              {"renderer", to_string(row.renderer)},
+              {kind == SectionKind::kBump ? "method" : "offset", row.method},
+              {"reference", row.reference},
+              {"profile", profile_metrics_json(row.profile)},
+              {"image", image_metrics_json(row.image)}};
+    if (row.shadow) c["shadow"] = shadow_metrics_json(*row.shadow);
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+// The scenes of a section's variants, in order of first appearance.
+std::vector<std::string> section_scenes(const Plan& plan, SectionKind kind) {
+  std::vector<std::string> names;
+  for (const Variant& v : plan.variants)
+    if (v.section == kind && std::find(names.begin(), names.end(), v.scene) == names.end())
+      names.push_back(v.scene);
+  return names;
+}
+
+json bump_rank_json(const std::vector<RankEntry>& entries) {
+  json list = json::array();
+  for (const RankEntry& e : entries)
+    list.push_back({{"method", e.method}, {"mean", e.mean}, {"count", e.count}});
+  return list;
+}
+
+json lowpoly_rank_json(const std::vector<RankEntry>& entries) {
+  json list = json::array();
+  for (const RankEntry& e : entries)
+    list.push_back({{"offset", e.method},
+                    {"darkened_fraction", e.mean},
+                    {"rmse_terminator", e.second},
+                    {"count", e.count}});
+  return list;
+}
+
+json skipped_json(const Plan& plan, SectionKind kind) {
+  json out = json::array();
+  for (const SkippedRenderer& s : plan.skipped)
+    if (s.section == kind)
+      out.push_back({{"renderer", to_string(s.renderer)}, {"scene", s.scene}, {"why", s.why}});
+  return out;
+}
+
+}  // namespace
+
+namespace {
+
+// Per renderer of a section: what it offers of the study's methods, and a
+// "missing" row (with the table's reason) for each one it does not.
+struct Offered {
+  json renderers = json::array();
+  json missing = json::array();
+};
+
+Offered offered_json(const ReportInputs& in, const Section& section) {
+  const bool bump = section.kind == SectionKind::kBump;
+  Offered out;
+  out.missing = bump ? json::array() : skipped_json(in.plan, section.kind);
+  // A low-poly-only study has no bump rows to offer or miss.
+  if (section.scenes.empty()) return out;
+  for (RendererKind r : section.renderers) {
+    const RendererInfo& info = renderer_info(r);
+    json offered = json::array();
+    for (const StudyMethod& m : section.methods) {
+      const bool has = bump ? offers(r, Representation::kBump, *method_from_id(m.id))
+                            : offers(r, *offset_method_from_id(m.id));
+      if (has)
+        offered.push_back(m.label);
+      else
+        out.missing.push_back({{"renderer", info.id},
+                               {bump ? "method" : "offset", m.label},
+                               {"why", bump ? info.methods_why_not : info.offsets_why_not}});
+    }
+    if (bump) {
+      const auto version = in.versions.find(r);
+      out.renderers.push_back(
+          {{"id", info.id},
+           {"version", version != in.versions.end() ? json(version->second) : json()},
+           {"methods", offered},
+           {"note", info.note}});
+    } else {
+      out.renderers.push_back({{"id", info.id}, {"offsets", offered}});
+    }
+  }
+  if (bump)
+    for (json& s : skipped_json(in.plan, section.kind)) out.missing.push_back(std::move(s));
+  return out;
+}
+
+json lowpoly_json(const ReportInputs& in) {
+  const Section& part = *in.study.lowpoly;
+  const std::vector<ComparisonRow>& rows = in.comparisons.rows;
+  json per_scene = json::array();
+  for (const std::string& name : section_scenes(in.plan, SectionKind::kLowPoly))
+    per_scene.push_back(
+        {{"scene", name}, {"offsets", lowpoly_rank_json(rank_lowpoly(in.plan, rows, name))}});
+  const Offered offered = offered_json(in, part);
+  return {{"axes", axes_json(part.axes)},
+          {"convergence_axis",
+           part.convergence_axis >= 0 ? json(part.axes[part.convergence_axis].pointer) : json()},
+          {"renderers", offered.renderers},
+          {"variants", variants_json(in, SectionKind::kLowPoly)},
+          {"comparisons", comparisons_json(in, SectionKind::kLowPoly)},
+          {"ranking",
+           {{"metric", "shadow.darkened_fraction"},
+            {"reference", "evaluator:analytic"},
+            {"renderer", "evaluator"},
+            {"per_scene", per_scene},
+            {"overall", lowpoly_rank_json(rank_lowpoly(in.plan, rows, ""))}}},
+          {"missing", offered.missing},
+          {"units",
+           {{"darkened_fraction",
+             "fraction of the pixels lit in the analytic render (>= 0.05 albedo*E/pi) that "
+             "the mesh renders below half of it"},
+            {"max_darkening", "largest analytic - mesh radiance, fraction of albedo*E/pi"},
+            {"lost_shadow_fraction",
+             "fraction of the analytic render's cast-shadow pixels (theta < 85 deg, below "
+             "half of cos theta) that the mesh render lights"},
+            {"shadow_shift_px", "distance between the two cast-shadow centroids, pixels"}}}};
+}
+
+json units_json() {
+  return {{"profile", "fraction of albedo*E/pi"},
+          {"angles", "degrees"},
+          {"image", "W m^-2 sr^-1"},
+          {"theta", "angle between wi and the base (undisplaced) surface normal"},
+          {"terminator_region_deg", {kTerminatorBegin, kTerminatorEnd}},
+          {"lit_region_deg", {0.0, kLitEnd}},
+          {"dark_level", kDarkLevel}};
+}
+
+json bump_ranking_json(const ReportInputs& in) {
+  json per_scene = json::array();
+  for (const std::string& s : section_scenes(in.plan, SectionKind::kBump))
+    per_scene.push_back(
+        {{"scene", s}, {"methods", bump_rank_json(rank_bump(in.plan, in.comparisons.rows, s))}});
+  return {{"metric", "profile.rmse_terminator"},
+          {"reference", "evaluator:displacement"},
+          {"renderer", "evaluator"},
+          {"per_scene", per_scene},
+          {"overall", bump_rank_json(rank_bump(in.plan, in.comparisons.rows, ""))}};
+}
+
+json report_json(const ReportInputs& in) {
+  const Offered offered = offered_json(in, in.study.bump);
+  json failures = json::array();
+  for (std::size_t i = 0; i < in.plan.jobs.size(); ++i)
+    if (!in.done[i])
+      failures.push_back({{"render", in.plan.jobs[i].label}, {"error", in.errors[i]}});
+  json plots = json::array();
+  for (const StudyPlot& p : in.study.plots)
+    plots.push_back(
+        {{"metric", p.metric}, {"x", p.x}, {"y", p.y}, {"kind", p.kind}, {"renderer", p.renderer}});
+  return {{"format", "penumbra-report"},
+          {"version", kReportFormatVersion},
+          {"penumbra", kPenumbraVersion},
+          {"study", {{"name", in.study.name}, {"file", in.study.file}}},
+          {"units", units_json()},
+          {"axes", axes_json(in.study.bump.axes)},
+          {"renderers", offered.renderers},
+          {"variants", variants_json(in, SectionKind::kBump)},
+          {"comparisons", comparisons_json(in, SectionKind::kBump)},
+          {"ranking", bump_ranking_json(in)},
+          {"missing", offered.missing},
+          {"failures", failures},
+          {"nonfinite_pixels", in.comparisons.nonfinite},
+          {"plots", plots},
+          {"lowpoly", in.study.lowpoly ? lowpoly_json(in) : json()}};
+}
+
+}  // namespace
+
+void write_report_files(const ReportInputs& in, const std::string& folder) {
+  const fs::path out(folder);
+  if (in.study.lowpoly)
+    write_text_file((out / "lowpoly.csv").string(),
+                    comparison_csv(in, *in.study.lowpoly, lowpoly_columns()));
+  write_text_file((out / "report.json").string(), report_json(in).dump(1) + "\n");
+  write_text_file((out / "metrics.csv").string(),
+                  comparison_csv(in, in.study.bump, bump_columns()));
+}
+
+}  // namespace penumbra

@@ -1,0 +1,33 @@
+// The files a study leaves for people and programs: report.json (every
+// render, comparison and ranking; the figures are drawn from it alone),
+// metrics.csv (bump comparisons) and lowpoly.csv (low-poly comparisons), each
+// CSV from one column list.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "study/compare.h"
+#include "study/plan.h"
+#include "study/study_file.h"
+
+namespace penumbra {
+
+inline constexpr int kReportFormatVersion = 1;
+
+// What the report needs besides the plan and the comparisons.
+struct ReportInputs {
+  const Study& study;
+  const Plan& plan;
+  const Comparisons& comparisons;
+  const std::map<RendererKind, std::string>& versions;  // probed renderers only
+  const std::vector<std::string>& errors;               // per job; "" when done
+  const std::vector<char>& done;                        // per job
+};
+
+// Writes report.json, metrics.csv and (with a low-poly section) lowpoly.csv
+// into `folder`.
+void write_report_files(const ReportInputs& in, const std::string& folder);
+
+}  // namespace penumbra

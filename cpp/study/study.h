@@ -1,0 +1,60 @@
+// Batch studies, in one direction:
+//   study_file  (read the study)  ->  plan  (typed jobs, validated)
+//   -> cache  (what is already rendered)  ->  execute  (render the rest)
+//   -> compare  (rows against the ground truth)  ->  report_files, figures.
+// Bump methods are compared with the displacement ground truth, low-poly
+// meshes and shadow-ray offsets with the analytic smooth surface.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "renderers/renderers.h"
+#include "study/study_file.h"
+
+namespace penumbra {
+
+struct StudyOptions {
+  std::string output_dir;
+  int jobs = 1;
+  double timeout_s = 600.0;
+  // Stop starting renders after this many new (uncached) ones; -1: no limit.
+  // Resuming later finishes the rest. Tests use it to simulate an interrupt.
+  long max_new_renders = -1;
+  const std::atomic<bool>* interrupted = nullptr;  // set by a SIGINT handler
+  std::function<void(const std::string&)> log;     // progress lines
+  std::function<void(std::size_t done, std::size_t total, double eta_s)> progress;
+  bool figures = true;  // run harness/report.py (figures and report.html)
+  // Plan and validate only: count renders and cache hits, write nothing.
+  bool dry_run = false;
+  // Per render; a render estimated above it is refused (bad input) before
+  // anything is written.
+  double max_memory_bytes = kDefaultMaxMemoryBytes;
+  std::string python;  // default: PENUMBRA_PYTHON, /usr/bin/python3, python3
+};
+
+struct StudyRunStats {
+  std::size_t renders = 0;            // in the study
+  std::size_t rendered = 0;           // rendered by this run
+  std::size_t cached = 0;             // reused from the cache
+  std::size_t failed = 0;             // failed in this run (kept out of the cache)
+  std::size_t not_started = 0;        // interrupted or --max-renders
+  std::vector<std::string> failures;  // "label: error"
+  double seconds = 0.0;
+  std::string report_html;                     // path, when written
+  std::map<std::string, std::size_t> planned;  // dry run: renders per renderer
+  std::vector<std::string> warnings;           // damaged cache entries, stale files removed
+  std::size_t stale_removed = 0;
+  bool complete() const { return failed == 0 && not_started == 0; }
+};
+
+// Runs the study; writes report.json and metrics.csv (and figures and
+// report.html when options.figures) only when every render is accounted for
+// (done or failed), never after an interruption.
+StudyRunStats run_study(const Study& study, const StudyOptions& options);
+
+}  // namespace penumbra

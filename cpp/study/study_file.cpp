@@ -1,0 +1,341 @@
+#include "study/study_file.h"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <set>
+
+#include <fmt/format.h>
+
+#include "scene/scene_json.h"
+#include "study/names.h"
+#include "util/strict_json.h"
+
+namespace penumbra {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string child(const std::string& pointer, const std::string& key) {
+  return pointer + "/" + key;
+}
+
+void reject_unknown(const json& object, std::initializer_list<const char*> known,
+                    const std::string& file, const std::string& pointer) {
+  for (const auto& [key, value] : object.items()) {
+    bool ok = false;
+    for (const char* k : known) ok = ok || key == k;
+    if (!ok) {
+      std::string names;
+      for (const char* k : known) names += (names.empty() ? "" : ", ") + std::string(k);
+      throw InputError(file, child(pointer, key), "unknown key (expected one of: " + names + ")");
+    }
+  }
+}
+
+const json& require(const json& object, const char* key, const std::string& file,
+                    const std::string& pointer) {
+  if (!object.contains(key)) throw InputError(file, child(pointer, key), "missing required key");
+  return object.at(key);
+}
+
+// The value of an integer in [lo, hi], or -1 when `v` is not one (no
+// truncation: 4294967297 is not 1).
+long long strict_integer(const json& v, long long lo, long long hi) {
+  if (v.is_number_unsigned()) {
+    const auto u = v.get<std::uint64_t>();
+    return u >= static_cast<std::uint64_t>(lo) && u <= static_cast<std::uint64_t>(hi)
+               ? static_cast<long long>(u)
+               : -1;
+  }
+  if (!v.is_number_integer()) return -1;
+  const auto i = v.get<std::int64_t>();
+  return i >= lo && i <= hi ? i : -1;
+}
+
+std::string method_label(const std::string& id, const json& parameters) {
+  if (!parameters.is_object() || parameters.empty()) return id;
+  std::string s = id + "(";
+  bool first = true;
+  for (const auto& [k, v] : parameters.items()) {
+    s += (first ? "" : ",") + k + "=" + v.dump();
+    first = false;
+  }
+  return s + ")";
+}
+
+}  // namespace
+
+namespace {
+
+// The parts the bump and low-poly sections share: scene files, fixed
+// overrides, sweep axes and renderers, under the JSON pointer `at`.
+void read_scenes(const json& doc, const std::string& f, const std::string& at, const fs::path& base,
+                 std::vector<std::string>* scenes) {
+  const json& list = require(doc, "scenes", f, at);
+  if (!list.is_array() || list.empty())
+    throw InputError(f, at + "/scenes", "expected a non-empty array of scene file paths");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    if (!list[i].is_string())
+      throw InputError(f, fmt::format("{}/scenes/{}", at, i), "expected a path (string)");
+    const fs::path p = base / list[i].get<std::string>();
+    if (!fs::is_regular_file(p))
+      throw InputError(f, fmt::format("{}/scenes/{}", at, i),
+                       fmt::format("no such scene file: {}", p.string()));
+    scenes->push_back(p.lexically_normal().string());
+  }
+}
+
+json read_set(const json& doc, const std::string& f, const std::string& at) {
+  if (!doc.contains("set")) return json::object();
+  if (!doc["set"].is_object())
+    throw InputError(f, at + "/set", "expected an object of JSON pointer -> value");
+  return doc["set"];
+}
+
+std::vector<StudyAxis> read_axes(const json& doc, const std::string& f, const std::string& at) {
+  std::vector<StudyAxis> out;
+  if (!doc.contains("axes")) return out;
+  const json& axes = doc["axes"];
+  if (!axes.is_array()) throw InputError(f, at + "/axes", "expected an array");
+  for (std::size_t i = 0; i < axes.size(); ++i) {
+    const std::string p = fmt::format("{}/axes/{}", at, i);
+    if (!axes[i].is_object()) throw InputError(f, p, "expected an object");
+    reject_unknown(axes[i], {"pointer", "label", "values"}, f, p);
+    StudyAxis axis;
+    const json& pointer = require(axes[i], "pointer", f, p);
+    if (!pointer.is_string() || pointer.get<std::string>().rfind("/", 0) != 0)
+      throw InputError(f, p + "/pointer", "expected a JSON pointer such as \"/height/amplitude\"");
+    axis.pointer = pointer.get<std::string>();
+    axis.label = axis.pointer;
+    if (axes[i].contains("label")) {
+      if (!axes[i]["label"].is_string()) throw InputError(f, p + "/label", "expected a string");
+      axis.label = axes[i]["label"].get<std::string>();
+    }
+    const json& values = require(axes[i], "values", f, p);
+    if (!values.is_array() || values.empty())
+      throw InputError(f, p + "/values", "expected a non-empty array of values");
+    axis.values = values.get<std::vector<json>>();
+    out.push_back(std::move(axis));
+  }
+  return out;
+}
+
+std::vector<RendererKind> read_renderers(const json& doc, const std::string& f,
+                                         const std::string& at) {
+  if (!doc.contains("renderers")) return all_renderers();
+  std::vector<RendererKind> out;
+  const json& renderers = doc["renderers"];
+  if (!renderers.is_array() || renderers.empty())
+    throw InputError(f, at + "/renderers", "expected a non-empty array of renderer ids");
+  for (std::size_t i = 0; i < renderers.size(); ++i) {
+    const auto r =
+        renderers[i].is_string() ? renderer_from_id(renderers[i].get<std::string>()) : std::nullopt;
+    if (!r)
+      throw InputError(f, fmt::format("{}/renderers/{}", at, i), "expected " + renderer_choices());
+    out.push_back(*r);
+  }
+  if (std::find(out.begin(), out.end(), RendererKind::kEvaluator) == out.end())
+    throw InputError(f, at + "/renderers",
+                     "must include \"evaluator\": it provides the geometry and the reference");
+  return out;
+}
+
+// Method ids, or {"id": ..., "parameters": {...}} objects, under `key`;
+// parameter values are checked by the scene reader when variants expand.
+// Absent: every id. `what` names the kind in errors ("method", "offset method").
+std::vector<StudyMethod> read_method_list(const json& doc, const char* key, const std::string& f,
+                                          const std::string& at,
+                                          const std::vector<std::string>& ids, const char* what) {
+  std::vector<StudyMethod> out;
+  if (!doc.contains(key)) {
+    for (const std::string& id : ids) out.push_back({id, json(), id});
+    return out;
+  }
+  const std::string pointer = at + "/" + key;
+  const json& list = doc[key];
+  if (!list.is_array() || list.empty())
+    throw InputError(f, pointer, fmt::format("expected a non-empty array of {} ids", what));
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string p = fmt::format("{}/{}", pointer, i);
+    StudyMethod m;
+    if (list[i].is_string()) {
+      m.id = list[i].get<std::string>();
+    } else if (list[i].is_object()) {
+      reject_unknown(list[i], {"id", "parameters"}, f, p);
+      const json& id = require(list[i], "id", f, p);
+      if (!id.is_string()) throw InputError(f, p + "/id", fmt::format("expected a {} id", what));
+      m.id = id.get<std::string>();
+      if (list[i].contains("parameters")) {
+        if (!list[i]["parameters"].is_object())
+          throw InputError(f, p + "/parameters", "expected an object of parameter values");
+        m.parameters = list[i]["parameters"];
+      }
+    } else {
+      throw InputError(
+          f, p, fmt::format("expected a {} id or {{\"id\": ..., \"parameters\": {{...}}}}", what));
+    }
+    if (std::find(ids.begin(), ids.end(), m.id) == ids.end()) {
+      std::string valid;
+      for (const std::string& id : ids) valid += (valid.empty() ? "" : ", ") + id;
+      throw InputError(f, p, fmt::format("unknown {} \"{}\" (valid: {})", what, m.id, valid));
+    }
+    m.label = method_label(m.id, m.parameters);
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+std::vector<std::string> offset_ids() {
+  std::vector<std::string> ids;
+  for (const OffsetMethodInfo& info : all_offset_methods()) ids.emplace_back(info.id);
+  return ids;
+}
+
+std::vector<std::string> terminator_ids() {
+  std::vector<std::string> ids;
+  for (const MethodInfo& info : all_methods()) ids.emplace_back(info.id);
+  return ids;
+}
+
+Section read_lowpoly(const json& doc, const std::string& f, const fs::path& base) {
+  const std::string at = "/lowpoly";
+  if (!doc.is_object()) throw InputError(f, at, "expected an object");
+  reject_unknown(doc, {"scenes", "set", "axes", "offsets", "renderers", "convergence"}, f, at);
+  Section part;
+  part.kind = SectionKind::kLowPoly;
+  read_scenes(doc, f, at, base, &part.scenes);
+  part.set = read_set(doc, f, at);
+  part.axes = read_axes(doc, f, at);
+  part.methods = read_method_list(doc, "offsets", f, at, offset_ids(), "offset method");
+  part.renderers = read_renderers(doc, f, at);
+  if (doc.contains("convergence")) {
+    const json& c = doc["convergence"];
+    bool found = false;
+    for (std::size_t a = 0; a < part.axes.size(); ++a)
+      if (c.is_string() && c.get<std::string>() == part.axes[a].pointer) {
+        part.convergence_axis = static_cast<int>(a);
+        found = true;
+      }
+    if (!found)
+      throw InputError(f, at + "/convergence",
+                       "expected the pointer of one of /lowpoly/axes (the tessellation level)");
+  }
+  return part;
+}
+
+// Plots: a metric over two different axes of the study.
+std::vector<StudyPlot> read_plots(const json& plots, const std::string& f,
+                                  const std::vector<StudyAxis>& axes) {
+  if (!plots.is_array()) throw InputError(f, "/plots", "expected an array");
+  std::vector<StudyPlot> out;
+  for (std::size_t i = 0; i < plots.size(); ++i) {
+    const std::string p = fmt::format("/plots/{}", i);
+    if (!plots[i].is_object()) throw InputError(f, p, "expected an object");
+    reject_unknown(plots[i], {"metric", "x", "y", "kind", "renderer"}, f, p);
+    StudyPlot plot;
+    const json& metric = require(plots[i], "metric", f, p);
+    static const std::set<std::string> metrics{"profile.rmse_terminator",
+                                               "profile.rmse_overall",
+                                               "profile.max_error_terminator",
+                                               "profile.max_step",
+                                               "profile.position_error_deg",
+                                               "profile.width_deg",
+                                               "profile.lit_bias",
+                                               "image.rmse",
+                                               "image.ssim",
+                                               "image.max_error"};
+    if (!metric.is_string() || !metrics.count(metric.get<std::string>())) {
+      std::string names;
+      for (const std::string& m : metrics) names += (names.empty() ? "" : ", ") + m;
+      throw InputError(f, p + "/metric", "expected one of " + names);
+    }
+    plot.metric = metric.get<std::string>();
+    auto axis_index = [&](const char* key) {
+      const json& v = require(plots[i], key, f, p);
+      for (std::size_t a = 0; a < axes.size(); ++a)
+        if (v.is_string() && v.get<std::string>() == axes[a].pointer) return static_cast<int>(a);
+      throw InputError(f, child(p, key), "expected the pointer of one of the study's axes");
+    };
+    plot.x = axis_index("x");
+    plot.y = axis_index("y");
+    if (plot.x == plot.y)
+      throw InputError(f, p + "/y", "expected an axis other than x (a plot needs two axes)");
+    if (plots[i].contains("kind")) {
+      const json& k = plots[i]["kind"];
+      if (!k.is_string() || (k != "contour" && k != "heatmap"))
+        throw InputError(f, p + "/kind", "expected \"contour\" or \"heatmap\"");
+      plot.kind = k.get<std::string>();
+    }
+    if (plots[i].contains("renderer")) {
+      const json& r = plots[i]["renderer"];
+      if (!r.is_string() || !renderer_from_id(r.get<std::string>()))
+        throw InputError(f, p + "/renderer", "expected " + renderer_choices());
+      plot.renderer = r.get<std::string>();
+    }
+    out.push_back(plot);
+  }
+  return out;
+}
+
+}  // namespace
+
+Study load_study(const std::string& path) {
+  const json doc = read_json_file(path);
+  const std::string& f = path;
+  if (!doc.is_object()) throw InputError(f, "", "expected a JSON object");
+  reject_unknown(doc,
+                 {"version", "name", "scenes", "set", "axes", "methods", "renderers", "blender_spp",
+                  "plots", "lowpoly"},
+                 f, "");
+  const json& version = require(doc, "version", f, "");
+  if (strict_integer(version, 1, 1000) != kStudyFormatVersion)
+    throw InputError(
+        f, "/version",
+        fmt::format("expected {}, got {}", kStudyFormatVersion, describe_json(version)));
+  Study s;
+  s.file = path;
+  if (doc.contains("name")) {
+    if (!doc["name"].is_string()) throw InputError(f, "/name", "expected a string");
+    s.name = doc["name"].get<std::string>();
+    // The name becomes the default output folder results/NAME: a plain name only.
+    if (!plain_name(s.name))
+      throw InputError(f, "/name",
+                       fmt::format("expected a study name of 1 to 100 letters, digits, '-', '_' "
+                                   "or '.' (not starting with '.'), got \"{}\"",
+                                   s.name));
+  } else {  // the file's stem, made plain
+    s.name = file_safe(fs::path(path).stem().string().substr(0, 100));
+    if (s.name.empty() || s.name[0] == '.') s.name = "study" + s.name;
+  }
+  const fs::path base = fs::path(path).parent_path();
+  if (doc.contains("lowpoly")) s.lowpoly = read_lowpoly(doc["lowpoly"], f, base);
+  // A study is a bump study, a low-poly study, or both.
+  if (doc.contains("scenes") || !s.lowpoly) read_scenes(doc, f, "", base, &s.bump.scenes);
+  s.bump.set = read_set(doc, f, "");
+  s.bump.axes = read_axes(doc, f, "");
+  s.bump.methods = read_method_list(doc, "methods", f, "", terminator_ids(), "method");
+  s.bump.renderers = read_renderers(doc, f, "");
+  if (doc.contains("blender_spp")) {
+    const long long spp = strict_integer(doc["blender_spp"], 1, 65536);
+    if (spp < 0)
+      throw InputError(
+          f, "/blender_spp",
+          "expected an integer in [1, 65536], got " + describe_json(doc["blender_spp"]));
+    s.blender_spp = static_cast<int>(spp);
+  }
+  if (doc.contains("plots")) s.plots = read_plots(doc["plots"], f, s.bump.axes);
+  return s;
+}
+
+double planned_render_count(const Study& study) {
+  auto section_count = [](const Section& s) {
+    double n = double(s.scenes.size()) * double(s.renderers.size()) * double(1 + s.methods.size());
+    for (const StudyAxis& a : s.axes) n *= double(a.values.size());
+    return n;
+  };
+  return section_count(study.bump) + (study.lowpoly ? section_count(*study.lowpoly) : 0.0);
+}
+
+}  // namespace penumbra

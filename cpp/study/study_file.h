@@ -1,0 +1,73 @@
+// The study file: base scenes x sweep axes x methods x renderers, read
+// strictly (unknown keys, wrong types, unknown methods or renderers are
+// InputErrors naming the file and the JSON pointer). See README, "Writing a
+// study".
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "scene/renderer_table.h"
+
+namespace penumbra {
+
+inline constexpr int kStudyFormatVersion = 1;
+
+// One sweep axis: a scene value by JSON pointer and the values it takes.
+struct StudyAxis {
+  std::string pointer;
+  std::string label;  // for plots and tables; default: the pointer
+  std::vector<nlohmann::json> values;
+};
+
+// A method as the study names it: an id and optional parameter values.
+struct StudyMethod {
+  std::string id;
+  nlohmann::json parameters;  // object or null
+  std::string label;          // "shading-offset(s=0.3)"
+};
+
+// A metric drawn over two axes (indices into the bump section's axes).
+struct StudyPlot {
+  std::string metric;  // "profile.rmse_terminator", "image.ssim", ...
+  int x = 0, y = 1;
+  std::string kind = "contour";  // or "heatmap"
+  std::string renderer = "evaluator";
+};
+
+// The two kinds of section differ in what varies and what counts as truth:
+//   bump      the terminator method on a bump-mapped scene; truth: the same
+//             scene displaced (representation "displacement", method none);
+//   low-poly  the shadow-ray offset on a tessellated scene; truth: the same
+//             scene's analytic, untessellated surface.
+enum class SectionKind { kBump, kLowPoly };
+
+// Base scenes x axis values x renderers x (truth + each method it offers).
+struct Section {
+  SectionKind kind = SectionKind::kBump;
+  std::vector<std::string> scenes;                // paths, resolved against the study file's folder
+  nlohmann::json set = nlohmann::json::object();  // pointer -> value, for every scene
+  std::vector<StudyAxis> axes;
+  std::vector<StudyMethod> methods;  // terminator methods (bump), offset methods (low-poly)
+  std::vector<RendererKind> renderers;
+  int convergence_axis = -1;  // low-poly: index into axes of the tessellation level
+};
+
+struct Study {
+  std::string name;
+  std::string file;
+  Section bump;  // no scenes: a low-poly-only study
+  std::optional<Section> lowpoly;
+  int blender_spp = 32;
+  std::vector<StudyPlot> plots;
+};
+
+Study load_study(const std::string& path);
+
+// Renders the study expands to, counted without expanding it.
+double planned_render_count(const Study& study);
+
+}  // namespace penumbra

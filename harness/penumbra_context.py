@@ -1,0 +1,42 @@
+"""Building blocks of report.html's template context.
+
+Plain dicts the templates (templates/macros.html.j2) know how to draw:
+  table   {'head': [str], 'rows': [[cell]], 'row_class': str}
+  cell    {'text': str, 'cls': str}  (cls: '', 'n' right-aligned number,
+          'n na' greyed n/a)
+  figure  {'src': data: URI, 'alt': str, 'caption': str ('' for none)}
+  grid    {'cols': [str], 'rows': [{'head': str, 'cells': [grid cell]}]}
+  grid cell {'figure': figure or None, 'na': str or None} (both None: an
+          empty cell)
+Every str is plain text: the template escapes it.
+"""
+from penumbra_data import data_uri, fmt
+
+
+def cell(c):
+    """A table cell: strings as they are; ints as they are, right-aligned;
+    anything else a number formatted by fmt (a (value, scale) tuple is
+    scaled), right-aligned, greyed when n/a."""
+    if isinstance(c, str) or type(c) is int:
+        return {'text': str(c), 'cls': 'n' if type(c) is int else ''}
+    t = fmt(*c) if isinstance(c, tuple) else fmt(c)
+    return {'text': t, 'cls': 'n na' if t == 'n/a' else 'n'}
+
+
+def table(head, rows, row_class=''):
+    return {'head': [str(h) for h in head],
+            'rows': [[cell(c) for c in r] for r in rows],
+            'row_class': row_class}
+
+
+def figure(src, alt, caption=''):
+    return {'src': src, 'alt': str(alt), 'caption': str(caption)}
+
+
+def figure_file(path, alt, caption):
+    """A figure drawn by the figure modules, embedded."""
+    return figure(data_uri(path, path, 'figure'), alt, caption)
+
+
+def grid_cell(fig=None, na=None):
+    return {'figure': fig, 'na': na}

@@ -1,0 +1,103 @@
+"""The contour plots of `penumbra contour` (report.py contour).
+
+Reads the contour JSON ("format": "penumbra-contour", "version": 1:
+light_deg[], deviation_deg[], methods[{id, G[deviation][light]}], null
+where G is undefined) and writes into OUTDIR contour-<method>.*,
+contour-diff-<a>-<b>.* for every pair of methods in the given order, and
+the combined contour.*, each as PNG, SVG and PDF.
+"""
+import os
+
+import numpy as np
+from matplotlib import patheffects
+from matplotlib.ticker import MaxNLocator
+
+from penumbra_data import BadInput, farray, load_json, obj, stem
+from penumbra_plot import contour_lines, plt, save
+
+
+def load_contour(path):
+    """(light angles L, deviations D, {method: G[D][L]}), checked."""
+    doc = load_json(path, 'penumbra-contour')
+    L, D = farray(doc.get('light_deg')), farray(doc.get('deviation_deg'))
+    for name, a in (('light_deg', L), ('deviation_deg', D)):
+        if a.size < 2 or not np.all(np.diff(a) > 0):
+            raise BadInput(path, f'"{name}": expected >= 2 increasing numbers')
+    if not isinstance(doc.get('methods'), list) or not doc['methods']:
+        raise BadInput(path, '"methods": expected a non-empty array')
+    G = {}
+    for i, m in enumerate(doc['methods']):
+        g = obj(m).get('G')
+        if not isinstance(obj(m).get('id'), str) or m['id'] in G or \
+                not isinstance(g, list) or len(g) != D.size or \
+                any(not isinstance(r, list) or len(r) != L.size for r in g):
+            raise BadInput(path, f'methods[{i}]: expected {{"id": a new '
+                           f'string, "G": {D.size} rows of {L.size} numbers}}')
+        G[m['id']] = np.array([farray(r) for r in g])
+    return L, D, G
+
+
+def contour_panel(ax, L, D, G, title, diff=None):
+    """G, or a difference when diff is given (its symmetric limit)."""
+    if diff is None:
+        levels, cmap, lines = np.linspace(0, 1, 11), 'viridis', None
+    else:
+        levels = MaxNLocator(20, symmetric=True).tick_values(-diff, diff)
+        cmap = 'RdBu'
+        lines = MaxNLocator(8, symmetric=True).tick_values(-diff, diff)
+    z = np.ma.masked_invalid(G)
+    if z.count():
+        extend = 'both' if diff is None and (z.min() < 0 or z.max() > 1) \
+            else 'neither'
+        im = ax.contourf(L, D, z, levels=levels, cmap=cmap, extend=extend)
+        contour_lines(ax, L, D, z, levels if lines is None else lines,
+                      '%.2g')
+    else:
+        ax.text(0.5, 0.5, 'undefined everywhere', transform=ax.transAxes,
+                ha='center')
+        ax.set(xlim=(L[0], L[-1]), ylim=(D[0], D[-1]))
+        im = plt.cm.ScalarMappable(plt.Normalize(levels[0], levels[-1]),
+                                   cmap)
+    lo, hi = max(L[0], D[0]), min(L[-1], D[-1])
+    ax.plot([lo, hi], [lo, hi], '--', color='w', lw=1.3,
+            label='y = x: shading normal points at the light',
+            path_effects=[patheffects.withStroke(linewidth=2.6,
+                                                 foreground='k')])
+    ax.legend(loc='upper left', fontsize=7)
+    ax.set(xlabel='light angle from Ng (degrees)', title=title,
+           ylabel='shading-normal deviation towards the light (degrees)')
+    return im
+
+
+def diff_panel(ax, fig, L, D, G, a, b):
+    """G[a] - G[b] with its colour bar, symmetric around 0."""
+    d = G[a] - G[b]
+    lim = np.nanmax(np.abs(d)) if np.isfinite(d).any() else 0
+    im = contour_panel(ax, L, D, d, f'G[{a}] − G[{b}]\npositive: {a} '
+                       'lets more light through', float(lim) or 1e-3)
+    fig.colorbar(im, ax=ax, label=f'G[{a}] − G[{b}]')
+
+
+def contour_figures(L, D, G, outdir):
+    """Every contour figure; returns the paths written."""
+    os.makedirs(outdir, exist_ok=True)
+    written, ids = [], list(G)
+    for m, g in G.items():
+        fig, ax = plt.subplots(figsize=(5.6, 4.6), layout='constrained')
+        im = contour_panel(ax, L, D, g, f'terminator factor G: {m}')
+        fig.colorbar(im, ax=ax, label='G (fraction of light let through)')
+        written += save(fig, outdir, f'contour-{stem(m)}')
+    for i, a in enumerate(ids):
+        for b in ids[i + 1:]:
+            fig, ax = plt.subplots(figsize=(5.6, 4.8), layout='constrained')
+            diff_panel(ax, fig, L, D, G, a, b)
+            written += save(fig, outdir, f'contour-diff-{stem(a)}-{stem(b)}')
+    n = len(ids) + (len(ids) >= 2)
+    fig, axs = plt.subplots(1, n, figsize=(4.3 * n + 1, 4.6),
+                            layout='constrained', squeeze=False)
+    for ax, m in zip(axs[0], ids):
+        im = contour_panel(ax, L, D, G[m], m)
+    fig.colorbar(im, ax=axs[0][:len(ids)].tolist(), label='G')
+    if len(ids) >= 2:
+        diff_panel(axs[0][-1], fig, L, D, G, ids[0], ids[1])
+    return written + save(fig, outdir, 'contour')

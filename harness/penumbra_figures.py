@@ -1,0 +1,311 @@
+"""The matplotlib figures of a Penumbra study (the bump-mapping section).
+
+Every figure is written as NAME.png, NAME.svg and NAME.pdf into the given
+folder; the functions return the paths they wrote, PNG first (the page
+embeds the PNG). report_figures() draws all of a report's figures, the
+low-poly ones included, in a fixed order, which is the order report.py
+prints them in. No HTML here: penumbra_html embeds what these return.
+"""
+import math
+import os
+
+import numpy as np
+from matplotlib.ticker import MaxNLocator
+
+from penumbra_data import (
+    GROUND_TRUTH, REF, BadInput, axis_index, axis_text, column, farray, fmt,
+    get_metric, metric_label, num, obj, objs, stem)
+from penumbra_lowpoly_figures import lowpoly_figures
+from penumbra_plot import contour_lines, method_colors, plt, save
+
+L_LABEL = 'L / (albedo·E/π)'
+
+
+def report_colors(report):
+    """The method colours of the bump section: every method named anywhere
+    in the report, in order of first appearance."""
+    return method_colors(
+        [str(m) for r in report.renderers for m in r.get('methods') or []] +
+        [str(e.get('method')) for _, g in report.ranking_groups()
+         for e in g] +
+        [str(r.get('method')) for v in report.variants
+         for r in objs(v.get('renders'))] +
+        [str(c.get('method')) for c in report.comps])
+
+
+def profile_xy(p):
+    """(theta bin centres, values) of the bins that hold samples, or None."""
+    b, v = num(obj(p).get('bin_degrees')), farray(obj(p).get('value'))
+    c = farray(obj(p).get('count'))
+    ok = np.isfinite(v) & ((c > 0) if c.size == v.size else True)
+    if not (b > 0 and ok.any()):
+        return None
+    return ((np.arange(v.size) + 0.5) * b)[ok], v[ok]
+
+
+def ranking_figure(rk, colors, figdir):
+    """figures/ranking.*: the overall ranking and the per-scene means; []
+    when the ranking is empty."""
+    overall, scenes = objs(rk.get('overall')), objs(rk.get('per_scene'))
+    if not overall and not any(objs(s.get('methods')) for s in scenes):
+        return []
+    methods = list(dict.fromkeys(str(e.get('method')) for e in overall + [
+        e for s in scenes for e in objs(s.get('methods'))]))
+    n = max(len(methods), 1)
+    fig, (ax, ag) = plt.subplots(1, 2, figsize=(11, 1.2 + 0.35 * max(
+        n, len(scenes) * n * 0.6)), layout='constrained')
+    vals = [num(e.get('mean')) for e in overall]
+    y = np.arange(len(overall))
+    ax.barh(y, np.nan_to_num(vals), color=[colors[str(e.get('method'))]
+                                           for e in overall])
+    for yi, v in zip(y, vals):
+        ax.text(np.nan_to_num(v), yi, ' ' + fmt(v), va='center', fontsize=8)
+    ax.set_yticks(y, [str(e.get('method')) for e in overall])
+    ax.set_title(f'overall (mean over variants), reference '
+                 f'{rk.get("reference", "?")}')
+    ax.margins(x=0.15)
+    h = 0.8 / n
+    for j, m in enumerate(methods):
+        bars = [(i + (j - (n - 1) / 2) * h, num(e.get('mean')))
+                for i, s in enumerate(scenes) for e in objs(s.get('methods'))
+                if str(e.get('method')) == m and math.isfinite(
+                    num(e.get('mean')))]
+        ag.barh([b[0] for b in bars], [b[1] for b in bars], height=h,
+                color=colors[m], label=m)
+    ag.set_yticks(range(len(scenes)), [str(s.get('scene')) for s in scenes])
+    ag.set_title('per scene')
+    if methods:
+        ag.legend(title='method', loc='lower right')
+    for a in (ax, ag):
+        a.invert_yaxis()
+        a.set_xlabel(metric_label(rk.get('metric',
+                                         'profile.rmse_terminator')))
+    return save(fig, figdir, 'ranking')
+
+
+def _profile_style(r, colors, others):
+    """(legend label, line style) of one render in the profile figure."""
+    dashes = [(0, (5, 2)), (0, (2, 1.5)), (0, (6, 2, 1, 2)), (0, (1, 1))]
+    rend, meth, lab = str(r.get('renderer')), str(r.get('method')), column(r)
+    is_gt = lab == GROUND_TRUTH
+    if rend == REF:
+        return lab, dict(color='k', lw=2.8, zorder=5) if is_gt else dict(
+            color=colors[meth], lw=1.4)
+    return f'{rend}: {lab}', dict(
+        color='0.35' if is_gt else colors[meth], lw=1.2,
+        ls=dashes[others.index(rend) % len(dashes)])
+
+
+def profile_figure(var, colors, region, figdir):
+    """figures/profiles-<variant>.*: L(theta) of every render of a variant,
+    and its error vs the truth; empty bins are bridged (dots mark the bins
+    when they are sparse)."""
+    renders = objs(var.get('renders'))
+    gt = next((profile_xy(r.get('profile')) for r in renders
+               if r.get('renderer') == REF and
+               r.get('representation') == 'displacement'), None)
+    others = sorted({str(r.get('renderer')) for r in renders} - {REF})
+    fig, (ax, ad) = plt.subplots(2, 1, figsize=(9.5, 7), sharex=True,
+                                 height_ratios=[3, 2], layout='constrained')
+    finite = []
+    for r in renders:
+        xy = profile_xy(r.get('profile'))
+        if xy is None:
+            continue
+        lab, style = _profile_style(r, colors, others)
+        span = (xy[0][-1] - xy[0][0]) / num(r['profile']['bin_degrees'])
+        if xy[0].size < 0.6 * span:  # sparse: mark the bins
+            style.update(marker='.', ms=4)
+        ax.plot(*xy, label=lab, **style)
+        finite.append(xy[0])
+        if gt is not None and not (column(r) == GROUND_TRUTH and
+                                   str(r.get('renderer')) == REF):
+            ref = np.interp(xy[0], *gt, left=math.nan, right=math.nan)
+            ad.plot(xy[0], xy[1] - ref, label=lab, **style)
+    for a in (ax, ad):
+        a.axvspan(*region, color='0.9', zorder=0, label='terminator region '
+                  f'{region[0]:g}–{region[1]:g}°' if a is ax else None)
+        a.grid(alpha=0.3)
+    ad.axhline(0, color='k', lw=0.8)
+    if finite:  # clip to the bins that hold samples
+        finite = np.concatenate(finite)
+        ad.set_xlim(max(0, finite.min() - 1), min(180, finite.max() + 1))
+    ax.set_ylabel(L_LABEL)
+    ad.set_ylabel(f'Δ{L_LABEL}: method − truth')
+    ad.set_xlabel('θ: angle between light and base normal (degrees)')
+    ax.set_title(f'terminator profiles: {var.get("label", var.get("id"))}',
+                 wrap=True)
+    ad.set_title(f'difference from the {REF} displacement ground truth'
+                 if gt is not None else 'no evaluator ground truth')
+    ax.legend(loc='upper left', bbox_to_anchor=(1.01, 1.0))
+    return save(fig, figdir, f'profiles-{stem(var.get("id"))}')
+
+
+def geometric(v):
+    """Whether positive values are more evenly spaced on a log scale."""
+    v = np.sort(np.asarray(v, dtype=float))
+    if v.size < 3 or v[0] <= 0:
+        return False
+
+    def cv(d):
+        return np.std(d) / np.mean(d) if np.mean(d) > 0 else math.inf
+    return cv(np.diff(np.log(v))) < cv(np.diff(v))
+
+
+def _draw_contour(ax, grid, xs, ys, xt, yt, cmap, norm):
+    X, Y = np.meshgrid([num(v) for v in xs], [num(v) for v in ys])
+    z = np.ma.masked_invalid(grid)
+    levels = MaxNLocator(10).tick_values(norm.vmin, norm.vmax)
+    im = ax.contourf(X, Y, z, levels=levels, cmap=cmap, norm=norm)
+    contour_lines(ax, X, Y, z, levels, '%.3g')
+    ax.plot(X.ravel(), Y.ravel(), 'o', color='w', ms=3.5, mec='k',
+            mew=0.6, label='study samples')
+    ax.legend(loc='upper right', fontsize=7)
+    for v, set_scale in ((xs, ax.set_xscale), (ys, ax.set_yscale)):
+        if geometric([num(t) for t in v]):
+            set_scale('log')
+    ax.minorticks_off()
+    ax.set_xticks(X[0], xt, rotation=45, ha='right')
+    ax.set_yticks(Y[:, 0], yt)
+    return im
+
+
+def draw_grid(ax, grid, xs, ys, labels, kind, lim, title):
+    """One panel: contour when kind == 'contour', else annotated heatmap;
+    colours span lim = (vmin, vmax)."""
+    cmap, norm = plt.get_cmap('viridis'), plt.Normalize(*lim)  # own norm:
+    # one shared by several figures breaks matplotlib 3.6 at close
+    xt, yt = ([axis_text(v, i) for i, v in enumerate(a)] for a in (xs, ys))
+    if kind == 'contour':
+        im = _draw_contour(ax, grid, xs, ys, xt, yt, cmap, norm)
+    else:
+        im = ax.imshow(grid, origin='lower', cmap=cmap, norm=norm,
+                       aspect='auto')
+        for (i, j), v in np.ndenumerate(grid):
+            lum = np.dot(cmap(norm(v))[:3], [0.299, 0.587, 0.114])
+            ax.text(j, i, fmt(v), ha='center', va='center', fontsize=8,
+                    color='w' if lum < 0.5 and math.isfinite(v) else 'k')
+        ax.set_xticks(range(len(xs)), xt, rotation=30, ha='right')
+        ax.set_yticks(range(len(ys)), yt)
+    ax.set(xlabel=labels[0], ylabel=labels[1], title=title)
+    return im
+
+
+def _sweep_cells(doc, axes, x, y, metric, rend):
+    """{(scene, method): [sum grid, count grid]} of the comparisons of
+    renderer rend against its displacement, over axes[y] x axes[x]."""
+    xs, ys = axes[x]['values'], axes[y]['values']
+    variants = {v.get('id'): v for v in objs(doc.get('variants'))}
+    cells = {}
+    for c in objs(doc.get('comparisons')):
+        var, val = obj(variants.get(c.get('variant'))), get_metric(c, metric)
+        av = var.get('axis_values')
+        if c.get('renderer') != rend or not math.isfinite(val) or \
+                c.get('reference') != f'{rend}:displacement' or \
+                not isinstance(av, list) or len(av) != len(axes):
+            continue
+        i, j = axis_index(ys, av[y]), axis_index(xs, av[x])
+        if i is not None and j is not None:
+            key = (str(c.get('scene', var.get('scene'))),
+                   str(c.get('method')))
+            acc = cells.setdefault(key, np.zeros((2, len(ys), len(xs))))
+            acc[:, i, j] += (val, 1)
+    return cells
+
+
+def _sweep_scene(k, plot, scene, grids, xs, ys, labels, numeric, figdir):
+    """The figures of one scene of a sweep: one file per method, then the
+    small multiples; returns (small multiples' paths, all paths)."""
+    metric, rend = str(plot.get('metric')), str(plot.get('renderer', REF))
+    allv = np.concatenate([g[np.isfinite(g)] for g in grids.values()])
+    lo, hi = allv.min(), allv.max()
+    pad = 0 if hi > lo else max(abs(lo) * 0.05, 1e-6)  # constant data
+    lim = (lo - pad, hi + pad)
+    kind = 'contour' if plot.get('kind', 'contour') == 'contour' and \
+        numeric and all(np.isfinite(g).sum() >= 4
+                        for g in grids.values()) else 'heatmap'
+    note = f'{rend} vs {rend}:displacement, {scene}'
+    cols = min(len(grids), 3)
+    rows = -(-len(grids) // cols)
+    fig, axs = plt.subplots(rows, cols, squeeze=False,
+                            figsize=(4.2 * cols + 1, 4.2 * rows + 0.4),
+                            layout='constrained')
+    for a in axs.flat[len(grids):]:
+        a.set_visible(False)
+    written = []
+    for a, (m, g) in zip(axs.flat, grids.items()):
+        im = draw_grid(a, g, xs, ys, labels, kind, lim, m)
+        f1, a1 = plt.subplots(figsize=(5.4, 4.4), layout='constrained')
+        f1.colorbar(draw_grid(a1, g, xs, ys, labels, kind, lim,
+                              f'{m}: {note}'),
+                    ax=a1, label=metric_label(metric))
+        written += save(f1, figdir, f'plot-{k}-{stem(scene)}-{stem(metric)}-'
+                        f'{stem(m)}')
+    fig.colorbar(im, ax=axs.ravel().tolist(), label=metric_label(metric))
+    fig.suptitle(f'{metric_label(metric)}: {note} (mean over other axes)')
+    paths = save(fig, figdir, f'plot-{k}-{stem(scene)}')
+    return paths, written + paths
+
+
+def sweep_figures(k, plot, doc, src, figdir):
+    """plots[k] of the report: per scene, the metric over axes[x] x axes[y]
+    (mean over the other axes): small multiples plot-<k>-<scene>.* and one
+    file per method. Returns {'metric', 'renderer', 'scenes': [(scene,
+    small multiples' PNG)], 'written': [every path]}."""
+    axes = objs(doc.get('axes'))
+    x, y = plot.get('x'), plot.get('y')
+    if x == y or not all(type(i) is int and 0 <= i < len(axes)
+                         for i in (x, y)):
+        raise BadInput(src, f'plots[{k}]: x and y must be two different '
+                       f'indices into axes (0..{len(axes) - 1}), got {x!r}, '
+                       f'{y!r}')
+    metric, rend = str(plot.get('metric')), str(plot.get('renderer', REF))
+    cells = _sweep_cells(doc, axes, x, y, metric, rend)
+    xs, ys = axes[x]['values'], axes[y]['values']
+    numeric = all(len(v) >= 2 and all(math.isfinite(num(t)) for t in v)
+                  for v in (xs, ys))
+    ox, oy = (np.argsort([num(t) for t in v]) if numeric
+              else np.arange(len(v)) for v in (xs, ys))
+    xs, ys = [xs[i] for i in ox], [ys[i] for i in oy]
+    labels = [str(axes[i].get('label', axes[i].get('pointer')))
+              for i in (x, y)]
+    result = {'metric': metric, 'renderer': rend, 'scenes': [],
+              'written': []}
+    for scene in dict.fromkeys(s for s, _ in cells):
+        with np.errstate(invalid='ignore', divide='ignore'):
+            grids = {m: (a[0] / a[1])[np.ix_(oy, ox)]
+                     for (s, m), a in cells.items() if s == scene}
+        paths, written = _sweep_scene(k, plot, scene, grids, xs, ys, labels,
+                                      numeric, figdir)
+        result['scenes'].append((scene, paths[0]))
+        result['written'] += written
+    return result
+
+
+def report_figures(report):
+    """Every figure of a report into OUT/figures, in the order report.py
+    prints them: ranking, profiles per variant, sweeps, then the low-poly
+    section. Returns {'ranking': PNG or None, 'profiles': [PNG per
+    variant], 'sweeps': [sweep_figures()], 'lowpoly': lowpoly_figures() or
+    None, 'written': [every path]}."""
+    figdir = os.path.join(report.out, 'figures')
+    os.makedirs(figdir, exist_ok=True)
+    colors = report_colors(report)
+    written = ranking_figure(report.ranking, colors, figdir)
+    figs = {'ranking': written[0] if written else None, 'profiles': [],
+            'sweeps': [], 'lowpoly': None}
+    for v in report.variants:
+        paths = profile_figure(v, colors, report.terminator, figdir)
+        figs['profiles'].append(paths[0])
+        written += paths
+    for k, plot in enumerate(report.doc.get('plots', [])):
+        if not isinstance(plot, dict):
+            raise BadInput(report.src, f'plots[{k}] must be an object')
+        sweep = sweep_figures(k, plot, report.doc, report.src, figdir)
+        figs['sweeps'].append(sweep)
+        written += sweep['written']
+    if report.lowpoly:
+        figs['lowpoly'] = lowpoly_figures(report.lowpoly, figdir)
+        written += figs['lowpoly']['written']
+    figs['written'] = written
+    return figs

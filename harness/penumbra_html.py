@@ -1,0 +1,171 @@
+"""report.html of a Penumbra study, rendered from templates/report.html.j2.
+
+The functions here turn the checked report (penumbra_data.Report) and the
+figures drawn for it (penumbra_figures.report_figures) into a plain context
+of strings, lists and dicts: tables as rows of cells, images as data: URIs
+(the page is self-contained), captions. All markup is in the templates,
+and every string from report.json reaches the page through Jinja2's
+autoescape, so it is escaped exactly once; nothing in the context is
+marked safe.
+
+The shapes of tables, figures and image grids are in penumbra_context.
+"""
+import math
+import os
+
+import jinja2
+
+from penumbra_context import figure, figure_file, grid_cell, table
+from penumbra_data import (
+    FRACTION, GROUND_TRUTH, METRICS, column, get_metric, metric_label, num,
+    objs, stem)
+from penumbra_lowpoly_html import lowpoly_context
+
+TEMPLATES = os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                         'templates')
+VARIANT_METRICS = (               # (metric, scale, column head)
+    ('profile.rmse_terminator', 100, 'terminator RMSE (%)'),
+    ('profile.rmse_overall', 100, 'overall RMSE (%)'),
+    ('profile.max_error_terminator', 100, 'max error (%)'),
+    ('profile.max_step', 100, 'max step (%)'),
+    ('profile.position_error_deg', 1, 'position error (deg)'),
+    ('profile.width_deg', 1, 'width (deg)'),
+    ('profile.lit_bias', 100, 'lit bias (%)'),
+    ('image.rmse', 1, 'image RMSE (W m⁻² sr⁻¹)'),
+    ('image.ssim', 1, 'SSIM'))
+
+
+def image_grid(var, uris, missing, renderers):
+    """Rows: renderers (image row, then difference row); columns: ground
+    truth, then methods (Chiang 2019, Fig. 4)."""
+    renders = objs(var.get('renders'))
+    cols = list(dict.fromkeys([GROUND_TRUTH] + [column(r) for r in renders]))
+    at = {(str(r.get('renderer')), column(r)): r for r in renders}
+
+    def img(rel, alt, cap):
+        return grid_cell(figure(uris[rel], alt, cap) if rel is not None
+                         else None)
+    rows = []
+    for rend in dict.fromkeys(renderers + [k[0] for k in at]):
+        rs = [at.get((rend, c)) for c in cols]
+        if not any(rs):
+            continue
+        rows.append({'head': rend, 'cells': [
+            img(r.get('image'), f'{rend} {c}', f'{rend} / {c}') if r else
+            grid_cell(na=missing.get((rend, c), 'not rendered'))
+            for c, r in zip(cols, rs)]})
+        if any(r and r.get('difference') is not None for r in rs):
+            rows.append({'head': 'difference', 'cells': [
+                img(r.get('difference'), f'{rend} {c} difference',
+                    f'{c} − displacement ({rend})') if r else grid_cell()
+                for c, r in zip(cols, rs)]})
+    return {'cols': cols, 'rows': rows}
+
+
+def variant_context(var, report, fig, missing):
+    """One variant's section: image grid, profile figure, metrics table."""
+    vid = str(var.get('id'))
+    comps = [c for c in report.comps if c.get('variant') == var.get('id')]
+    rows = [[str(c.get('renderer')), str(c.get('method')),
+             str(c.get('reference'))] +
+            [(get_metric(c, m), s) for m, s, _ in VARIANT_METRICS]
+            for c in comps]
+    head = ['renderer', 'method', 'reference'] + [
+        h for *_, h in VARIANT_METRICS]
+    return {'anchor': f'v-{stem(vid)}', 'id': vid,
+            'label': str(var.get('label', '')),
+            'grid': image_grid(var, report.uris, missing,
+                               [str(r.get('id')) for r in report.renderers]),
+            'profiles': figure_file(
+                fig, f'profiles {vid}',
+                f'figures/profiles-{stem(vid)}.{{png,svg,pdf}}'),
+            'metrics': table(head, rows) if rows else None}
+
+
+def ranking_context(report):
+    """The headline: ranking tables (overall, per scene)."""
+    rk = report.ranking
+    name, unit = METRICS.get(rk.get('metric'), (rk.get('metric'), ''))
+    scale = 100 if unit == FRACTION else 1
+    head = ['method', f'mean {name} ({"%" if scale == 100 else unit})',
+            'rank', 'count']
+    return [{'title': str(group), 'table': table(head, [
+        [str(e.get('method')), (e.get('mean'), scale),
+         i + 1 if math.isfinite(num(e.get('mean'))) else None,
+         e.get('count')] for i, e in enumerate(entries)])}
+        for group, entries in report.ranking_groups() if entries]
+
+
+def renderer_tables(report):
+    """The renderers, what they cannot provide, and what failed."""
+    miss, fails = objs(report.doc.get('missing')), objs(
+        report.doc.get('failures'))
+    return {
+        'renderers': table(['renderer', 'version', 'methods', 'note'], [
+            [str(r.get('id')), str(r.get('version', '')),
+             ', '.join(map(str, r.get('methods') or [])),
+             str(r.get('note', ''))] for r in report.renderers]),
+        'missing': table(['renderer', 'method', 'why'], [
+            [str(m.get(k, '')) for k in ('renderer', 'method', 'why')]
+            for m in miss]) if miss else None,
+        'failures': table(['render', 'error'], [
+            [str(f.get('render', '')), str(f.get('error', ''))]
+            for f in fails], 'fail') if fails else None}
+
+
+def sweeps_context(report, sweeps):
+    return [{'title': f'{metric_label(s["metric"])}, {s["renderer"]}',
+             'figures': [figure_file(
+                 f, f'plot {k} {scene}',
+                 f'scene {scene}: {os.path.relpath(f, report.out)[:-4]}'
+                 '.{png,svg,pdf}') for scene, f in s['scenes']]}
+            for k, s in enumerate(sweeps)]
+
+
+def report_context(report, figs):
+    """The template context of the whole page."""
+    rk, study = report.ranking, report.study
+    name = str(study.get('name', 'study'))
+    missing = {(str(m.get('renderer')), str(m.get('method'))):
+               str(m.get('why', '')) for m in objs(report.doc.get('missing'))}
+    ranking_fig = figs['ranking']
+    return {
+        'title': f'Penumbra report: {name}',
+        'study': {'name': str(study.get('name', '')),
+                  'file': str(study.get('file', ''))},
+        'penumbra': str(report.doc.get('penumbra', '?')),
+        'ranking': {k: str(rk.get(k, '?'))
+                    for k in ('metric', 'renderer', 'reference')},
+        'ranking_tables': ranking_context(report),
+        'ranking_figure': figure_file(
+            ranking_fig, 'ranking', 'figures/ranking.{png,svg,pdf}')
+        if ranking_fig else None,
+        **renderer_tables(report),
+        'variants': [variant_context(v, report, f, missing)
+                     for v, f in zip(report.variants, figs['profiles'])],
+        'sweeps': sweeps_context(report, figs['sweeps']),
+        'has_plots': bool(report.doc.get('plots')),
+        'lowpoly': lowpoly_context(report.lowpoly, figs['lowpoly'],
+                                   report.out, report.src)
+        if report.lowpoly else None,
+        'terminator': [f'{t:g}' for t in report.terminator],
+        'lit': [f'{t:g}' for t in report.lit],
+        'image_unit': str(report.units.get('image', 'W m^-2 sr^-1'))}
+
+
+def environment():
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(TEMPLATES), autoescape=True,
+        undefined=jinja2.StrictUndefined)
+
+
+def write_report(report, figs):
+    """Render OUT/report.html (atomically: a reader never sees half a
+    page); returns its path."""
+    page = environment().get_template('report.html.j2').render(
+        report_context(report, figs))
+    path = os.path.join(report.out, 'report.html')
+    with open(path + '.tmp', 'w', encoding='utf-8') as f:
+        f.write(page.rstrip('\n') + '\n')  # one final newline
+    os.replace(path + '.tmp', path)
+    return path

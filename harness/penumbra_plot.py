@@ -1,0 +1,47 @@
+"""Matplotlib set-up and helpers shared by every Penumbra figure module.
+
+Importing this module selects the Agg backend (no display) and the rcParams
+that make the output reproducible: the same input gives the same bytes,
+with no dates or versions in the files and a fixed SVG hash salt.
+"""
+import os
+
+import matplotlib
+matplotlib.use('Agg')
+import matplotlib.pyplot as plt  # noqa: E402
+
+plt.rcParams.update({'svg.hashsalt': 'penumbra', 'font.size': 10,
+                     'axes.titlesize': 11, 'legend.fontsize': 8})
+META = {'png': {'Software': None}, 'svg': {'Date': None, 'Creator': None},
+        'pdf': {'CreationDate': None, 'Creator': None, 'Producer': None}}
+
+
+def save(fig, outdir, name):
+    """Write fig as outdir/name.{png,svg,pdf}; returns the three paths."""
+    written = []
+    for ext, meta in META.items():
+        path = os.path.join(outdir, f'{name}.{ext}')
+        fig.savefig(path, dpi=150 if ext == 'png' else 72, metadata=meta,
+                    bbox_inches='tight', pad_inches=0.05)
+        written.append(path)
+    plt.close(fig)
+    return written
+
+
+def method_colors(names):
+    """A stable colour per method, in order of first appearance; 'none' is
+    grey."""
+    palette = [c for i, c in enumerate(plt.get_cmap('tab10').colors)
+               if i != 7] + list(plt.get_cmap('Dark2').colors)
+    colors = {'none': (0.5, 0.5, 0.5)}
+    for m in names:
+        colors.setdefault(m, palette[(len(colors) - 1) % len(palette)])
+    return colors
+
+
+def contour_lines(ax, X, Y, z, levels, label_fmt):
+    """Labelled black contour lines at the levels inside z's range."""
+    inner = [v for v in levels if z.count() and z.min() < v < z.max()]
+    if inner:
+        cs = ax.contour(X, Y, z, levels=inner, colors='k', linewidths=0.6)
+        ax.clabel(cs, fontsize=7, fmt=label_fmt)
