@@ -9,6 +9,7 @@
 #include <span>
 #include <vector>
 
+#include "core/enum_names.h"
 #include "core/vec.h"
 
 namespace penumbra {
@@ -21,6 +22,8 @@ struct SineTerm {
 };
 
 enum class HeightCombine { kSum, kProduct };
+inline constexpr EnumName<HeightCombine> kHeightCombineNames[] = {
+    {"product", HeightCombine::kProduct}, {"sum", HeightCombine::kSum}};
 
 // A product of more factors than this is refused by the scene layer: the
 // evaluator keeps the factors on the stack.

@@ -2,6 +2,7 @@
 // bump and displacement representations need. Scene units throughout.
 #pragma once
 
+#include "core/enum_names.h"
 #include "core/height.h"
 #include "core/vec.h"
 
@@ -13,6 +14,8 @@ struct Ray {
 };
 
 enum class ShapeType { kCylinder, kSphere };
+inline constexpr EnumName<ShapeType> kShapeTypeNames[] = {{"cylinder", ShapeType::kCylinder},
+                                                          {"sphere", ShapeType::kSphere}};
 
 // Cylinder: side of the given radius around `axis` through `center`, from
 // -height/2 to +height/2 along the axis, optionally closed by flat caps.

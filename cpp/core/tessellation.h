@@ -4,6 +4,7 @@
 // which is what makes the smooth-shading terminator (shadow_origin.h).
 #pragma once
 
+#include "core/enum_names.h"
 #include "core/grid_mesh.h"
 #include "core/shape.h"
 
@@ -13,11 +14,15 @@ enum class TessellationScheme {
   kUv,         // cylinder: segments x rings grid (+ cap fans); sphere: UV sphere
   kIcosphere,  // sphere only: geodesic subdivision of the icosahedron
 };
+inline constexpr EnumName<TessellationScheme> kTessellationSchemeNames[] = {
+    {"uv", TessellationScheme::kUv}, {"icosphere", TessellationScheme::kIcosphere}};
 
 enum class NormalShading {
   kSmooth,  // shading normal Ni interpolated from the vertex normals
   kFlat,    // shading normal = the triangle's Ng
 };
+inline constexpr EnumName<NormalShading> kNormalShadingNames[] = {
+    {"smooth", NormalShading::kSmooth}, {"flat", NormalShading::kFlat}};
 
 struct Tessellation {
   TessellationScheme scheme = TessellationScheme::kUv;

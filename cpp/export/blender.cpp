@@ -37,7 +37,7 @@ json camera_json(const Camera& c) {
                     lr / c.width, lu / c.height));
   const Vec3 p = to_blender(c.position);
   json camera = {
-      {"projection", c.projection == Projection::kOrthographic ? "orthographic" : "perspective"},
+      {"projection", name_of<Projection>(kProjectionNames, c.projection)},
       {"matrix_world",
        json::array({json::array({x.x, y.x, z.x, p.x}), json::array({x.y, y.y, z.y, p.y}),
                     json::array({x.z, y.z, z.z, p.z}), json::array({0.0, 0.0, 0.0, 1.0})})},
@@ -57,7 +57,10 @@ json camera_json(const Camera& c) {
 
 }  // namespace
 
-BlenderExport export_blender(const Scene& scene) {
+namespace {
+
+// What Blender 3.4 Cycles cannot express; ExportError says why.
+void check_blender_scene(const Scene& scene) {
   const TerminatorMethod method = scene.terminator.method.method;
   if (!offers(RendererKind::kBlender, scene.representation, method))
     throw ExportError(fmt::format(
@@ -83,11 +86,15 @@ BlenderExport export_blender(const Scene& scene) {
         "Blender Cycles 3.4 offers the shadow-ray offsets `none` and `cycles-geometry-offset`; "
         "`{}` is not available",
         offset_method_info(scene.offset.method).id));
+  // The script builds one node group per term and refuses more (MAX_TERMS).
+  if (scene.height.function.terms.size() > kBlenderMaxHeightTerms)
+    throw ExportError(fmt::format(
+        "Blender export: at most {} height terms (harness/blender_render.py builds a node group "
+        "per term), the scene has {}; lower /height/terms",
+        kBlenderMaxHeightTerms, scene.height.function.terms.size()));
+}
 
-  BlenderExport out;
-  const HeightFunction& hf = scene.height.function;
-  const double amplitude = scene.height.amplitude;
-  const bool has_height = amplitude > 0.0 && !hf.terms.empty();
+BlenderShading blender_shading(const Scene& scene, bool has_height) {
   // Cycles would bump the flat triangle with h differenced over its own
   // plane; the evaluator rotates the analytic bumped normal onto Ni. Not the
   // same shading normal, so a low-poly bump render would not be comparable.
@@ -97,19 +104,36 @@ BlenderExport export_blender(const Scene& scene) {
         "representation, or no /shape/tessellation)");
   switch (scene.representation) {
     case Representation::kSmooth:
-      out.shading = BlenderShading::kSmooth;
-      break;
+      return BlenderShading::kSmooth;
     case Representation::kBump:
-      out.shading = !has_height                               ? BlenderShading::kSmooth
-                    : method == TerminatorMethod::kChiang2019 ? BlenderShading::kBumpNode
-                                                              : BlenderShading::kBumpDisplacement;
-      break;
+      return !has_height ? BlenderShading::kSmooth
+             : scene.terminator.method.method == TerminatorMethod::kChiang2019
+                 ? BlenderShading::kBumpNode
+                 : BlenderShading::kBumpDisplacement;
     case Representation::kDisplacement:
-      out.shading = BlenderShading::kMesh;
-      break;
+      return BlenderShading::kMesh;
   }
+  return BlenderShading::kSmooth;
+}
 
-  const bool displaced = out.shading == BlenderShading::kMesh && has_height;
+const char* mode_name(BlenderShading shading) {
+  switch (shading) {
+    case BlenderShading::kSmooth:
+      return "smooth";
+    case BlenderShading::kBumpDisplacement:
+      return "bump-displacement";
+    case BlenderShading::kBumpNode:
+      return "bump-node";
+    case BlenderShading::kMesh:
+      return "mesh";
+  }
+  return "smooth";
+}
+
+// The mesh Blender loads, in Blender coordinates with outward winding.
+TriangleMesh blender_mesh(const Scene& scene, bool displaced) {
+  const HeightFunction& hf = scene.height.function;
+  const double amplitude = scene.height.amplitude;
   const double reach = displaced ? amplitude * max_abs_height(hf) : 0.0;
   // The ground truth needs the fine grid; the base surface of smooth and bump
   // renders does not: 1024 segments around keep the chord within 4.7e-6 R
@@ -119,12 +143,11 @@ BlenderExport export_blender(const Scene& scene) {
   if (!displaced) res = {1024, scene.shape.type == ShapeType::kCylinder ? 1u : 512u};
   // A tessellated shape is sent as the evaluator's own triangles (its normals
   // are the exact ones at the vertices), through the same coordinate change.
-  out.mesh = scene.tessellation ? tessellate(scene.shape, *scene.tessellation)
-                                : make_grid_mesh(scene.shape, hf, displaced ? amplitude : 0.0, res);
-  const bool flat = scene.tessellation && scene.tessellation->shading == NormalShading::kFlat;
+  TriangleMesh mesh = scene.tessellation
+                          ? tessellate(scene.shape, *scene.tessellation)
+                          : make_grid_mesh(scene.shape, hf, displaced ? amplitude : 0.0, res);
   // Swap y and z (a mirror), then restore outward winding: Cycles flips the
   // shading normal on back faces, so a reversed triangle would shade dark.
-  TriangleMesh& mesh = out.mesh;
   for (std::size_t i = 0; i < mesh.positions.size(); i += 3) {
     std::swap(mesh.positions[i + 1], mesh.positions[i + 2]);
     std::swap(mesh.normals[i + 1], mesh.normals[i + 2]);
@@ -140,26 +163,17 @@ BlenderExport export_blender(const Scene& scene) {
     const Vec3 ng = cross(point(tri[1]) - point(tri[0]), point(tri[2]) - point(tri[0]));
     if (dot(ng, normal(tri[0]) + normal(tri[1]) + normal(tri[2])) < 0.0) std::swap(tri[1], tri[2]);
   }
+  return mesh;
+}
 
+json job_json(const Scene& scene, const BlenderExport& out, bool has_height) {
+  const HeightFunction& hf = scene.height.function;
   json terms = json::array();
   for (const SineTerm& t : hf.terms)
     terms.push_back({{"k", to_json(to_blender(t.k))}, {"phase", t.phase}, {"weight", t.weight}});
-  const char* mode = "smooth";
-  switch (out.shading) {
-    case BlenderShading::kSmooth:
-      mode = "smooth";
-      break;
-    case BlenderShading::kBumpDisplacement:
-      mode = "bump-displacement";
-      break;
-    case BlenderShading::kBumpNode:
-      mode = "bump-node";
-      break;
-    case BlenderShading::kMesh:
-      mode = "mesh";
-      break;
-  }
-  const json job = {
+  const bool flat = scene.tessellation && scene.tessellation->shading == NormalShading::kFlat;
+  const TerminatorMethod method = scene.terminator.method.method;
+  return {
       {"format", "penumbra-blender-job"},
       {"version", 2},
       {"camera", camera_json(scene.camera)},
@@ -172,21 +186,31 @@ BlenderExport export_blender(const Scene& scene) {
        {{"positions", kBlenderPositionsFile},
         {"normals", kBlenderNormalsFile},
         {"triangles", kBlenderTrianglesFile},
-        {"vertex_count", mesh.vertex_count()},
-        {"triangle_count", mesh.triangle_count()},
+        {"vertex_count", out.mesh.vertex_count()},
+        {"triangle_count", out.mesh.triangle_count()},
         {"faces", flat ? "flat" : "smooth"}}},
       {"material", {{"albedo", scene.material.albedo}}},
       {"height",
-       {{"amplitude", has_height ? amplitude : 0.0},
-        {"combine", hf.combine == HeightCombine::kSum ? "sum" : "product"},
+       {{"amplitude", has_height ? scene.height.amplitude : 0.0},
+        {"combine", name_of<HeightCombine>(kHeightCombineNames, hf.combine)},
         {"terms", terms}}},
       {"shading",
-       {{"mode", mode},
+       {{"mode", mode_name(out.shading)},
         {"shading_offset",
          method == TerminatorMethod::kShadingOffset ? scene.terminator.method.shading_offset : 0.0},
         {"geometry_offset",
          scene.offset.method == OffsetMethod::kCyclesGeometryOffset ? scene.offset.cutoff : 0.0}}}};
-  out.job_json = job.dump(2) + "\n";
+}
+
+}  // namespace
+
+BlenderExport export_blender(const Scene& scene) {
+  check_blender_scene(scene);
+  const bool has_height = scene.height.amplitude > 0.0 && !scene.height.function.terms.empty();
+  BlenderExport out;
+  out.shading = blender_shading(scene, has_height);
+  out.mesh = blender_mesh(scene, out.shading == BlenderShading::kMesh && has_height);
+  out.job_json = job_json(scene, out, has_height).dump(2) + "\n";
   return out;
 }
 

@@ -68,6 +68,9 @@ struct BlenderExport {
 // Cycles' default 0.1): offset `none`, as on the fine grids that stand in for
 // the analytic shapes.
 BlenderExport export_blender(const Scene& scene);
+// The most height terms the Blender script accepts (MAX_TERMS in
+// harness/blender_render.py; a test checks the two agree).
+inline constexpr std::size_t kBlenderMaxHeightTerms = 32;
 // File names the job refers to (fixed: never derived from scene values).
 inline constexpr const char* kBlenderJobFile = "job.json";
 inline constexpr const char* kBlenderPositionsFile = "positions.f32";

@@ -95,7 +95,10 @@ std::vector<std::string> PovrayExport::arguments(const std::string& input,
           fmt::format("+WT{}", single_thread ? 1 : std::max(1, threads))};
 }
 
-PovrayExport export_povray(const Scene& scene) {
+namespace {
+
+// What POV-Ray 3.7 cannot express; ExportError says why.
+void check_povray_scene(const Scene& scene) {
   if (!offers(RendererKind::kPovray, scene.representation, scene.terminator.method.method))
     throw ExportError(
         fmt::format("POV-Ray has no shadow-terminator method; it renders only `none` (got `{}`)",
@@ -114,26 +117,44 @@ PovrayExport export_povray(const Scene& scene) {
     throw ExportError(
         fmt::format("POV-Ray has no shadow-ray offset; it offers only `none` (got offset `{}`)",
                     offset_method_info(scene.offset.method).id));
+}
 
-  PovrayExport out;
-  const Camera& cam = scene.camera;
-  out.width = cam.width, out.height = cam.height;
-  int nx = 1, ny = 1;
-  strata(cam.spp, &nx, &ny);
-  out.supersample_x = nx, out.supersample_y = ny;
+// The values every part of the SDL shares.
+struct SdlContext {
+  const Scene& scene;
+  Placement place;
+  double amplitude, max_h, reach, r, half;
+  bool has_height, cylinder;
+  std::string texture;
+};
 
+SdlContext sdl_context(const Scene& scene) {
   const Shape& shape = scene.shape;
-  const Placement place = placement(shape);
-  const double amplitude = scene.height.amplitude;
   const HeightFunction& hf = scene.height.function;
-  const double max_h = max_abs_height(hf);
-  const bool has_height = amplitude > 0.0 && max_h > 0.0 && !hf.terms.empty();
-  const double reach = has_height ? amplitude * max_h : 0.0;
-  const bool cylinder = shape.type == ShapeType::kCylinder;
-  const double r = shape.radius, half = 0.5 * shape.height;
-  const bool isosurface = scene.representation == Representation::kDisplacement && has_height;
-  out.single_thread = isosurface;
+  SdlContext c{scene,
+               placement(shape),
+               scene.height.amplitude,
+               max_abs_height(hf),
+               0.0,
+               shape.radius,
+               0.5 * shape.height,
+               false,
+               shape.type == ShapeType::kCylinder,
+               ""};
+  c.has_height = c.amplitude > 0.0 && c.max_h > 0.0 && !hf.terms.empty();
+  c.reach = c.has_height ? c.amplitude * c.max_h : 0.0;
+  c.texture = fmt::format(
+      "  pigment {{ rgb {} }}\n"
+      "  finish {{ ambient 0 emission 0 diffuse 1 brilliance 1 specular 0 phong 0 reflection 0 "
+      "}}\n",
+      num(scene.material.albedo));
+  return c;
+}
 
+// Header comment with the command line, global settings, camera and light.
+std::string sdl_header(const Scene& scene, const PovrayExport& out) {
+  const Camera& cam = scene.camera;
+  const int nx = out.supersample_x, ny = out.supersample_y;
   std::string s;
   s += fmt::format("// Penumbra {} export of scene \"{}\" ({}).\n", kPenumbraVersion,
                    comment_safe(scene.name), to_string(scene.representation));
@@ -154,107 +175,130 @@ PovrayExport export_povray(const Scene& scene) {
 
   // A parallel light far away along the direction towards the light. POV-Ray
   // gives colour * pigment * cos, so colour E/pi yields albedo/pi * E * cos.
+  const Shape& shape = scene.shape;
   const Vec3 wi = normalize(scene.light.direction);
-  const double far = 1e4 * std::max(1.0, r + length(shape.center));
+  const double far = 1e4 * std::max(1.0, shape.radius + length(shape.center));
   const double colour = scene.light.irradiance / kPi;
   s += fmt::format("light_source {{\n  {}\n  color rgb {}\n  parallel\n  point_at {}\n}}\n\n",
                    vec(shape.center + wi * far), num(colour), vec(shape.center));
+  return s;
+}
 
-  const std::string texture = fmt::format(
-      "  pigment {{ rgb {} }}\n"
-      "  finish {{ ambient 0 emission 0 diffuse 1 brilliance 1 specular 0 phong 0 reflection 0 "
-      "}}\n",
-      num(scene.material.albedo));
+// A tessellated shape: the evaluator's very triangles as a mesh2.
+std::string mesh_sdl(const SdlContext& c) {
+  const Scene& scene = c.scene;
+  // POV-Ray's bump perturbs the normal with the 3D pattern gradient, the
+  // evaluator rotates the analytic bumped normal onto Ni: not the same
+  // shading normal, so the comparison would measure that, not the mesh.
+  if (scene.representation != Representation::kSmooth && c.has_height)
+    throw ExportError(
+        "POV-Ray export: bump on a tessellated shape is evaluator-only (use the smooth "
+        "representation, or no /shape/tessellation)");
+  // In scene coordinates. Smooth shading: one normal per vertex, indexed like
+  // the vertices (POV-Ray interpolates them barycentrically); flat: no
+  // normals, POV-Ray shades with Ng.
+  const TriangleMesh mesh = tessellate(scene.shape, *scene.tessellation);
+  std::string faces;
+  for (std::size_t t = 0; t < mesh.triangles.size(); t += 3)
+    faces += fmt::format(",\n    <{}, {}, {}>", mesh.triangles[t], mesh.triangles[t + 1],
+                         mesh.triangles[t + 2]);
+  const bool smooth = scene.tessellation->shading == NormalShading::kSmooth;
+  std::string s = fmt::format(
+      "// Low-poly {} mesh: {} vertices, {} triangles. POV-Ray starts shadow rays\n"
+      "// on the flat triangle (offset `none`).\n"
+      "mesh2 {{\n  vertex_vectors {{\n    {}{}\n  }}\n",
+      smooth ? "smooth-shaded" : "flat-shaded", mesh.vertex_count(), mesh.triangle_count(),
+      mesh.vertex_count(), mesh_vectors(mesh.positions));
+  if (smooth)
+    s += fmt::format("  normal_vectors {{\n    {}{}\n  }}\n", mesh.vertex_count(),
+                     mesh_vectors(mesh.normals));
+  s += fmt::format("  face_indices {{\n    {}{}\n  }}\n{}}}\n", mesh.triangle_count(), faces,
+                   c.texture);
+  return s;
+}
 
-  if (scene.tessellation) {
-    // POV-Ray's bump perturbs the normal with the 3D pattern gradient, the
-    // evaluator rotates the analytic bumped normal onto Ni: not the same
-    // shading normal, so the comparison would measure that, not the mesh.
-    if (scene.representation != Representation::kSmooth && has_height)
-      throw ExportError(
-          "POV-Ray export: bump on a tessellated shape is evaluator-only (use the smooth "
-          "representation, or no /shape/tessellation)");
-    // The evaluator's very triangles, in scene coordinates. Smooth shading:
-    // one normal per vertex, indexed like the vertices (POV-Ray interpolates
-    // them barycentrically); flat: no normals, POV-Ray shades with Ng.
-    const TriangleMesh mesh = tessellate(shape, *scene.tessellation);
-    std::string faces;
-    for (std::size_t t = 0; t < mesh.triangles.size(); t += 3)
-      faces += fmt::format(",\n    <{}, {}, {}>", mesh.triangles[t], mesh.triangles[t + 1],
-                           mesh.triangles[t + 2]);
-    const bool smooth = scene.tessellation->shading == NormalShading::kSmooth;
-    s += fmt::format(
-        "// Low-poly {} mesh: {} vertices, {} triangles. POV-Ray starts shadow rays\n"
-        "// on the flat triangle (offset `none`).\n"
-        "mesh2 {{\n  vertex_vectors {{\n    {}{}\n  }}\n",
-        smooth ? "smooth-shaded" : "flat-shaded", mesh.vertex_count(), mesh.triangle_count(),
-        mesh.vertex_count(), mesh_vectors(mesh.positions));
-    if (smooth)
-      s += fmt::format("  normal_vectors {{\n    {}{}\n  }}\n", mesh.vertex_count(),
-                       mesh_vectors(mesh.normals));
-    s += fmt::format("  face_indices {{\n    {}{}\n  }}\n{}}}\n", mesh.triangle_count(), faces,
-                     texture);
-    out.sdl = std::move(s);
-    return out;
-  }
+// |q| of the point q, kept away from 0: the radial distance of the base surface.
+std::string rho_sdl(const SdlContext& c) {
+  return c.cylinder ? "max(sqrt(x*x + z*z), " + num(1e-9 * c.r) + ")"
+                    : "max(sqrt(x*x + y*y + z*z), " + num(1e-9 * c.r) + ")";
+}
 
-  if (has_height)
-    s += fmt::format("#declare Penumbra_H = function(x, y, z) {{\n    {}\n}}\n\n",
-                     height_function(hf, place));
+// h at the base point under q (radial projection onto the base surface):
+// constant along the normal, so POV-Ray's 3D pattern gradient is the
+// surface gradient the evaluator uses, and the isosurface is P + A h N.
+std::string projected_h_sdl(const SdlContext& c) {
+  const std::string rho = rho_sdl(c);
+  return c.cylinder ? fmt::format("Penumbra_H({0} * x / {1}, y, {0} * z / {1})", num(c.r), rho)
+                    : fmt::format("Penumbra_H({0} * x / {1}, {0} * y / {1}, {0} * z / {1})",
+                                  num(c.r), rho);
+}
 
-  // h at the base point under q (radial projection onto the base surface):
-  // constant along the normal, so POV-Ray's 3D pattern gradient is the
-  // surface gradient the evaluator uses, and the isosurface is P + A h N.
-  const std::string rho = cylinder ? "max(sqrt(x*x + z*z), " + num(1e-9 * r) + ")"
-                                   : "max(sqrt(x*x + y*y + z*z), " + num(1e-9 * r) + ")";
-  const std::string projected_h =
-      cylinder
-          ? fmt::format("Penumbra_H({0} * x / {1}, y, {0} * z / {1})", num(r), rho)
-          : fmt::format("Penumbra_H({0} * x / {1}, {0} * y / {1}, {0} * z / {1})", num(r), rho);
-  if (isosurface) {
-    // |grad F| = sqrt(1 + A^2 |grad (h o projection)|^2); the projection onto
-    // the base surface stretches tangential gradients by at most R / r_min.
-    const double stretch = r / std::max(r - reach, 1e-9 * r);
-    const double gradient =
-        std::sqrt(1.0 + std::pow(amplitude * max_gradient_norm(hf) * std::max(1.0, stretch), 2));
-    const double outer = r + 1.01 * reach + 1e-6 * r;
-    const std::string function =
-        fmt::format("{} - {} - {} * {}", rho, num(r), num(amplitude), projected_h);
-    const std::string container = cylinder
-                                      ? fmt::format("box {{ <{0}, {1}, {0}>, <{2}, {3}, {2}> }}",
-                                                    num(-outer), num(-half), num(outer), num(half))
-                                      : fmt::format("sphere {{ <0, 0, 0>, {} }}", num(outer));
-    s += fmt::format(
-        "// True displacement: the surface |q| = R + A h(base point of q).\n"
-        "// max_gradient = sqrt(1 + (A max|grad h| R/(R - A max|h|))^2) * 1.05, an upper bound\n"
-        "// of |grad F| near the surface plus 5% for rounding.\n"
-        "isosurface {{\n  function {{ {} }}\n  contained_by {{ {} }}\n  threshold 0\n"
-        "  accuracy 1e-5\n  max_gradient {}\n{}{}  {}\n}}\n",
-        function, container, num(1.05 * gradient), cylinder && !shape.caps ? "  open\n" : "",
-        texture, matrix(place));
-    out.sdl = std::move(s);
-    return out;
-  }
+// True displacement: the isosurface |q| = R + A h(base point of q).
+std::string isosurface_sdl(const SdlContext& c) {
+  // |grad F| = sqrt(1 + A^2 |grad (h o projection)|^2); the projection onto
+  // the base surface stretches tangential gradients by at most R / r_min.
+  const double stretch = c.r / std::max(c.r - c.reach, 1e-9 * c.r);
+  const double gradient =
+      std::sqrt(1.0 + std::pow(c.amplitude * max_gradient_norm(c.scene.height.function) *
+                                   std::max(1.0, stretch),
+                               2));
+  const double outer = c.r + 1.01 * c.reach + 1e-6 * c.r;
+  const std::string function =
+      fmt::format("{} - {} - {} * {}", rho_sdl(c), num(c.r), num(c.amplitude), projected_h_sdl(c));
+  const std::string container =
+      c.cylinder ? fmt::format("box {{ <{0}, {1}, {0}>, <{2}, {3}, {2}> }}", num(-outer),
+                               num(-c.half), num(outer), num(c.half))
+                 : fmt::format("sphere {{ <0, 0, 0>, {} }}", num(outer));
+  return fmt::format(
+      "// True displacement: the surface |q| = R + A h(base point of q).\n"
+      "// max_gradient = sqrt(1 + (A max|grad h| R/(R - A max|h|))^2) * 1.05, an upper bound\n"
+      "// of |grad F| near the surface plus 5% for rounding.\n"
+      "isosurface {{\n  function {{ {} }}\n  contained_by {{ {} }}\n  threshold 0\n"
+      "  accuracy 1e-5\n  max_gradient {}\n{}{}  {}\n}}\n",
+      function, container, num(1.05 * gradient),
+      c.cylinder && !c.scene.shape.caps ? "  open\n" : "", c.texture, matrix(c.place));
+}
 
+// The analytic primitive, with POV-Ray's bump for the bump representation.
+std::string primitive_sdl(const SdlContext& c) {
   std::string normal;
-  if (scene.representation == Representation::kBump && has_height) {
+  if (c.scene.representation == Representation::kBump && c.has_height) {
     // POV-Ray: Ns = normalize(N - (2/15) bump_size grad f). With
     // f = 0.5 + C h, bump_size = 7.5 A / C gives N - A grad h; C keeps f in
     // (0.1, 0.9), away from the pattern's wrap at 1.
-    const double c = 0.4 / max_h;
+    const double k = 0.4 / c.max_h;
     normal = fmt::format(
         "  normal {{\n    function {{ 0.5 + {} * {} }}\n"
         "    bump_size {}\n    accuracy 1e-4\n  }}\n",
-        num(c), projected_h, num(7.5 * amplitude / c));
+        num(k), projected_h_sdl(c), num(7.5 * c.amplitude / k));
   }
-  if (cylinder)
-    s += fmt::format("cylinder {{\n  <0, {}, 0>, <0, {}, 0>, {}\n{}{}{}  {}\n}}\n", num(-half),
-                     num(half), num(r), shape.caps ? "" : "  open\n", texture, normal,
-                     matrix(place));
-  else
-    s += fmt::format("sphere {{\n  <0, 0, 0>, {}\n{}{}  {}\n}}\n", num(r), texture, normal,
-                     matrix(place));
-  out.sdl = std::move(s);
+  if (c.cylinder)
+    return fmt::format("cylinder {{\n  <0, {}, 0>, <0, {}, 0>, {}\n{}{}{}  {}\n}}\n", num(-c.half),
+                       num(c.half), num(c.r), c.scene.shape.caps ? "" : "  open\n", c.texture,
+                       normal, matrix(c.place));
+  return fmt::format("sphere {{\n  <0, 0, 0>, {}\n{}{}  {}\n}}\n", num(c.r), c.texture, normal,
+                     matrix(c.place));
+}
+
+}  // namespace
+
+PovrayExport export_povray(const Scene& scene) {
+  check_povray_scene(scene);
+  PovrayExport out;
+  out.width = scene.camera.width, out.height = scene.camera.height;
+  strata(scene.camera.spp, &out.supersample_x, &out.supersample_y);
+  const SdlContext c = sdl_context(scene);
+  const bool isosurface = scene.representation == Representation::kDisplacement && c.has_height;
+  out.single_thread = isosurface;
+  out.sdl = sdl_header(scene, out);
+  if (scene.tessellation) {
+    out.sdl += mesh_sdl(c);
+    return out;
+  }
+  if (c.has_height)
+    out.sdl += fmt::format("#declare Penumbra_H = function(x, y, z) {{\n    {}\n}}\n\n",
+                           height_function(scene.height.function, c.place));
+  out.sdl += isosurface ? isosurface_sdl(c) : primitive_sdl(c);
   return out;
 }
 

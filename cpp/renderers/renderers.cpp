@@ -145,6 +145,35 @@ RendererRun geometry_pass(const Scene& scene, const RenderSettings& settings) {
   return run;
 }
 
+// Runs an external renderer in `work` and reads the image it leaves there
+// (`output`); RendererError when it fails or writes nothing readable.
+struct ExternalRun {
+  Image image;
+  double seconds = 0.0;
+};
+
+ExternalRun run_external(RendererKind r, const std::vector<std::string>& argv, WorkDir& work,
+                         const std::string& output, const RenderSettings& settings) {
+  const ProcessResult p =
+      run_process(argv, work.path.string(), settings.log_path, settings.timeout_s);
+  check_process(r, p, settings, work);
+  if (!fs::exists(work.path / output))
+    throw RendererError(fmt::format("{} exited 0 but wrote no image; log {}:\n{}", to_string(r),
+                                    settings.log_path, tail_lines(settings.log_path, 12)));
+  return {read_renderer_image(r, (work.path / output).string()), p.seconds};
+}
+
+// The renderer's colour on the evaluator's analysis channels of the same camera.
+RendererRun with_geometry(RendererKind r, const Image& colour, double seconds, const Scene& scene,
+                          const RenderSettings& settings, WorkDir& work) {
+  RendererRun run = geometry_pass(scene, settings);
+  run.geometry_seconds = run.seconds;
+  run.seconds = seconds;
+  run.image = merge_with_geometry(colour, run.image, r);
+  work.keep = false;
+  return run;
+}
+
 RendererRun render_povray(const Scene& scene, const RenderSettings& settings) {
   const PovrayExport job = export_povray(scene);
   const std::string exe = executable_for(RendererKind::kPovray, settings);
@@ -153,23 +182,13 @@ RendererRun render_povray(const Scene& scene, const RenderSettings& settings) {
   std::vector<std::string> argv{exe};
   for (std::string& a : job.arguments("scene.pov", "scene.exr", thread_count(settings)))
     argv.push_back(std::move(a));
-  const ProcessResult p =
-      run_process(argv, work.path.string(), settings.log_path, settings.timeout_s);
-  check_process(RendererKind::kPovray, p, settings, work);
-  if (!fs::exists(work.path / "scene.exr"))
-    throw RendererError(fmt::format("povray exited 0 but wrote no image; log {}:\n{}",
-                                    settings.log_path, tail_lines(settings.log_path, 12)));
-  const Image big = read_renderer_image(RendererKind::kPovray, (work.path / "scene.exr").string());
+  const ExternalRun ext = run_external(RendererKind::kPovray, argv, work, "scene.exr", settings);
+  const Image& big = ext.image;
   if (big.width != job.width * job.supersample_x || big.height != job.height * job.supersample_y)
     throw RendererError(fmt::format("povray wrote {}x{}, expected {}x{}", big.width, big.height,
                                     job.width * job.supersample_x, job.height * job.supersample_y));
   const Image colour = box_downsample(big, job.supersample_x, job.supersample_y);
-  RendererRun run = geometry_pass(scene, settings);
-  run.geometry_seconds = run.seconds;
-  run.seconds = p.seconds;
-  run.image = merge_with_geometry(colour, run.image, RendererKind::kPovray);
-  work.keep = false;
-  return run;
+  return with_geometry(RendererKind::kPovray, colour, ext.seconds, scene, settings, work);
 }
 
 RendererRun render_blender(const Scene& scene, const RenderSettings& settings) {
@@ -195,20 +214,8 @@ RendererRun render_blender(const Scene& scene, const RenderSettings& settings) {
                                       "render.exr",
                                       "--threads",
                                       std::to_string(thread_count(settings))};
-  const ProcessResult p =
-      run_process(argv, work.path.string(), settings.log_path, settings.timeout_s);
-  check_process(RendererKind::kBlender, p, settings, work);
-  if (!fs::exists(work.path / "render.exr"))
-    throw RendererError(fmt::format("blender exited 0 but wrote no image; log {}:\n{}",
-                                    settings.log_path, tail_lines(settings.log_path, 12)));
-  const Image colour =
-      read_renderer_image(RendererKind::kBlender, (work.path / "render.exr").string());
-  RendererRun run = geometry_pass(scene, settings);
-  run.geometry_seconds = run.seconds;
-  run.seconds = p.seconds;
-  run.image = merge_with_geometry(colour, run.image, RendererKind::kBlender);
-  work.keep = false;
-  return run;
+  const ExternalRun ext = run_external(RendererKind::kBlender, argv, work, "render.exr", settings);
+  return with_geometry(RendererKind::kBlender, ext.image, ext.seconds, scene, settings, work);
 }
 
 RendererRun render_dispatch(RendererKind renderer, const Scene& scene,

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/bsdf.h"
+#include "core/enum_names.h"
 #include "core/height.h"
 #include "core/shadow_origin.h"
 #include "core/shape.h"
@@ -32,6 +33,8 @@ inline constexpr double kMaxFrequency = 1e6;
 inline constexpr double kMaxRadiant = 1e9;
 
 enum class Projection { kOrthographic, kPerspective };
+inline constexpr EnumName<Projection> kProjectionNames[] = {
+    {"orthographic", Projection::kOrthographic}, {"perspective", Projection::kPerspective}};
 
 // Pixel (i, j), j = 0 at the top, sample offset (a, b) in [0,1)^2:
 //   x0 = (i + a)/width - 1/2,   y0 = 1/2 - (j + b)/height
@@ -63,6 +66,8 @@ inline void strata(int spp, int* nx, int* ny) {
 }
 
 enum class LightType { kDistant, kPoint };
+inline constexpr EnumName<LightType> kLightTypeNames[] = {{"distant", LightType::kDistant},
+                                                          {"point", LightType::kPoint}};
 
 struct Light {
   LightType type = LightType::kDistant;
@@ -77,9 +82,17 @@ enum class Representation {
   kBump,          // base geometry, Ns = exact normal of the displaced surface
   kDisplacement,  // the displaced surface itself (ground truth)
 };
+inline constexpr EnumName<Representation> kRepresentationNames[] = {
+    {"smooth", Representation::kSmooth},
+    {"bump", Representation::kBump},
+    {"displacement", Representation::kDisplacement}};
 
-enum class ReferenceNormal { kGeometric, kInterpolated };  // "Ng" or "Ni"
+enum class ReferenceNormal { kGeometric, kInterpolated };
+inline constexpr EnumName<ReferenceNormal> kReferenceNormalNames[] = {
+    {"Ng", ReferenceNormal::kGeometric}, {"Ni", ReferenceNormal::kInterpolated}};
 enum class Lobes { kDiffuse, kAll };
+inline constexpr EnumName<Lobes> kLobesNames[] = {{"diffuse", Lobes::kDiffuse},
+                                                  {"all", Lobes::kAll}};
 
 struct TerminatorSettings {
   MethodSettings method;
@@ -90,6 +103,10 @@ struct TerminatorSettings {
 };
 
 enum class HeightFamily { kNone, kGrating, kWeave, kNoise };
+inline constexpr EnumName<HeightFamily> kHeightFamilyNames[] = {{"none", HeightFamily::kNone},
+                                                                {"grating", HeightFamily::kGrating},
+                                                                {"weave", HeightFamily::kWeave},
+                                                                {"noise", HeightFamily::kNoise}};
 
 struct HeightSpec {
   HeightFamily family = HeightFamily::kNone;

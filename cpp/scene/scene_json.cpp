@@ -7,6 +7,7 @@
 #include <limits>
 #include <optional>
 #include <set>
+#include <span>
 #include <sstream>
 #include <utility>
 
@@ -83,7 +84,7 @@ class Reader {
   }
   // One of a fixed set of names; the error lists them.
   template <typename Enum>
-  Enum choice(const std::string& key, std::initializer_list<std::pair<const char*, Enum>> options,
+  Enum choice(const std::string& key, std::span<const EnumName<Enum>> options,
               std::optional<Enum> fallback = std::nullopt) {
     if (fallback && !has(key)) return *fallback;
     const json& v = at(key);
@@ -169,10 +170,7 @@ bool phase_range(double x) {
 
 Camera read_camera(Reader r) {
   Camera c;
-  c.projection = r.choice<Projection>(
-      "projection",
-      {{"orthographic", Projection::kOrthographic}, {"perspective", Projection::kPerspective}},
-      Projection::kOrthographic);
+  c.projection = r.choice<Projection>("projection", kProjectionNames, Projection::kOrthographic);
   c.position = r.vec3("position");
   c.direction = r.vec3("direction");  // keep the length: it is the focal length in perspective
   r.check_direction("direction", c.direction);
@@ -191,8 +189,7 @@ Camera read_camera(Reader r) {
 
 Light read_light(Reader r) {
   Light l;
-  l.type =
-      r.choice<LightType>("type", {{"distant", LightType::kDistant}, {"point", LightType::kPoint}});
+  l.type = r.choice<LightType>("type", kLightTypeNames);
   if (l.type == LightType::kDistant) {
     l.direction = r.direction("direction");
     l.irradiance = r.number("irradiance", radiant_range, "in [0, 1e9] (W/m^2)");
@@ -206,9 +203,8 @@ Light read_light(Reader r) {
 
 Tessellation read_tessellation(Reader r, const Shape& shape) {
   Tessellation t;
-  t.scheme = r.choice<TessellationScheme>(
-      "scheme", {{"uv", TessellationScheme::kUv}, {"icosphere", TessellationScheme::kIcosphere}},
-      TessellationScheme::kUv);
+  t.scheme =
+      r.choice<TessellationScheme>("scheme", kTessellationSchemeNames, TessellationScheme::kUv);
   if (t.scheme == TessellationScheme::kUv) {
     t.segments = static_cast<unsigned>(r.integer_or("segments", t.segments, 3, 65536));
     const long long min_rings = shape.type == ShapeType::kSphere ? 2 : 1;
@@ -218,9 +214,7 @@ Tessellation read_tessellation(Reader r, const Shape& shape) {
       r.fail("scheme", "expected \"uv\" for a cylinder (\"icosphere\" tessellates spheres only)");
     t.frequency = static_cast<unsigned>(r.integer_or("frequency", t.frequency, 1, 2048));
   }
-  t.shading = r.choice<NormalShading>(
-      "shading", {{"smooth", NormalShading::kSmooth}, {"flat", NormalShading::kFlat}},
-      NormalShading::kSmooth);
+  t.shading = r.choice<NormalShading>("shading", kNormalShadingNames, NormalShading::kSmooth);
   r.finish();
   return t;
 }
@@ -252,8 +246,7 @@ OffsetSettings read_offset(Reader r) {
 
 Shape read_shape(Reader r, std::optional<Tessellation>* tessellation = nullptr) {
   Shape s;
-  s.type = r.choice<ShapeType>(
-      "type", {{"cylinder", ShapeType::kCylinder}, {"sphere", ShapeType::kSphere}});
+  s.type = r.choice<ShapeType>("type", kShapeTypeNames);
   s.center = r.vec3_or("center", {0, 0, 0});
   s.axis = r.has("axis") ? r.direction("axis") : Vec3{0, 1, 0};
   s.radius = r.number("radius", length_scale, "in [1e-6, 1e6] (scene units)");
@@ -285,10 +278,7 @@ Material read_material(Reader r) {
 
 HeightSpec read_height(Reader r, const Shape& shape) {
   HeightSpec h;
-  h.family = r.choice<HeightFamily>("type", {{"none", HeightFamily::kNone},
-                                             {"grating", HeightFamily::kGrating},
-                                             {"weave", HeightFamily::kWeave},
-                                             {"noise", HeightFamily::kNoise}});
+  h.family = r.choice<HeightFamily>("type", kHeightFamilyNames);
   if (h.family == HeightFamily::kNone) {
     r.finish();
     return h;
@@ -316,9 +306,8 @@ HeightSpec read_height(Reader r, const Shape& shape) {
         Reader item(wrapper, r.child_pointer("directions") + "/" + std::to_string(i), r.origin());
         directions.push_back(item.scaled_direction("d"));
       }
-      const HeightCombine combine = r.choice<HeightCombine>(
-          "combine", {{"product", HeightCombine::kProduct}, {"sum", HeightCombine::kSum}},
-          HeightCombine::kProduct);
+      const HeightCombine combine =
+          r.choice<HeightCombine>("combine", kHeightCombineNames, HeightCombine::kProduct);
       h.function = make_weave(directions, frequency, combine);
       break;
     }
@@ -375,12 +364,9 @@ TerminatorSettings read_terminator(Reader r) {
     }
     p.finish();
   }
-  t.reference_normal = r.choice<ReferenceNormal>(
-      "reference_normal",
-      {{"Ng", ReferenceNormal::kGeometric}, {"Ni", ReferenceNormal::kInterpolated}},
-      ReferenceNormal::kGeometric);
-  t.lobes = r.choice<Lobes>("lobes", {{"diffuse", Lobes::kDiffuse}, {"all", Lobes::kAll}},
-                            Lobes::kDiffuse);
+  t.reference_normal = r.choice<ReferenceNormal>("reference_normal", kReferenceNormalNames,
+                                                 ReferenceNormal::kGeometric);
+  t.lobes = r.choice<Lobes>("lobes", kLobesNames, Lobes::kDiffuse);
   r.finish();
   return t;
 }
@@ -489,11 +475,8 @@ Scene scene_from_json(const json& document, const std::string& origin) {
   s.shape = read_shape(r.object("shape"), &s.tessellation);
   if (r.has("material")) s.material = read_material(r.object("material"));
   if (r.has("height")) s.height = read_height(r.object("height"), s.shape);
-  s.representation = r.choice<Representation>("representation",
-                                              {{"smooth", Representation::kSmooth},
-                                               {"bump", Representation::kBump},
-                                               {"displacement", Representation::kDisplacement}},
-                                              Representation::kBump);
+  s.representation =
+      r.choice<Representation>("representation", kRepresentationNames, Representation::kBump);
   if (r.has("terminator")) s.terminator = read_terminator(r.object("terminator"));
   if (r.has("offset")) s.offset = read_offset(r.object("offset"));
   if (r.has("props")) {
@@ -554,29 +537,11 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
 }
 
 const char* to_string(Representation r) {
-  switch (r) {
-    case Representation::kSmooth:
-      return "smooth";
-    case Representation::kBump:
-      return "bump";
-    case Representation::kDisplacement:
-      return "displacement";
-  }
-  return "?";
+  return name_of<Representation>(kRepresentationNames, r);
 }
 
 const char* to_string(HeightFamily f) {
-  switch (f) {
-    case HeightFamily::kNone:
-      return "none";
-    case HeightFamily::kGrating:
-      return "grating";
-    case HeightFamily::kWeave:
-      return "weave";
-    case HeightFamily::kNoise:
-      return "noise";
-  }
-  return "?";
+  return name_of<HeightFamily>(kHeightFamilyNames, f);
 }
 
 }  // namespace penumbra

@@ -218,14 +218,17 @@ std::vector<Image> render_specs(const std::vector<Spec>& specs, const Calibratio
   return images;
 }
 
-// Compares the cases and checks each against its bound.
-void calibration_rows(const std::vector<Spec>& specs, const std::vector<Image>& images,
-                      CalibrationResult& result) {
+// Compares two cases of one shape and appends the row to the result.
+struct RowMaker {
+  const std::vector<Spec>& specs;
+  const std::vector<Image>& images;
+  CalibrationResult& result;
   std::map<std::string, std::size_t> index;
-  for (std::size_t i = 0; i < specs.size(); ++i) index[specs[i].label] = i;
-  auto compare = [&](const std::string& shape, Representation rep, const std::string& test_method,
-                     RendererKind test, const std::string& ref_method, RendererKind ref,
-                     const std::string& note, int scale = 1) -> CalibrationRow& {
+
+  CalibrationRow& operator()(const std::string& shape, Representation rep,
+                             const std::string& test_method, RendererKind test,
+                             const std::string& ref_method, RendererKind ref,
+                             const std::string& note, int scale = 1) {
     CalibrationRow row;
     row.shape = shape;
     row.representation = to_string(rep);
@@ -248,63 +251,73 @@ void calibration_rows(const std::vector<Spec>& specs, const std::vector<Image>& 
     }
     result.rows.push_back(std::move(row));
     return result.rows.back();
-  };
+  }
+};
+
+// The rows of one shape, each with its bound (or none, said in the note).
+void shape_rows(RowMaker& compare, const char* shape) {
   const RendererKind E = RendererKind::kEvaluator, P = RendererKind::kPovray,
                      B = RendererKind::kBlender;
-  for (const char* shape : {"cylinder", "sphere"}) {
-    {
-      CalibrationRow& row = compare(shape, Representation::kSmooth, "none", P, "none", E,
-                                    "deterministic both; same sample positions (stratum "
-                                    "centres), POV-Ray output is half float");
-      if (row.missing.empty()) {
-        row.checks.push_back(
-            at_most("image RMSE / peak radiance", row.image.rmse / row.image.peak, 0.001));
-        row.checks.push_back(at_least("mask IoU (silhouettes)", row.image.mask_iou, 0.99));
-      }
-    }
-    {
-      CalibrationRow& row = compare(
-          shape, Representation::kSmooth, "none", B, "none", E,
-          "Monte Carlo: the test is |mean(Cycles - evaluator)| / mean(evaluator) over fully "
-          "covered pixels <= 0.5 %");
-      if (row.missing.empty()) {
-        row.checks.push_back(at_most("|mean error| / mean radiance",
-                                     std::abs(row.image.mean_error) / row.image.reference_mean,
-                                     0.005));
-        row.checks.push_back(at_least("mask IoU (silhouettes)", row.image.mask_iou, 0.99));
-      }
-    }
-    {
-      CalibrationRow& row = compare(shape, Representation::kBump, "none", P, "none", E,
-                                    "POV-Ray bump: pattern h(projected point), bump_size "
-                                    "7.5 A / C, one-sided differences of step 1e-4");
-      if (row.missing.empty())
-        row.checks.push_back(
-            at_most("profile RMSE (fraction of albedo*E/pi)", row.profile.rmse_overall, 0.01));
-    }
-    const std::string footprint_note =
-        footprint_explanation(specs[index.at(key(shape, Representation::kBump, "none", B))].scene);
-    compare(shape, Representation::kBump, "none", B, "none", E,
-            "no bound: Cycles 3.4 differentiates h over the pixel footprint (ray "
-            "differentials), not analytically. " +
-                footprint_note);
-    compare(shape, Representation::kBump, "chiang2019", B, "chiang2019", E,
-            "no bound: Cycles' own chiang2019 (Bump node, Ng := Ni) on the same "
-            "footprint-differenced normal");
-    for (int scale : {2, 4})
-      compare(shape, Representation::kBump, "none", B, "none", E,
-              fmt::format("no bound: the same view at {}x the pixels, so 1/{} of the footprint; "
-                          "the residual should shrink with it",
-                          scale, scale),
-              scale);
-    for (const auto& [t, r] : {std::pair{P, E}, std::pair{B, E}, std::pair{B, P}}) {
-      CalibrationRow& row = compare(shape, Representation::kDisplacement, "none", t, "none", r,
-                                    "true displacement in both");
-      if (row.missing.empty())
-        row.checks.push_back(
-            at_most("profile RMSE (fraction of albedo*E/pi)", row.profile.rmse_overall, 0.01));
+  {
+    CalibrationRow& row = compare(shape, Representation::kSmooth, "none", P, "none", E,
+                                  "deterministic both; same sample positions (stratum "
+                                  "centres), POV-Ray output is half float");
+    if (row.missing.empty()) {
+      row.checks.push_back(
+          at_most("image RMSE / peak radiance", row.image.rmse / row.image.peak, 0.001));
+      row.checks.push_back(at_least("mask IoU (silhouettes)", row.image.mask_iou, 0.99));
     }
   }
+  {
+    CalibrationRow& row =
+        compare(shape, Representation::kSmooth, "none", B, "none", E,
+                "Monte Carlo: the test is |mean(Cycles - evaluator)| / mean(evaluator) over fully "
+                "covered pixels <= 0.5 %");
+    if (row.missing.empty()) {
+      row.checks.push_back(at_most("|mean error| / mean radiance",
+                                   std::abs(row.image.mean_error) / row.image.reference_mean,
+                                   0.005));
+      row.checks.push_back(at_least("mask IoU (silhouettes)", row.image.mask_iou, 0.99));
+    }
+  }
+  {
+    CalibrationRow& row = compare(shape, Representation::kBump, "none", P, "none", E,
+                                  "POV-Ray bump: pattern h(projected point), bump_size "
+                                  "7.5 A / C, one-sided differences of step 1e-4");
+    if (row.missing.empty())
+      row.checks.push_back(
+          at_most("profile RMSE (fraction of albedo*E/pi)", row.profile.rmse_overall, 0.01));
+  }
+  const std::string footprint_note = footprint_explanation(
+      compare.specs[compare.index.at(key(shape, Representation::kBump, "none", B))].scene);
+  compare(shape, Representation::kBump, "none", B, "none", E,
+          "no bound: Cycles 3.4 differentiates h over the pixel footprint (ray "
+          "differentials), not analytically. " +
+              footprint_note);
+  compare(shape, Representation::kBump, "chiang2019", B, "chiang2019", E,
+          "no bound: Cycles' own chiang2019 (Bump node, Ng := Ni) on the same "
+          "footprint-differenced normal");
+  for (int scale : {2, 4})
+    compare(shape, Representation::kBump, "none", B, "none", E,
+            fmt::format("no bound: the same view at {}x the pixels, so 1/{} of the footprint; "
+                        "the residual should shrink with it",
+                        scale, scale),
+            scale);
+  for (const auto& [t, r] : {std::pair{P, E}, std::pair{B, E}, std::pair{B, P}}) {
+    CalibrationRow& row = compare(shape, Representation::kDisplacement, "none", t, "none", r,
+                                  "true displacement in both");
+    if (row.missing.empty())
+      row.checks.push_back(
+          at_most("profile RMSE (fraction of albedo*E/pi)", row.profile.rmse_overall, 0.01));
+  }
+}
+
+// Compares the cases and checks each against its bound.
+void calibration_rows(const std::vector<Spec>& specs, const std::vector<Image>& images,
+                      CalibrationResult& result) {
+  RowMaker compare{specs, images, result, {}};
+  for (std::size_t i = 0; i < specs.size(); ++i) compare.index[specs[i].label] = i;
+  for (const char* shape : {"cylinder", "sphere"}) shape_rows(compare, shape);
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 // these tests, it is never skipped as a pass.
 #include <gtest/gtest.h>
 
+#include <iterator>
+
 #include "temp_dir_test.h"
 
 #include <sys/stat.h>
@@ -477,6 +479,28 @@ TEST_F(Renderers, CalibrationMeetsEveryBound) {
   const json report = read_json_file(path("calibration.json"));
   EXPECT_EQ(report.at("rows").size(), result.rows.size());
   EXPECT_TRUE(report.at("all_pass").get<bool>());
+}
+
+// The exporter refuses what the fixed Blender script would refuse, with the
+// same limit: read from the script, not restated here.
+TEST(BlenderExport, HeightTermLimitIsTheScriptsAndIsCheckedBeforeBlenderRuns) {
+  std::ifstream in(kSource + "/harness/blender_render.py");
+  const std::string script((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(script, m, std::regex(R"(\nMAX_TERMS = (\d+)\n)")));
+  EXPECT_EQ(std::stoul(m[1].str()), kBlenderMaxHeightTerms);
+  auto noise = [&](std::size_t terms) {
+    return load_scene(kSource + "/scenes/cylinder-noise.json",
+                      {parse_override("/height/terms=" + std::to_string(terms)),
+                       parse_override("/representation=bump")});
+  };
+  EXPECT_NO_THROW(export_blender(noise(kBlenderMaxHeightTerms)));
+  try {
+    export_blender(noise(kBlenderMaxHeightTerms + 1));
+    ADD_FAILURE() << "expected ExportError";
+  } catch (const ExportError& e) {
+    EXPECT_NE(std::string(e.what()).find("at most 32 height terms"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
