@@ -96,6 +96,49 @@ def ranking_context(report):
         for group, entries in report.ranking_groups() if entries]
 
 
+def interval_text(ci, scale=1.0, digits=2):
+    """'[lo, hi]' of a report.json interval pair (n/a when undefined)."""
+    if not isinstance(ci, list) or len(ci) != 2 or None in ci:
+        return 'n/a'
+    lo, hi = (float(v) * scale for v in ci)
+    return f'[{lo:.{digits}f}, {hi:.{digits}f}]'
+
+
+def statistics_context(report):
+    """Sentences and the overall table of report.json's "statistics": every
+    number with its 95 % interval; methods the literature rejects labelled."""
+    st = report.doc.get('statistics')
+    if not isinstance(st, dict) or not isinstance(st.get('overall'), dict):
+        return None
+    overall = st['overall']
+    rows = []
+    for m in objs(overall.get('methods')):
+        term, img = m.get('terminator_vs_none') or {}, m.get('image_vs_none') or {}
+        label = str(m.get('method'))
+        if m.get('rejected'):
+            label += ' (rejected)'
+        rows.append([
+            m.get('rank'), label,
+            (m.get('combined_relative_error'), 1),
+            interval_text(m.get('combined_ci')),
+            (m.get('terminator_improvement'), 100),
+            interval_text(m.get('terminator_improvement_ci'), 100, 0),
+            f'{term.get("better", 0)}/{m.get("variants", 0)}',
+            (m.get('image_improvement'), 100),
+            interval_text(m.get('image_improvement_ci'), 100, 0)])
+    head = ['rank', 'method', 'combined relative error', '95 % CI',
+            'terminator RMSE removed (%)', '95 % CI (%)',
+            'better than none', 'image RMSE removed (%)', '95 % CI (%)']
+    rejected = [f'{m.get("method")}: {m.get("rejected")}'
+                for m in objs(overall.get('methods')) if m.get('rejected')]
+    return {'sentences': [str(x) for x in overall.get('headline') or []],
+            'table': table(head, rows) if rows else None,
+            'definition': str(st.get('definition', '')),
+            'interval': str(st.get('interval', '')),
+            'test': str(st.get('test', '')),
+            'rejected': rejected}
+
+
 def renderer_tables(report):
     """The renderers, what they cannot provide, and what failed."""
     miss, fails = objs(report.doc.get('missing')), objs(
@@ -137,6 +180,7 @@ def report_context(report, figs):
         'ranking': {k: str(rk.get(k, '?'))
                     for k in ('metric', 'renderer', 'reference')},
         'ranking_tables': ranking_context(report),
+        'statistics': statistics_context(report),
         'ranking_figure': figure_file(
             ranking_fig, 'ranking', 'figures/ranking.{png,svg,pdf}')
         if ranking_fig else None,

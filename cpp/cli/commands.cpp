@@ -24,6 +24,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/contour.h"
+#include "analysis/intervals.h"
 #include "analysis/metrics.h"
 #include "analysis/metrics_json.h"
 #include "export/export.h"
@@ -355,8 +356,6 @@ int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
   return kExitOk;
 }
 
-namespace {}  // namespace
-
 int command_export(const ExportArgs& a, std::ostream& out) {
   const std::vector<Override> overrides = collect_overrides(a.scene_args);
   json document = read_json_file(a.scene);
@@ -478,6 +477,23 @@ Image difference_image(const Image& test, const Image& reference) {
 
 }  // namespace
 
+namespace {
+
+json with_interval(json metrics, const char* key, const Interval& i) {
+  auto bound = [](double v) { return std::isfinite(v) ? json(v) : json(); };
+  metrics[key] = {bound(i.low), bound(i.high)};
+  return metrics;
+}
+
+std::string interval_note(const ComparisonIntervals& ci) {
+  return fmt::format(
+      "intervals: 95 %, paired block bootstrap over {} bands of rows, {} resamples (seed 1), "
+      "centred on the estimate: the spread over image regions, not a bias both images share",
+      ci.bands, ci.resamples);
+}
+
+}  // namespace
+
 int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err) {
   if (!a.difference.empty()) {
     check_extension(a.difference, ".exr", "-o");
@@ -507,6 +523,7 @@ int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err) 
   const Profile pt = terminator_profile(test_with_theta, scale, options);
   const ProfileMetrics pm = compare_profiles(pt, pr, options);
   const ImageMetrics im = compare_images(test, reference);
+  const ComparisonIntervals ci = comparison_intervals(test_with_theta, reference, scale, options);
   const bool nonfinite = im.nonfinite > 0;
   const bool over = a.max_rmse >= 0.0 && !(pm.rmse_overall <= a.max_rmse);
   if (!a.difference.empty())
@@ -518,8 +535,10 @@ int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err) 
                 {"test", a.test},
                 {"radiance_scale", scale},
                 {"radiance_scale_unit", "W m^-2 sr^-1 (albedo * E / pi)"},
-                {"profile", profile_metrics_json(pm)},
-                {"image", image_metrics_json(im)},
+                {"profile",
+                 with_interval(profile_metrics_json(pm), "rmse_terminator_ci", ci.rmse_terminator)},
+                {"image", with_interval(image_metrics_json(im), "rmse_ci", ci.image_rmse)},
+                {"intervals", interval_note(ci)},
                 {"pass", !nonfinite && !over}}
                .dump(2)
         << "\n";
@@ -529,7 +548,9 @@ int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err) 
         "profile (1-degree theta bins, fraction of albedo*E/pi = {:.6g} W m^-2 "
         "sr^-1; {} common bins):\n",
         scale, pm.common_bins);
-    out << fmt::format("  RMSE terminator [60,100) deg  {:.6f}\n", pm.rmse_terminator);
+    out << fmt::format("  RMSE terminator [60,100) deg  {:.6f} [{:.6f}, {:.6f}] (95 % CI)\n",
+                       pm.rmse_terminator, ci.rmse_terminator.low, ci.rmse_terminator.high);
+    out << fmt::format("  (bootstrap bias of that RMSE  {:+.6f})\n", ci.rmse_terminator_bias);
     out << fmt::format("  RMSE overall                  {:.6f}\n", pm.rmse_overall);
     out << fmt::format("  max error terminator          {:.6f}\n", pm.max_error);
     out << fmt::format("  largest bin step              {:.6f} (reference {:.6f})\n", pm.max_step,
@@ -542,19 +563,20 @@ int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err) 
     out << fmt::format("  lit-region bias (<60 deg)     {:+.6f}\n", pm.lit_bias);
     out << fmt::format("image (pixels fully covered in both: {}):\n", im.pixels);
     out << fmt::format("  mask IoU (alpha>=0.5)         {:.6f}\n", im.mask_iou);
-    out << fmt::format("  RMSE                          {:.6g} W m^-2 sr^-1\n", im.rmse);
+    out << fmt::format(
+        "  RMSE                          {:.6g} [{:.6g}, {:.6g}] W m^-2 sr^-1 (95 % CI)\n", im.rmse,
+        ci.image_rmse.low, ci.image_rmse.high);
     out << fmt::format("  max error                     {:.6g} W m^-2 sr^-1\n", im.max_error);
     out << fmt::format("  mean error (test-reference)   {:+.6g} W m^-2 sr^-1\n", im.mean_error);
     out << fmt::format("  SSIM (Gaussian 11x11)         {:.6f}\n", im.ssim);
     out << fmt::format("  NaN/Inf values                {}\n", im.nonfinite);
+    out << interval_note(ci) << "\n";
     if (over)
       out << fmt::format("FAIL: profile RMSE {:.6f} above --max-profile-rmse {}\n", pm.rmse_overall,
                          a.max_rmse);
   }
   return nonfinite || over ? kExitThreshold : kExitOk;
 }
-
-namespace {}  // namespace
 
 int command_calibrate(const CalibrationOptions& options, bool quiet, std::ostream& out,
                       std::ostream& err) {
@@ -657,8 +679,6 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   if (!stats.report_html.empty()) out << "report: " << stats.report_html << "\n";
   return stats.failed > 0 ? kExitFailure : kExitOk;
 }
-
-namespace {}  // namespace
 
 int command_contour(const std::vector<std::string>& ids, double step, const std::string& output,
                     std::ostream& out) {
@@ -763,7 +783,5 @@ int command_bench(int size, int spp, std::ostream& out) {
       double(stats.camera_samples) / stats.seconds / 1e6, peak_rss_mib(), rss_before);
   return kExitOk;
 }
-
-namespace {}  // namespace
 
 }  // namespace penumbra

@@ -48,7 +48,8 @@ constexpr std::array<MethodInfo, 7> kMethods{{
      "the estevez2019 G1 for wi times the same G1 for wo; darkens silhouettes",
      {},
      true,
-     ""},
+     "",
+     "rejected by its authors (Ray Tracing Gems ch. 12, Fig. 12-7): it darkens silhouettes"},
     {TerminatorMethod::kDeshmukh2020,
      "deshmukh2020",
      "Deshmukh & Green 2020, 'Predictable and Targeted Softening of the Shadow Terminator', "

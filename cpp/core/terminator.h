@@ -46,6 +46,9 @@ struct MethodInfo {
   // reference formulas do so by design); tests and docs rely on this flag.
   bool identity_without_deviation;
   std::string_view identity_note;
+  // Why the literature rejects the method ("" if it does not): reports keep
+  // it in their tables but label it.
+  std::string_view rejected = {};
 };
 
 std::span<const MethodInfo> all_methods();

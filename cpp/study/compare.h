@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/intervals.h"
 #include "analysis/metrics.h"
 #include "image/image.h"
 #include "study/plan.h"
@@ -38,6 +39,7 @@ struct ComparisonRow {
   ProfileMetrics profile;
   ImageMetrics image;
   std::optional<ShadowMetrics> shadow;  // low-poly rows
+  ComparisonIntervals intervals;        // 95 % intervals (analysis/intervals.h)
 };
 
 struct Comparisons {

@@ -1,5 +1,6 @@
 #include "study/report_files.h"
 
+#include <cmath>
 #include <filesystem>
 #include <functional>
 
@@ -11,6 +12,7 @@
 #include "image/image_io.h"
 #include "scene/scene_json.h"
 #include "study/cache.h"
+#include "study/ranking.h"
 
 namespace penumbra {
 namespace fs = std::filesystem;
@@ -61,6 +63,12 @@ const std::vector<Column>& bump_columns() {
       {"image_mean_error", [](auto& r) { return number(r.image.mean_error); }},
       {"image_pixels", [](auto& r) { return count(r.image.pixels); }},
       {"image_nonfinite", [](auto& r) { return count(r.image.nonfinite); }},
+      {"profile_rmse_terminator_ci_low",
+       [](auto& r) { return number(r.intervals.rmse_terminator.low); }},
+      {"profile_rmse_terminator_ci_high",
+       [](auto& r) { return number(r.intervals.rmse_terminator.high); }},
+      {"image_rmse_ci_low", [](auto& r) { return number(r.intervals.image_rmse.low); }},
+      {"image_rmse_ci_high", [](auto& r) { return number(r.intervals.image_rmse.high); }},
   };
   return columns;
 }
@@ -82,6 +90,10 @@ const std::vector<Column>& lowpoly_columns() {
       {"image_ssim", [](auto& r) { return number(r.image.ssim); }},
       {"image_mask_iou", [](auto& r) { return number(r.image.mask_iou); }},
       {"image_nonfinite", [](auto& r) { return count(r.image.nonfinite); }},
+      {"profile_rmse_terminator_ci_low",
+       [](auto& r) { return number(r.intervals.rmse_terminator.low); }},
+      {"profile_rmse_terminator_ci_high",
+       [](auto& r) { return number(r.intervals.rmse_terminator.high); }},
   };
   return columns;
 }
@@ -153,6 +165,11 @@ json variants_json(const ReportInputs& in, SectionKind kind) {
   return out;
 }
 
+// JSON has no NaN: undefined bounds are null.
+json bound(double v) {
+  return std::isfinite(v) ? json(v) : json();
+}
+
 json comparisons_json(const ReportInputs& in, SectionKind kind) {
   json out = json::array();
   for (const ComparisonRow& row : in.comparisons.rows) {
@@ -167,6 +184,10 @@ json comparisons_json(const ReportInputs& in, SectionKind kind) {
               {"profile", profile_metrics_json(row.profile)},
               {"image", image_metrics_json(row.image)}};
     if (row.shadow) c["shadow"] = shadow_metrics_json(*row.shadow);
+    c["profile"]["rmse_terminator_ci"] = {bound(row.intervals.rmse_terminator.low),
+                                          bound(row.intervals.rmse_terminator.high)};
+    c["image"]["rmse_ci"] = {bound(row.intervals.image_rmse.low),
+                             bound(row.intervals.image_rmse.high)};
     out.push_back(std::move(c));
   }
   return out;
@@ -286,12 +307,90 @@ json lowpoly_json(const ReportInputs& in) {
 
 json units_json() {
   return {{"profile", "fraction of albedo*E/pi"},
+          {"intervals",
+           fmt::format("*_ci: 95 % interval of a paired block bootstrap over {} bands of image "
+                       "rows, {} resamples, seed 1, centred on the estimate (analysis/intervals.h)",
+                       kIntervalBands, kIntervalResamples)},
           {"angles", "degrees"},
           {"image", "W m^-2 sr^-1"},
           {"theta", "angle between wi and the base (undisplaced) surface normal"},
           {"terminator_region_deg", {kTerminatorBegin, kTerminatorEnd}},
           {"lit_region_deg", {0.0, kLitEnd}},
           {"dark_level", kDarkLevel}};
+}
+
+// JSON has no NaN: undefined quantities are null.
+json value(double v) {
+  return std::isfinite(v) ? json(v) : json();
+}
+
+json interval_json(const Interval& i) {
+  return json::array({value(i.low), value(i.high)});
+}
+
+json paired_json(const PairedComparison& c) {
+  return {{"pairs", c.n},
+          {"better", c.a_better},
+          {"worse", c.b_better},
+          {"equal", c.equal},
+          {"mean_difference", value(c.mean_difference)},
+          {"ci", interval_json(c.interval)},
+          {"p_sign_test", c.p}};
+}
+
+json method_statistics_json(const MethodStatistics& m) {
+  return {{"method", m.method},
+          {"rank", m.rank},
+          {"rejected", m.rejected.empty() ? json() : json(m.rejected)},
+          {"variants", m.variants},
+          {"combined_relative_error", value(m.combined)},
+          {"combined_ci", interval_json(m.combined_interval)},
+          {"terminator_improvement", value(m.terminator_improvement)},
+          {"terminator_improvement_ci", interval_json(m.terminator_interval)},
+          {"terminator_vs_none", paired_json(m.terminator)},
+          {"image_improvement", value(m.image_improvement)},
+          {"image_improvement_ci", interval_json(m.image_interval)},
+          {"image_vs_none", paired_json(m.image)}};
+}
+
+json ranking_statistics_json(const RankingStatistics& s) {
+  json methods = json::array(), pairs = json::array();
+  for (const MethodStatistics& m : s.methods) methods.push_back(method_statistics_json(m));
+  for (const PairStatistics& p : s.pairs)
+    pairs.push_back({{"a", p.a},
+                     {"b", p.b},
+                     {"combined", paired_json(p.combined)},
+                     {"p_holm", p.p_holm},
+                     {"tied", p.tied}});
+  return {{"scene", s.scene.empty() ? json() : json(s.scene)},
+          {"variants", s.variants},
+          {"methods", methods},
+          {"pairs", pairs},
+          {"headline", s.headline}};
+}
+
+// Rankings with statistics (study/ranking.h), overall and per scene.
+json statistics_json(const ReportInputs& in) {
+  json per_scene = json::array();
+  for (const std::string& s : section_scenes(in.plan, SectionKind::kBump))
+    per_scene.push_back(
+        ranking_statistics_json(ranking_statistics(in.plan, in.comparisons.rows, s)));
+  return {
+      {"definition",
+       "per variant v and method m: E_term = terminator-region profile RMSE, E_img = image RMSE "
+       "over every pixel covered in both (silhouettes included), both as fractions of "
+       "albedo*E/pi, evaluator against its displacement ground truth; combined relative error "
+       "C = (E_term/E_term(none) + E_img/E_img(none))/2, 1 for raw bump, lower is better; "
+       "improvement = 1 - mean(E/E(none))"},
+      {"confidence", kRankingConfidence},
+      {"interval", "percentile bootstrap over variants, 10000 resamples, seed 1"},
+      {"test",
+       "two-sided exact sign test over variants; pairs of methods Holm-adjusted as one family; "
+       "tied when the interval of the mean paired difference contains 0 or p_holm >= 0.05"},
+      {"baseline", "none"},
+      {"reference", "evaluator:displacement"},
+      {"overall", ranking_statistics_json(ranking_statistics(in.plan, in.comparisons.rows, ""))},
+      {"per_scene", per_scene}};
 }
 
 json bump_ranking_json(const ReportInputs& in) {
@@ -326,6 +425,7 @@ json report_json(const ReportInputs& in) {
           {"variants", variants_json(in, SectionKind::kBump)},
           {"comparisons", comparisons_json(in, SectionKind::kBump)},
           {"ranking", bump_ranking_json(in)},
+          {"statistics", statistics_json(in)},
           {"missing", offered.missing},
           {"failures", failures},
           {"nonfinite_pixels", in.comparisons.nonfinite},

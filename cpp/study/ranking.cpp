@@ -1,0 +1,229 @@
+#include "study/ranking.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include <fmt/format.h>
+
+namespace penumbra {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Per method label, its two errors in each selected variant (NaN: missing).
+struct ErrorTable {
+  std::vector<std::size_t> variants;  // plan indices
+  std::vector<std::string> methods;   // in order of first appearance
+  std::map<std::string, std::vector<double>> term, img;
+};
+
+ErrorTable error_table(const Plan& plan, const std::vector<ComparisonRow>& rows,
+                       const std::string& scene) {
+  ErrorTable t;
+  std::map<std::size_t, std::size_t> column;
+  for (std::size_t v = 0; v < plan.variants.size(); ++v) {
+    const Variant& var = plan.variants[v];
+    if (var.section != SectionKind::kBump || (!scene.empty() && var.scene != scene)) continue;
+    column[v] = t.variants.size();
+    t.variants.push_back(v);
+  }
+  for (const ComparisonRow& row : rows) {
+    const auto c = column.find(row.variant);
+    if (c == column.end() || row.renderer != RendererKind::kEvaluator ||
+        row.reference_renderer != RendererKind::kEvaluator)
+      continue;
+    if (!t.term.count(row.method)) {
+      t.methods.push_back(row.method);
+      t.term[row.method].assign(t.variants.size(), kNaN);
+      t.img[row.method].assign(t.variants.size(), kNaN);
+    }
+    t.term[row.method][c->second] = row.profile.rmse_terminator;
+    t.img[row.method][c->second] = row.image.rmse / radiance_scale(plan.jobs[row.job].scene);
+  }
+  return t;
+}
+
+// x / baseline per variant; NaN where either is undefined or the baseline is 0.
+std::vector<double> relative(const std::vector<double>& x, const std::vector<double>& baseline) {
+  std::vector<double> r(x.size(), kNaN);
+  for (std::size_t v = 0; v < x.size(); ++v)
+    if (std::isfinite(x[v]) && std::isfinite(baseline[v]) && baseline[v] > 0.0)
+      r[v] = x[v] / baseline[v];
+  return r;
+}
+
+std::vector<double> finite(const std::vector<double>& x) {
+  std::vector<double> out;
+  for (double v : x)
+    if (std::isfinite(v)) out.push_back(v);
+  return out;
+}
+
+double mean(const std::vector<double>& x) {
+  if (x.empty()) return kNaN;
+  double sum = 0.0;
+  for (double v : x) sum += v;
+  return sum / double(x.size());
+}
+
+// 1 - mean(ratio) and its interval (the interval of 1 - mean, flipped).
+void improvement(const std::vector<double>& ratio, double* value, Interval* interval) {
+  const std::vector<double> r = finite(ratio);
+  *value = 1.0 - mean(r);
+  const Interval i = bootstrap_mean_interval(r, kRankingConfidence);
+  *interval = {1.0 - i.high, 1.0 - i.low};
+}
+
+std::string method_rejection(const std::string& label) {
+  const std::string id = label.substr(0, label.find('('));
+  const auto m = method_from_id(id);
+  return m ? std::string(method_info(*m).rejected) : std::string();
+}
+
+MethodStatistics method_statistics(const ErrorTable& t, const std::string& m,
+                                   const std::vector<double>& combined) {
+  MethodStatistics s;
+  s.method = m;
+  s.rejected = method_rejection(m);
+  const std::vector<double> c = finite(combined);
+  s.variants = c.size();
+  s.combined = mean(c);
+  s.combined_interval = bootstrap_mean_interval(c, kRankingConfidence);
+  improvement(relative(t.term.at(m), t.term.at("none")), &s.terminator_improvement,
+              &s.terminator_interval);
+  improvement(relative(t.img.at(m), t.img.at("none")), &s.image_improvement, &s.image_interval);
+  s.terminator = compare_paired(t.term.at(m), t.term.at("none"), kRankingConfidence);
+  s.image = compare_paired(t.img.at(m), t.img.at("none"), kRankingConfidence);
+  return s;
+}
+
+// Every pair of methods on C, Holm-adjusted as one family.
+std::vector<PairStatistics> pair_statistics(
+    const std::vector<MethodStatistics>& methods,
+    const std::map<std::string, std::vector<double>>& combined) {
+  std::vector<PairStatistics> pairs;
+  for (std::size_t i = 0; i < methods.size(); ++i)
+    for (std::size_t j = i + 1; j < methods.size(); ++j) {
+      PairStatistics p;
+      p.a = methods[i].method, p.b = methods[j].method;
+      p.combined = compare_paired(combined.at(p.a), combined.at(p.b), kRankingConfidence);
+      pairs.push_back(std::move(p));
+    }
+  std::vector<double> raw;
+  for (const PairStatistics& p : pairs) raw.push_back(p.combined.p);
+  const std::vector<double> adjusted = holm_adjust(raw);
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    pairs[k].p_holm = adjusted[k];
+    pairs[k].tied = pairs[k].combined.n == 0 || pairs[k].combined.interval.contains(0.0) ||
+                    adjusted[k] >= kSignificance;
+  }
+  return pairs;
+}
+
+bool tied(const std::vector<PairStatistics>& pairs, const std::string& a, const std::string& b) {
+  for (const PairStatistics& p : pairs)
+    if ((p.a == a && p.b == b) || (p.a == b && p.b == a)) return p.tied;
+  return true;
+}
+
+}  // namespace
+
+RankingStatistics ranking_statistics(const Plan& plan, const std::vector<ComparisonRow>& rows,
+                                     const std::string& scene) {
+  RankingStatistics s;
+  s.scene = scene;
+  const ErrorTable t = error_table(plan, rows, scene);
+  s.variants = t.variants.size();
+  if (!t.term.count("none")) return s;  // no raw bump to measure against
+  std::map<std::string, std::vector<double>> combined;
+  for (const std::string& m : t.methods) {
+    const std::vector<double> rt = relative(t.term.at(m), t.term.at("none"));
+    const std::vector<double> ri = relative(t.img.at(m), t.img.at("none"));
+    std::vector<double>& c = combined[m];
+    c.assign(rt.size(), kNaN);
+    for (std::size_t v = 0; v < rt.size(); ++v) c[v] = 0.5 * (rt[v] + ri[v]);
+    s.methods.push_back(method_statistics(t, m, c));
+  }
+  std::sort(s.methods.begin(), s.methods.end(),
+            [](const MethodStatistics& a, const MethodStatistics& b) {
+              if (std::isnan(a.combined) != std::isnan(b.combined)) return std::isnan(b.combined);
+              return a.combined != b.combined ? a.combined < b.combined : a.method < b.method;
+            });
+  s.pairs = pair_statistics(s.methods, combined);
+  for (std::size_t i = 0; i < s.methods.size(); ++i)
+    s.methods[i].rank = i > 0 && tied(s.pairs, s.methods[i - 1].method, s.methods[i].method)
+                            ? s.methods[i - 1].rank
+                            : static_cast<int>(i + 1);
+  s.headline = headline_sentences(s);
+  return s;
+}
+
+namespace {
+
+std::string percent(double fraction) {
+  return fmt::format("{:.0f} %", 100.0 * fraction);
+}
+
+std::string percent_interval(const Interval& i) {
+  return fmt::format("[{:.0f}, {:.0f}]", 100.0 * i.low, 100.0 * i.high);
+}
+
+std::string p_text(double p) {
+  return p < 0.001 ? std::string("p < 0.001") : fmt::format("p = {:.2g}", p);
+}
+
+// "M lowers (raises) the terminator error of raw bump by X % [a, b]; better in
+// W of N variants (sign test p)".
+std::string versus_none(const MethodStatistics& m, std::size_t variants) {
+  const bool lowers = m.terminator_improvement >= 0.0;
+  const bool resolved = !m.terminator_interval.contains(0.0) && m.terminator.p < kSignificance;
+  return fmt::format(
+      "{} {} the terminator-region profile RMSE of raw bump by {} {} (95 % CI), better in {} of "
+      "{} variants ({}){}.",
+      m.method, lowers ? "lowers" : "raises", percent(std::abs(m.terminator_improvement)),
+      percent_interval(m.terminator_interval), m.terminator.a_better, variants,
+      p_text(m.terminator.p), resolved ? "" : "; within its interval of raw bump: a tie");
+}
+
+}  // namespace
+
+std::vector<std::string> headline_sentences(const RankingStatistics& s) {
+  std::vector<std::string> out;
+  if (s.methods.empty()) return out;
+  const MethodStatistics& best = s.methods.front();
+  std::string tied_with;
+  for (std::size_t i = 1; i < s.methods.size(); ++i)
+    if (s.methods[i].rank == best.rank)
+      tied_with += (tied_with.empty() ? "" : ", ") + s.methods[i].method;
+  out.push_back(fmt::format(
+      "Closest to the displacement ground truth over {} variants: {} (combined relative error "
+      "{:.2f} {} of raw bump's 1, 95 % CI){}.",
+      s.variants, best.method, best.combined,
+      fmt::format("[{:.2f}, {:.2f}]", best.combined_interval.low, best.combined_interval.high),
+      tied_with.empty() ? "" : "; tied with " + tied_with + " (paired, Holm-adjusted)"));
+  for (const MethodStatistics& m : s.methods)
+    if (m.method != "none" && m.rank <= best.rank + 1) out.push_back(versus_none(m, m.variants));
+  for (const PairStatistics& p : s.pairs)
+    if (p.tied && p.a != "none" && p.b != "none" && p.combined.n > 0 &&
+        (p.a == best.method || p.b == best.method))
+      out.push_back(fmt::format(
+          "{} and {} are tied (mean paired difference {:+.3f} {}, "
+          "Holm-adjusted {}).",
+          p.a, p.b, p.combined.mean_difference,
+          fmt::format("[{:+.3f}, {:+.3f}]", p.combined.interval.low, p.combined.interval.high),
+          p_text(p.p_holm)));
+  for (const MethodStatistics& m : s.methods)
+    if (m.image_interval.high < 0.0 && m.image.p < kSignificance)
+      out.push_back(fmt::format(
+          "{} darkens what a viewer sees: its whole-object image RMSE is {} {} above raw bump's "
+          "(worse in {} of {} variants, {}){}.",
+          m.method, percent(-m.image_improvement),
+          percent_interval({-m.image_interval.high, -m.image_interval.low}), m.image.b_better,
+          m.variants, p_text(m.image.p), m.rejected.empty() ? "" : " (" + m.rejected + ")"));
+  return out;
+}
+
+}  // namespace penumbra

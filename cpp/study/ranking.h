@@ -1,0 +1,74 @@
+// Rankings with statistics: each bump method against raw bump (`none`) and
+// against each other, paired per variant, over the evaluator's renders
+// compared with the evaluator's displacement ground truth.
+//
+// Per variant v and method m, two errors against the ground truth, both as
+// fractions of albedo*E/pi:
+//   E_term(m, v)  terminator-region profile RMSE (theta in [60, 100) deg);
+//   E_img(m, v)   image RMSE over every pixel fully covered in both images,
+//                 silhouettes and the lit region included: what a viewer
+//                 sees, which the light-angle profile does not weigh.
+// The ranking metric is the combined relative error
+//   C(m, v) = (E_term(m, v) / E_term(none, v) + E_img(m, v) / E_img(none, v)) / 2,
+// 1 for raw bump, lower is better; relative to `none` in each variant, so one
+// hard scene does not dominate the mean. Intervals: 95 % percentile
+// bootstrap over variants (10,000 resamples, fixed seed). Tests: two-sided
+// exact sign test over variants; between methods, Holm-adjusted across all
+// pairs. Two methods are tied when the interval of their mean paired
+// difference contains 0 or the adjusted p is at least 0.05.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "analysis/statistics.h"
+#include "study/compare.h"
+#include "study/plan.h"
+
+namespace penumbra {
+
+inline constexpr double kRankingConfidence = 0.95;
+inline constexpr double kSignificance = 0.05;
+
+// One method against raw bump over the variants.
+struct MethodStatistics {
+  std::string method;    // label
+  std::string rejected;  // why the literature rejects it, "" if not
+  std::size_t variants = 0;
+  double combined = 0.0;  // mean C over variants
+  Interval combined_interval;
+  // 1 - mean(E / E_none): the fraction of raw bump's error removed (negative:
+  // added), with wins = variants where E < E_none.
+  double terminator_improvement = 0.0;
+  Interval terminator_interval;
+  PairedComparison terminator;  // E_term(m) against E_term(none)
+  double image_improvement = 0.0;
+  Interval image_interval;
+  PairedComparison image;  // E_img(m) against E_img(none)
+  int rank = 0;            // 1-based; tied methods share the rank of the first
+};
+
+// Two methods, paired on C over the variants.
+struct PairStatistics {
+  std::string a, b;
+  PairedComparison combined;  // C(a) - C(b): negative when a is better
+  double p_holm = 1.0;
+  bool tied = true;
+};
+
+struct RankingStatistics {
+  std::string scene;  // "" for all variants
+  std::size_t variants = 0;
+  std::vector<MethodStatistics> methods;  // by rank, `none` included
+  std::vector<PairStatistics> pairs;
+  std::vector<std::string> headline;  // sentences, from the numbers above
+};
+
+// Over the bump section's variants of `scene` ("" for all).
+RankingStatistics ranking_statistics(const Plan& plan, const std::vector<ComparisonRow>& rows,
+                                     const std::string& scene);
+
+// The headline sentences of `s` (filled in by ranking_statistics).
+std::vector<std::string> headline_sentences(const RankingStatistics& s);
+
+}  // namespace penumbra

@@ -1,0 +1,95 @@
+// Rankings with statistics on synthetic comparison tables whose answers are
+// known: a clear winner, an exact tie, a method that darkens what the viewer
+// sees.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "study/ranking.h"
+
+namespace penumbra {
+namespace {
+
+struct Synthetic {
+  Plan plan;
+  std::vector<ComparisonRow> rows;
+  // One evaluator row per (variant, method): terminator and image errors
+  // (image as a fraction of albedo*E/pi; the default scene's scale is 0.8).
+  void add(std::size_t v, const std::string& method, double term, double img) {
+    while (plan.variants.size() <= v) {
+      Variant var;
+      var.id = "v" + std::to_string(plan.variants.size());
+      var.scene = plan.variants.size() % 2 ? "odd" : "even";
+      plan.variants.push_back(var);
+    }
+    ComparisonRow row;
+    row.variant = v;
+    row.job = plan.jobs.size();
+    row.method = method;
+    row.profile.rmse_terminator = term;
+    row.image.rmse = img * 0.8;
+    plan.jobs.push_back(Job{});
+    rows.push_back(row);
+  }
+};
+
+const MethodStatistics& find(const RankingStatistics& s, const std::string& m) {
+  for (const MethodStatistics& x : s.methods)
+    if (x.method == m) return x;
+  throw std::runtime_error("no " + m);
+}
+
+Synthetic table() {
+  Synthetic t;
+  for (std::size_t v = 0; v < 12; ++v) {
+    const double hard = 1.0 + 0.5 * double(v);  // errors differ tenfold across variants
+    t.add(v, "none", 0.10 * hard, 0.02 * hard);
+    t.add(v, "good", 0.05 * hard, 0.02 * hard);  // halves the terminator error everywhere
+    t.add(v, "twin", 0.05 * hard, 0.02 * hard);  // exactly as good
+    t.add(v, "dark", 0.05 * hard, 0.04 * hard);  // same terminator, darkened silhouettes
+  }
+  return t;
+}
+
+TEST(Ranking, ClearWinnerExactTieAndAViewerPenalty) {
+  const Synthetic t = table();
+  const RankingStatistics s = ranking_statistics(t.plan, t.rows, "");
+  ASSERT_EQ(s.methods.size(), 4u);
+  EXPECT_EQ(s.variants, 12u);
+  const MethodStatistics& good = find(s, "good");
+  // Relative to none in each variant: exactly half, in every variant.
+  EXPECT_NEAR(good.terminator_improvement, 0.5, 1e-12);
+  EXPECT_NEAR(good.terminator_interval.low, 0.5, 1e-12);
+  EXPECT_EQ(good.terminator.a_better, 12u);
+  EXPECT_DOUBLE_EQ(good.terminator.p, 2.0 / 4096.0);
+  EXPECT_NEAR(good.combined, 0.75, 1e-12);  // (0.5 + 1) / 2
+  // good and twin: an exact tie, one rank, first.
+  EXPECT_EQ(good.rank, 1);
+  EXPECT_EQ(find(s, "twin").rank, 1);
+  // dark: the same terminator gain, but its image error doubles: C = 1.25,
+  // ranked below raw bump, and the headline says why.
+  EXPECT_NEAR(find(s, "dark").combined, 1.25, 1e-12);
+  EXPECT_GT(find(s, "dark").rank, find(s, "none").rank);
+  bool tie_sentence = false, darkens = false;
+  for (const std::string& line : s.headline) {
+    tie_sentence |= line.find("good and twin are tied") != std::string::npos;
+    darkens |= line.find("dark darkens what a viewer sees") != std::string::npos;
+  }
+  EXPECT_TRUE(tie_sentence) << s.headline.front();
+  EXPECT_TRUE(darkens);
+  EXPECT_NE(s.headline.front().find("Closest to the displacement ground truth over 12 variants"),
+            std::string::npos)
+      << s.headline.front();
+}
+
+TEST(Ranking, PerSceneSelectsItsVariantsAndNoBaselineGivesNoRanking) {
+  const Synthetic t = table();
+  EXPECT_EQ(ranking_statistics(t.plan, t.rows, "odd").variants, 6u);
+  Synthetic without;
+  without.add(0, "good", 0.1, 0.1);
+  EXPECT_TRUE(ranking_statistics(without.plan, without.rows, "").methods.empty());
+}
+
+}  // namespace
+}  // namespace penumbra
