@@ -492,6 +492,43 @@ std::string interval_note(const ComparisonIntervals& ci) {
       ci.bands, ci.resamples);
 }
 
+// The text form of `penumbra compare`: every metric of --json, with units
+// and intervals.
+void print_comparison(const CompareArgs& a, double scale, const ProfileMetrics& pm,
+                      const ImageMetrics& im, const ComparisonIntervals& ci, bool over,
+                      std::ostream& out) {
+  out << fmt::format("reference {}\ntest      {}\n", a.reference, a.test);
+  out << fmt::format(
+      "profile (1-degree theta bins, fraction of albedo*E/pi = {:.6g} W m^-2 "
+      "sr^-1; {} common bins):\n",
+      scale, pm.common_bins);
+  out << fmt::format("  RMSE terminator [60,100) deg  {:.6f} [{:.6f}, {:.6f}] (95 % CI)\n",
+                     pm.rmse_terminator, ci.rmse_terminator.low, ci.rmse_terminator.high);
+  out << fmt::format("  (bootstrap bias of that RMSE  {:+.6f})\n", ci.rmse_terminator_bias);
+  out << fmt::format("  RMSE overall                  {:.6f}\n", pm.rmse_overall);
+  out << fmt::format("  max error terminator          {:.6f}\n", pm.max_error);
+  out << fmt::format("  largest bin step              {:.6f} (reference {:.6f})\n", pm.max_step,
+                     pm.reference_max_step);
+  out << fmt::format("  terminator position (L<{})  {:.3f} deg (reference {:.3f}, error {:+.3f})\n",
+                     kDarkLevel, pm.position, pm.reference_position, pm.position_error);
+  out << fmt::format("  transition width 90%->10%     {:.3f} deg (reference {:.3f})\n", pm.width,
+                     pm.reference_width);
+  out << fmt::format("  lit-region bias (<60 deg)     {:+.6f}\n", pm.lit_bias);
+  out << fmt::format("image (pixels fully covered in both: {}):\n", im.pixels);
+  out << fmt::format("  mask IoU (alpha>=0.5)         {:.6f}\n", im.mask_iou);
+  out << fmt::format(
+      "  RMSE                          {:.6g} [{:.6g}, {:.6g}] W m^-2 sr^-1 (95 % CI)\n", im.rmse,
+      ci.image_rmse.low, ci.image_rmse.high);
+  out << fmt::format("  max error                     {:.6g} W m^-2 sr^-1\n", im.max_error);
+  out << fmt::format("  mean error (test-reference)   {:+.6g} W m^-2 sr^-1\n", im.mean_error);
+  out << fmt::format("  SSIM (Gaussian 11x11)         {:.6f}\n", im.ssim);
+  out << fmt::format("  NaN/Inf values                {}\n", im.nonfinite);
+  out << interval_note(ci) << "\n";
+  if (over)
+    out << fmt::format("FAIL: profile RMSE {:.6f} above --max-profile-rmse {}\n", pm.rmse_overall,
+                       a.max_rmse);
+}
+
 }  // namespace
 
 int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err) {
@@ -543,37 +580,7 @@ int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err) 
                .dump(2)
         << "\n";
   } else {
-    out << fmt::format("reference {}\ntest      {}\n", a.reference, a.test);
-    out << fmt::format(
-        "profile (1-degree theta bins, fraction of albedo*E/pi = {:.6g} W m^-2 "
-        "sr^-1; {} common bins):\n",
-        scale, pm.common_bins);
-    out << fmt::format("  RMSE terminator [60,100) deg  {:.6f} [{:.6f}, {:.6f}] (95 % CI)\n",
-                       pm.rmse_terminator, ci.rmse_terminator.low, ci.rmse_terminator.high);
-    out << fmt::format("  (bootstrap bias of that RMSE  {:+.6f})\n", ci.rmse_terminator_bias);
-    out << fmt::format("  RMSE overall                  {:.6f}\n", pm.rmse_overall);
-    out << fmt::format("  max error terminator          {:.6f}\n", pm.max_error);
-    out << fmt::format("  largest bin step              {:.6f} (reference {:.6f})\n", pm.max_step,
-                       pm.reference_max_step);
-    out << fmt::format(
-        "  terminator position (L<{})  {:.3f} deg (reference {:.3f}, error {:+.3f})\n", kDarkLevel,
-        pm.position, pm.reference_position, pm.position_error);
-    out << fmt::format("  transition width 90%->10%     {:.3f} deg (reference {:.3f})\n", pm.width,
-                       pm.reference_width);
-    out << fmt::format("  lit-region bias (<60 deg)     {:+.6f}\n", pm.lit_bias);
-    out << fmt::format("image (pixels fully covered in both: {}):\n", im.pixels);
-    out << fmt::format("  mask IoU (alpha>=0.5)         {:.6f}\n", im.mask_iou);
-    out << fmt::format(
-        "  RMSE                          {:.6g} [{:.6g}, {:.6g}] W m^-2 sr^-1 (95 % CI)\n", im.rmse,
-        ci.image_rmse.low, ci.image_rmse.high);
-    out << fmt::format("  max error                     {:.6g} W m^-2 sr^-1\n", im.max_error);
-    out << fmt::format("  mean error (test-reference)   {:+.6g} W m^-2 sr^-1\n", im.mean_error);
-    out << fmt::format("  SSIM (Gaussian 11x11)         {:.6f}\n", im.ssim);
-    out << fmt::format("  NaN/Inf values                {}\n", im.nonfinite);
-    out << interval_note(ci) << "\n";
-    if (over)
-      out << fmt::format("FAIL: profile RMSE {:.6f} above --max-profile-rmse {}\n", pm.rmse_overall,
-                         a.max_rmse);
+    print_comparison(a, scale, pm, im, ci, over, out);
   }
   return nonfinite || over ? kExitThreshold : kExitOk;
 }

@@ -171,6 +171,17 @@ std::string percent_interval(const Interval& i) {
   return fmt::format("[{:.0f}, {:.0f}]", 100.0 * i.low, 100.0 * i.high);
 }
 
+// A method's label, marked when the literature rejects it.
+std::string named(const std::string& method, const std::string& rejected) {
+  return rejected.empty() ? method : method + " [rejected in the literature]";
+}
+
+std::string named(const RankingStatistics& s, const std::string& method) {
+  for (const MethodStatistics& m : s.methods)
+    if (m.method == method) return named(method, m.rejected);
+  return method;
+}
+
 std::string p_text(double p) {
   return p < 0.001 ? std::string("p < 0.001") : fmt::format("p = {:.2g}", p);
 }
@@ -183,9 +194,10 @@ std::string versus_none(const MethodStatistics& m, std::size_t variants) {
   return fmt::format(
       "{} {} the terminator-region profile RMSE of raw bump by {} {} (95 % CI), better in {} of "
       "{} variants ({}){}.",
-      m.method, lowers ? "lowers" : "raises", percent(std::abs(m.terminator_improvement)),
-      percent_interval(m.terminator_interval), m.terminator.a_better, variants,
-      p_text(m.terminator.p), resolved ? "" : "; within its interval of raw bump: a tie");
+      named(m.method, m.rejected), lowers ? "lowers" : "raises",
+      percent(std::abs(m.terminator_improvement)), percent_interval(m.terminator_interval),
+      m.terminator.a_better, variants, p_text(m.terminator.p),
+      resolved ? "" : "; within its interval of raw bump: a tie");
 }
 
 }  // namespace
@@ -197,11 +209,11 @@ std::vector<std::string> headline_sentences(const RankingStatistics& s) {
   std::string tied_with;
   for (std::size_t i = 1; i < s.methods.size(); ++i)
     if (s.methods[i].rank == best.rank)
-      tied_with += (tied_with.empty() ? "" : ", ") + s.methods[i].method;
+      tied_with += (tied_with.empty() ? "" : ", ") + named(s, s.methods[i].method);
   out.push_back(fmt::format(
       "Closest to the displacement ground truth over {} variants: {} (combined relative error "
       "{:.2f} {} of raw bump's 1, 95 % CI){}.",
-      s.variants, best.method, best.combined,
+      s.variants, named(best.method, best.rejected), best.combined,
       fmt::format("[{:.2f}, {:.2f}]", best.combined_interval.low, best.combined_interval.high),
       tied_with.empty() ? "" : "; tied with " + tied_with + " (paired, Holm-adjusted)"));
   for (const MethodStatistics& m : s.methods)
@@ -212,7 +224,7 @@ std::vector<std::string> headline_sentences(const RankingStatistics& s) {
       out.push_back(fmt::format(
           "{} and {} are tied (mean paired difference {:+.3f} {}, "
           "Holm-adjusted {}).",
-          p.a, p.b, p.combined.mean_difference,
+          named(s, p.a), named(s, p.b), p.combined.mean_difference,
           fmt::format("[{:+.3f}, {:+.3f}]", p.combined.interval.low, p.combined.interval.high),
           p_text(p.p_holm)));
   for (const MethodStatistics& m : s.methods)
@@ -220,9 +232,13 @@ std::vector<std::string> headline_sentences(const RankingStatistics& s) {
       out.push_back(fmt::format(
           "{} darkens what a viewer sees: its whole-object image RMSE is {} {} above raw bump's "
           "(worse in {} of {} variants, {}){}.",
-          m.method, percent(-m.image_improvement),
+          named(m.method, m.rejected), percent(-m.image_improvement),
           percent_interval({-m.image_interval.high, -m.image_interval.low}), m.image.b_better,
           m.variants, p_text(m.image.p), m.rejected.empty() ? "" : " (" + m.rejected + ")"));
+  for (const MethodStatistics& m : s.methods)
+    if (!m.rejected.empty() && m.rank == best.rank)
+      out.push_back(fmt::format("{} is {}; it is ranked for comparison, not recommended.", m.method,
+                                m.rejected));
   return out;
 }
 
