@@ -131,7 +131,10 @@ def statistics_context(report):
             'better than none', 'image RMSE removed (%)', '95 % CI (%)']
     rejected = [f'{m.get("method")}: {m.get("rejected")}'
                 for m in objs(overall.get('methods')) if m.get('rejected')]
+    agreement = report.doc.get('agreement')
+    agreement = agreement if isinstance(agreement, dict) else {}
     return {'sentences': [str(x) for x in overall.get('headline') or []],
+            'agreement': [str(x) for x in agreement.get('headline') or []],
             'table': table(head, rows) if rows else None,
             'definition': str(st.get('definition', '')),
             'interval': str(st.get('interval', '')),

@@ -90,6 +90,30 @@ void add_comparisons(const Plan& plan, const RenderedImages& r, std::size_t i, C
   }
 }
 
+// An external renderer's render against the evaluator's same render.
+void add_agreement(const Plan& plan, const RenderedImages& r, std::size_t i, Comparisons& c) {
+  const Job& job = plan.jobs[i];
+  if (job.renderer == RendererKind::kEvaluator ||
+      plan.variants[job.variant].section != SectionKind::kBump)
+    return;
+  long ref = -1;  // the evaluator's job with the same role and method
+  for (std::size_t k : plan.variants[job.variant].jobs)
+    if (plan.jobs[k].renderer == RendererKind::kEvaluator && plan.jobs[k].truth == job.truth &&
+        plan.jobs[k].method == job.method)
+      ref = static_cast<long>(k);
+  if (ref < 0 || !r.done[ref]) return;
+  const double scale = radiance_scale(job.scene);
+  const ProfileOptions po;
+  AgreementRow row;
+  row.variant = job.variant, row.job = i, row.reference_job = static_cast<std::size_t>(ref);
+  row.renderer = job.renderer;
+  row.what = job.truth ? "ground truth" : job.method;
+  row.profile = compare_profiles(terminator_profile(r.images[i], scale, po),
+                                 terminator_profile(r.images[ref], scale, po), po);
+  row.intervals = comparison_intervals(r.images[i], r.images[ref], scale, po);
+  c.agreement.push_back(std::move(row));
+}
+
 // Mean of `metric` (and `second`) per method over the evaluator's rows
 // against the evaluator's truth that `metric` and `second` define, sorted by
 // the mean, then the method label.
@@ -133,6 +157,7 @@ Comparisons compare_study(const Plan& plan, const RenderedImages& renders,
       if (!renders.done[i]) continue;
       c.renders[v].push_back(render_row(plan, renders, i, out));
       if (!plan.jobs[i].truth) add_comparisons(plan, renders, i, c);
+      add_agreement(plan, renders, i, c);
     }
   return c;
 }

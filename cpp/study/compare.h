@@ -42,9 +42,21 @@ struct ComparisonRow {
   ComparisonIntervals intervals;        // 95 % intervals (analysis/intervals.h)
 };
 
+// An external renderer's render against the evaluator's render of the same
+// scene: the ground truth (method "none", displacement), or a method both
+// implement. Bump section only.
+struct AgreementRow {
+  std::size_t variant = 0, job = 0, reference_job = 0;
+  RendererKind renderer = RendererKind::kPovray;
+  std::string what;  // "ground truth" or the method label
+  ProfileMetrics profile;
+  ComparisonIntervals intervals;
+};
+
 struct Comparisons {
   std::vector<std::vector<RenderRow>> renders;  // per variant, done jobs only
   std::vector<ComparisonRow> rows;              // in job order, then reference order
+  std::vector<AgreementRow> agreement;          // in job order
   std::size_t nonfinite = 0;                    // NaN or Inf values seen (a failure)
 };
 

@@ -242,4 +242,38 @@ std::vector<std::string> headline_sentences(const RankingStatistics& s) {
   return out;
 }
 
+std::vector<AgreementSummary> agreement_summaries(const std::vector<AgreementRow>& rows) {
+  std::vector<AgreementSummary> out;
+  std::map<std::pair<int, std::string>, std::vector<double>> values;
+  std::vector<std::pair<RendererKind, std::string>> order;
+  for (const AgreementRow& row : rows) {
+    const auto key = std::make_pair(static_cast<int>(row.renderer), row.what);
+    if (!values.count(key)) order.push_back({row.renderer, row.what});
+    if (std::isfinite(row.profile.rmse_terminator))
+      values[key].push_back(row.profile.rmse_terminator);
+    else
+      values[key];
+  }
+  for (const auto& [renderer, what] : order) {
+    const std::vector<double>& v = values[{static_cast<int>(renderer), what}];
+    AgreementSummary a;
+    a.renderer = renderer, a.what = what, a.variants = v.size();
+    a.mean = mean(v);
+    a.interval = bootstrap_mean_interval(v, kRankingConfidence);
+    for (double x : v) {
+      a.max = std::max(a.max, x);
+      a.above += x > kAgreementThreshold;
+    }
+    a.sentence = fmt::format(
+        "{}{} against the evaluator's: terminator RMSE {:.2f} % [{:.2f}, {:.2f}] of albedo*E/pi "
+        "(mean over {} variants, 95 % CI), at most {:.2f} %; {} {} above {:.0f} %.",
+        renderer_info(renderer).name,
+        what == "ground truth" ? std::string(" ground truth") : ", method " + what + ",",
+        100 * a.mean, 100 * a.interval.low, 100 * a.interval.high, a.variants, 100 * a.max, a.above,
+        a.above == 1 ? "variant" : "variants", 100 * kAgreementThreshold);
+    out.push_back(std::move(a));
+  }
+  return out;
+}
+
 }  // namespace penumbra

@@ -68,6 +68,23 @@ struct RankingStatistics {
 RankingStatistics ranking_statistics(const Plan& plan, const std::vector<ComparisonRow>& rows,
                                      const std::string& scene);
 
+// Cross-renderer agreement: each external renderer's ground truth and each
+// method it implements itself, against the evaluator's render of the same
+// scene, by the terminator-region profile RMSE over the variants.
+inline constexpr double kAgreementThreshold = 0.01;  // fraction of albedo*E/pi
+
+struct AgreementSummary {
+  RendererKind renderer = RendererKind::kPovray;
+  std::string what;  // "ground truth" or a method label
+  std::size_t variants = 0;
+  double mean = 0.0, max = 0.0;  // terminator RMSE, fraction of albedo*E/pi
+  Interval interval;             // bootstrap over variants
+  std::size_t above = 0;         // variants above kAgreementThreshold
+  std::string sentence;
+};
+
+std::vector<AgreementSummary> agreement_summaries(const std::vector<AgreementRow>& rows);
+
 // The headline sentences of `s` (filled in by ranking_statistics).
 std::vector<std::string> headline_sentences(const RankingStatistics& s);
 

@@ -369,6 +369,35 @@ json ranking_statistics_json(const RankingStatistics& s) {
           {"headline", s.headline}};
 }
 
+// Cross-renderer agreement (study/ranking.h): summaries and every row.
+json agreement_json(const ReportInputs& in) {
+  json summaries = json::array(), rows = json::array(), headline = json::array();
+  for (const AgreementSummary& a : agreement_summaries(in.comparisons.agreement)) {
+    summaries.push_back({{"renderer", to_string(a.renderer)},
+                         {"what", a.what},
+                         {"variants", a.variants},
+                         {"mean_rmse_terminator", value(a.mean)},
+                         {"ci", interval_json(a.interval)},
+                         {"max_rmse_terminator", value(a.max)},
+                         {"above_threshold", a.above}});
+    headline.push_back(a.sentence);
+  }
+  for (const AgreementRow& r : in.comparisons.agreement)
+    rows.push_back({{"variant", in.plan.variants[r.variant].id},
+                    {"renderer", to_string(r.renderer)},
+                    {"what", r.what},
+                    {"rmse_terminator", value(r.profile.rmse_terminator)},
+                    {"rmse_terminator_ci", interval_json(r.intervals.rmse_terminator)}});
+  return {{"definition",
+           "each external renderer's render against the evaluator's render of the same scene "
+           "(ground truth: displacement, method none; or a method both implement), "
+           "terminator-region profile RMSE as a fraction of albedo*E/pi"},
+          {"threshold", kAgreementThreshold},
+          {"summaries", summaries},
+          {"rows", rows},
+          {"headline", headline}};
+}
+
 // Rankings with statistics (study/ranking.h), overall and per scene.
 json statistics_json(const ReportInputs& in) {
   json per_scene = json::array();
@@ -426,6 +455,7 @@ json report_json(const ReportInputs& in) {
           {"comparisons", comparisons_json(in, SectionKind::kBump)},
           {"ranking", bump_ranking_json(in)},
           {"statistics", statistics_json(in)},
+          {"agreement", agreement_json(in)},
           {"missing", offered.missing},
           {"failures", failures},
           {"nonfinite_pixels", in.comparisons.nonfinite},

@@ -91,5 +91,29 @@ TEST(Ranking, PerSceneSelectsItsVariantsAndNoBaselineGivesNoRanking) {
   EXPECT_TRUE(ranking_statistics(without.plan, without.rows, "").methods.empty());
 }
 
+TEST(Agreement, SummariesPerRendererAndWhatWithThresholdCounts) {
+  std::vector<AgreementRow> rows;
+  for (std::size_t v = 0; v < 10; ++v) {
+    AgreementRow truth;
+    truth.variant = v, truth.renderer = RendererKind::kPovray, truth.what = "ground truth";
+    truth.profile.rmse_terminator = 0.002;  // always within 1 %
+    rows.push_back(truth);
+    AgreementRow bump = truth;
+    bump.renderer = RendererKind::kBlender, bump.what = "chiang2019";
+    bump.profile.rmse_terminator = v < 3 ? 0.02 : 0.005;  // 3 variants above 1 %
+    rows.push_back(bump);
+  }
+  const std::vector<AgreementSummary> s = agreement_summaries(rows);
+  ASSERT_EQ(s.size(), 2u);
+  EXPECT_EQ(s[0].renderer, RendererKind::kPovray);
+  EXPECT_NEAR(s[0].mean, 0.002, 1e-15);
+  EXPECT_EQ(s[0].above, 0u);
+  EXPECT_NEAR(s[0].interval.low, 0.002, 1e-15);
+  EXPECT_NEAR(s[1].mean, (3 * 0.02 + 7 * 0.005) / 10, 1e-15);
+  EXPECT_EQ(s[1].above, 3u);
+  EXPECT_NEAR(s[1].max, 0.02, 1e-15);
+  EXPECT_NE(s[1].sentence.find("3 variants above 1 %"), std::string::npos) << s[1].sentence;
+}
+
 }  // namespace
 }  // namespace penumbra
