@@ -93,13 +93,8 @@ Interval centred_interval(std::vector<double> v, double estimate, double confide
   double mean = 0.0;
   for (double x : v) mean += x / double(v.size());
   const double tail = 0.5 * (1.0 - confidence);
-  auto at = [&](double q) {
-    const double pos = q * double(v.size() - 1);
-    const std::size_t i = static_cast<std::size_t>(pos);
-    const std::size_t j = std::min(i + 1, v.size() - 1);
-    return v[i] + (pos - double(i)) * (v[j] - v[i]);
-  };
-  return {std::max(0.0, estimate + at(tail) - mean), estimate + at(1.0 - tail) - mean};
+  return {std::max(0.0, estimate + quantile(v, tail) - mean),
+          estimate + quantile(v, 1.0 - tail) - mean};
 }
 
 // The two metrics over the bands `pick` selects (all bands: the estimate).
@@ -143,11 +138,8 @@ ComparisonIntervals comparison_intervals(const Image& test, const Image& referen
   const Metrics estimate = metrics_of(
       bands, [](std::size_t n) { return n; }, radiance_scale, options);
   std::mt19937_64 rng(seed);
-  // 53 random bits to an index: the same on every standard library.
-  auto draw = [&](std::size_t) {
-    const double u = static_cast<double>(rng() >> 11) * 0x1.0p-53;
-    return std::min(bands.size() - 1, std::size_t(u * double(bands.size())));
-  };
+  auto draw = [&](std::size_t) { return uniform_index(rng, bands.size()); };
+
   std::vector<double> terminator, image;
   for (int r = 0; r < resamples; ++r) {
     const Metrics m = metrics_of(bands, draw, radiance_scale, options);

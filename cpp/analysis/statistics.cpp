@@ -8,25 +8,17 @@
 
 namespace penumbra {
 
-namespace {
-
-// A uniform index in [0, n) from 64 random bits (53 of them: the bias is far
-// below anything a 10^4-resample bootstrap resolves). Written out because
-// std::uniform_int_distribution is not the same on every standard library.
 std::size_t uniform_index(std::mt19937_64& rng, std::size_t n) {
   const double u = static_cast<double>(rng() >> 11) * 0x1.0p-53;
   return std::min(n - 1, static_cast<std::size_t>(u * static_cast<double>(n)));
 }
 
-// The q-quantile of sorted values, linear between order statistics.
 double quantile(const std::vector<double>& sorted, double q) {
   const double pos = q * static_cast<double>(sorted.size() - 1);
   const std::size_t i = static_cast<std::size_t>(std::floor(pos));
   const std::size_t j = std::min(i + 1, sorted.size() - 1);
   return sorted[i] + (pos - static_cast<double>(i)) * (sorted[j] - sorted[i]);
 }
-
-}  // namespace
 
 Interval bootstrap_mean_interval(const std::vector<double>& values, double confidence,
                                  int resamples, std::uint64_t seed) {

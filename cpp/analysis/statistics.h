@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <random>
 #include <vector>
 
 namespace penumbra {
@@ -20,6 +21,16 @@ struct Interval {
 // One value (or none) gives the degenerate interval [v, v] (or [NaN, NaN]).
 Interval bootstrap_mean_interval(const std::vector<double>& values, double confidence = 0.95,
                                  int resamples = 10000, std::uint64_t seed = 1);
+
+// A uniform index in [0, n) from 53 random bits (the bias is far below what
+// a 10^4-resample bootstrap resolves). Written out because
+// std::uniform_int_distribution differs between standard libraries, and the
+// same seed must give the same bits everywhere.
+std::size_t uniform_index(std::mt19937_64& rng, std::size_t n);
+
+// The q-quantile (q in [0, 1]) of ascending `sorted` values, linear between
+// order statistics; `sorted` must not be empty.
+double quantile(const std::vector<double>& sorted, double q);
 
 // Exact two-sided sign test of "positive and negative equally likely" for
 // `positive` and `negative` counts (zeros dropped before): the probability of

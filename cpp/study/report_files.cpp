@@ -165,9 +165,13 @@ json variants_json(const ReportInputs& in, SectionKind kind) {
   return out;
 }
 
-// JSON has no NaN: undefined bounds are null.
-json bound(double v) {
+// JSON has no NaN: undefined quantities are null.
+json value(double v) {
   return std::isfinite(v) ? json(v) : json();
+}
+
+json interval_json(const Interval& i) {
+  return json::array({value(i.low), value(i.high)});
 }
 
 json comparisons_json(const ReportInputs& in, SectionKind kind) {
@@ -184,10 +188,8 @@ json comparisons_json(const ReportInputs& in, SectionKind kind) {
               {"profile", profile_metrics_json(row.profile)},
               {"image", image_metrics_json(row.image)}};
     if (row.shadow) c["shadow"] = shadow_metrics_json(*row.shadow);
-    c["profile"]["rmse_terminator_ci"] = {bound(row.intervals.rmse_terminator.low),
-                                          bound(row.intervals.rmse_terminator.high)};
-    c["image"]["rmse_ci"] = {bound(row.intervals.image_rmse.low),
-                             bound(row.intervals.image_rmse.high)};
+    c["profile"]["rmse_terminator_ci"] = interval_json(row.intervals.rmse_terminator);
+    c["image"]["rmse_ci"] = interval_json(row.intervals.image_rmse);
     out.push_back(std::move(c));
   }
   return out;
@@ -317,15 +319,6 @@ json units_json() {
           {"terminator_region_deg", {kTerminatorBegin, kTerminatorEnd}},
           {"lit_region_deg", {0.0, kLitEnd}},
           {"dark_level", kDarkLevel}};
-}
-
-// JSON has no NaN: undefined quantities are null.
-json value(double v) {
-  return std::isfinite(v) ? json(v) : json();
-}
-
-json interval_json(const Interval& i) {
-  return json::array({value(i.low), value(i.high)});
 }
 
 json paired_json(const PairedComparison& c) {
