@@ -27,6 +27,8 @@ METRICS = {                       # metric -> (name, unit)
     'profile.position_error_deg': ('terminator position error', 'degrees'),
     'profile.width_deg': ('terminator width', 'degrees'),
     'profile.lit_bias': ('lit-region bias', FRACTION),
+    'view.rmse_grazing': ('grazing-view RMSE', FRACTION),
+    'view.bias_grazing': ('grazing-view bias', FRACTION),
     'image.rmse': ('image RMSE', 'W m⁻² sr⁻¹'),
     'image.ssim': ('image SSIM', 'unitless'),
     'image.mask_iou': ('silhouette IoU', 'unitless')}

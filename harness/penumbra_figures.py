@@ -83,6 +83,50 @@ def ranking_figure(rk, colors, figdir):
     return save(fig, figdir, 'ranking')
 
 
+def _interval_bars(ax, methods, key, ci_key, colors, title):
+    """Horizontal bars of m[key] with 95 % intervals m[ci_key] as error
+    bars; methods without a finite value are left out."""
+    rows = [(str(m.get('method')), num(m.get(key)), m.get(ci_key))
+            for m in methods if math.isfinite(num(m.get(key)))]
+    y = np.arange(len(rows))
+    vals = [r[1] for r in rows]
+    lo = [r[1] - num(r[2][0]) if isinstance(r[2], list) and len(r[2]) == 2
+          and r[2][0] is not None else 0.0 for r in rows]
+    hi = [num(r[2][1]) - r[1] if isinstance(r[2], list) and len(r[2]) == 2
+          and r[2][1] is not None else 0.0 for r in rows]
+    ax.barh(y, vals, xerr=[lo, hi], capsize=3,
+            color=[colors.get(r[0], 'grey') for r in rows])
+    ax.axvline(1.0, color='black', linewidth=0.8, linestyle='--')
+    ax.set_yticks(y, [r[0] for r in rows])
+    ax.invert_yaxis()
+    ax.set_title(title, fontsize=9)
+
+
+def statistics_figure(st, colors, figdir):
+    """figures/statistics.*: each method's combined relative error (1 =
+    raw bump) with its 95 % bootstrap interval over variants, overall and
+    per scene; [] without statistics."""
+    overall = obj(st.get('overall'))
+    scenes = [s for s in objs(st.get('per_scene')) if objs(s.get('methods'))]
+    if not objs(overall.get('methods')):
+        return []
+    panels = [('all variants', overall)] + [(str(s.get('scene')), s)
+                                            for s in scenes]
+    n = len(objs(overall.get('methods')))
+    fig, axes = plt.subplots(1, len(panels), sharey=False, squeeze=False,
+                             figsize=(3.2 * len(panels) + 1, 1.2 + 0.35 * n),
+                             layout='constrained')
+    for ax, (title, s) in zip(axes[0], panels):
+        _interval_bars(ax, objs(s.get('methods')), 'combined_relative_error',
+                       'combined_ci', colors,
+                       f'{title} ({s.get("variants", "?")} variants)')
+        # Log scale: a method 10x worse than raw bump would flatten the rest.
+        ax.set_xscale('log')
+        ax.set_xlabel('combined relative error, log scale\n(1 = raw bump; '
+                      '95 % CI)')
+    return save(fig, figdir, 'statistics')
+
+
 def _profile_style(r, colors, others):
     """(legend label, line style) of one render in the profile figure."""
     dashes = [(0, (5, 2)), (0, (2, 1.5)), (0, (6, 2, 1, 2)), (0, (1, 1))]
@@ -294,6 +338,10 @@ def report_figures(report):
     written = ranking_figure(report.ranking, colors, figdir)
     figs = {'ranking': written[0] if written else None, 'profiles': [],
             'sweeps': [], 'lowpoly': None}
+    stats = statistics_figure(obj(report.doc.get('statistics')), colors,
+                              figdir)
+    figs['statistics'] = stats[0] if stats else None
+    written += stats
     for v in report.variants:
         paths = profile_figure(v, colors, report.terminator, figdir)
         figs['profiles'].append(paths[0])

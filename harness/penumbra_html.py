@@ -31,6 +31,8 @@ VARIANT_METRICS = (               # (metric, scale, column head)
     ('profile.position_error_deg', 1, 'position error (deg)'),
     ('profile.width_deg', 1, 'width (deg)'),
     ('profile.lit_bias', 100, 'lit bias (%)'),
+    ('view.rmse_grazing', 100, 'grazing-view RMSE (%)'),
+    ('view.bias_grazing', 100, 'grazing-view bias (%)'),
     ('image.rmse', 1, 'image RMSE (W m⁻² sr⁻¹)'),
     ('image.ssim', 1, 'SSIM'))
 
@@ -113,7 +115,7 @@ def statistics_context(report):
     overall = st['overall']
     rows = []
     for m in objs(overall.get('methods')):
-        term, img = m.get('terminator_vs_none') or {}, m.get('image_vs_none') or {}
+        term, view = m.get('terminator_vs_none') or {}, m.get('view_vs_none') or {}
         label = str(m.get('method'))
         if m.get('rejected'):
             label += ' (rejected)'
@@ -124,22 +126,45 @@ def statistics_context(report):
             (m.get('terminator_improvement'), 100),
             interval_text(m.get('terminator_improvement_ci'), 100, 0),
             f'{term.get("better", 0)}/{m.get("variants", 0)}',
-            (m.get('image_improvement'), 100),
-            interval_text(m.get('image_improvement_ci'), 100, 0)])
+            (view.get('mean_difference'), 1),
+            interval_text(view.get('ci'), 1, 4),
+            (m.get('view_bias'), 1),
+            interval_text(m.get('view_bias_ci'), 1, 4)])
     head = ['rank', 'method', 'combined relative error', '95 % CI',
             'terminator RMSE removed (%)', '95 % CI (%)',
-            'better than none', 'image RMSE removed (%)', '95 % CI (%)']
+            'better than none', 'grazing-view RMSE minus none', '95 % CI',
+            'grazing-view signed error', '95 % CI']
     rejected = [f'{m.get("method")}: {m.get("rejected")}'
                 for m in objs(overall.get('methods')) if m.get('rejected')]
     agreement = report.doc.get('agreement')
     agreement = agreement if isinstance(agreement, dict) else {}
     return {'sentences': [str(x) for x in overall.get('headline') or []],
             'agreement': [str(x) for x in agreement.get('headline') or []],
+            'ground_truth': ground_truth_context(report),
             'table': table(head, rows) if rows else None,
             'definition': str(st.get('definition', '')),
             'interval': str(st.get('interval', '')),
             'test': str(st.get('test', '')),
             'rejected': rejected}
+
+
+def ground_truth_context(report):
+    """The convergence of each variant's evaluator ground truth."""
+    g = report.doc.get('ground_truth')
+    if not isinstance(g, dict) or not objs(g.get('variants')):
+        return None
+    rows = []
+    for v in objs(g.get('variants')):
+        rows.append([str(v.get('variant')), str(v.get('label')),
+                     (v.get('edge_length'), 1), v.get('spp') if type(v.get('spp')) is int
+                     else 'n/a', (v.get('reached'), 1),
+                     'yes' if v.get('converged') else 'NO: ' + str(v.get('why', '')),
+                     str(len(objs(v.get('steps'))))])
+    head = ['variant', 'scene and axes', 'edge length', 'spp',
+            'change reached (fraction of albedo*E/pi)', 'converged', 'checks']
+    return {'headline': str(g.get('headline', '')),
+            'definition': str(g.get('definition', '')),
+            'table': table(head, rows)}
 
 
 def renderer_tables(report):
@@ -175,6 +200,7 @@ def report_context(report, figs):
     missing = {(str(m.get('renderer')), str(m.get('method'))):
                str(m.get('why', '')) for m in objs(report.doc.get('missing'))}
     ranking_fig = figs['ranking']
+    stats_fig = figs.get('statistics')
     return {
         'title': f'Penumbra report: {name}',
         'study': {'name': str(study.get('name', '')),
@@ -187,6 +213,11 @@ def report_context(report, figs):
         'ranking_figure': figure_file(
             ranking_fig, 'ranking', 'figures/ranking.{png,svg,pdf}')
         if ranking_fig else None,
+        'statistics_figure': figure_file(
+            stats_fig, 'combined relative error with 95 % intervals',
+            'figures/statistics.{png,svg,pdf}: combined relative error per '
+            'method with its 95 % bootstrap interval over variants (1 = raw '
+            'bump; the dashed line)') if stats_fig else None,
         **renderer_tables(report),
         'variants': [variant_context(v, report, f, missing)
                      for v, f in zip(report.variants, figs['profiles'])],

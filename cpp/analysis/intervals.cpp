@@ -17,6 +17,7 @@ struct BandSums {
   std::vector<std::uint64_t> test_count, ref_count;
   double sq = 0.0;
   std::size_t pixels = 0;
+  ViewErrorProfile view;
 };
 
 struct Channels {
@@ -44,8 +45,8 @@ void add_to_profile(const Image& im, const Channels& c, int x, int y, const Prof
   ++count[k];
 }
 
-std::vector<BandSums> band_sums(const Image& test, const Image& ref, const ProfileOptions& o,
-                                int band_rows) {
+std::vector<BandSums> band_sums(const Image& test, const Image& ref, double scale,
+                                const ProfileOptions& o, int band_rows) {
   const Channels ct(test), cr(ref);
   const std::size_t bins = static_cast<std::size_t>(std::ceil(180.0 / o.bin_degrees));
   std::vector<BandSums> bands((test.height + band_rows - 1) / band_rows);
@@ -67,6 +68,9 @@ std::vector<BandSums> band_sums(const Image& test, const Image& ref, const Profi
       ++b.pixels;
     }
   }
+  for (std::size_t n = 0; n < bands.size(); ++n)
+    bands[n].view = view_error_profile(test, ref, scale, o.min_coverage, int(n) * band_rows,
+                                       int(n + 1) * band_rows);
   return bands;
 }
 
@@ -85,7 +89,9 @@ Profile profile_of(const std::vector<double>& weight, const std::vector<double>&
 // placed around the estimate. A plain percentile interval of an RMSE sits
 // above the estimate: resampling bands adds noise to every bin, which the
 // RMSE turns into upward bias; centring keeps the spread and drops the bias.
-Interval centred_interval(std::vector<double> v, double estimate, double confidence) {
+// `nonnegative`: an RMSE's interval stops at 0; a signed metric's does not.
+Interval centred_interval(std::vector<double> v, double estimate, double confidence,
+                          bool nonnegative = true) {
   v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
   const double nan = std::numeric_limits<double>::quiet_NaN();
   if (v.empty() || !std::isfinite(estimate)) return {nan, nan};
@@ -93,13 +99,14 @@ Interval centred_interval(std::vector<double> v, double estimate, double confide
   double mean = 0.0;
   for (double x : v) mean += x / double(v.size());
   const double tail = 0.5 * (1.0 - confidence);
-  return {std::max(0.0, estimate + quantile(v, tail) - mean),
-          estimate + quantile(v, 1.0 - tail) - mean};
+  const double low = estimate + quantile(v, tail) - mean;
+  return {nonnegative ? std::max(0.0, low) : low, estimate + quantile(v, 1.0 - tail) - mean};
 }
 
 // The two metrics over the bands `pick` selects (all bands: the estimate).
 struct Metrics {
-  double terminator, image;
+  ProfileMetrics profile;
+  double image, view;
 };
 
 template <typename Pick>
@@ -110,8 +117,12 @@ Metrics metrics_of(const std::vector<BandSums>& bands, Pick pick, double scale,
   std::vector<std::uint64_t> tc(bins, 0), rc(bins, 0);
   double sq = 0.0;
   std::size_t pixels = 0;
+  ViewErrorProfile view = bands[0].view;
+  std::fill(view.error_sum.begin(), view.error_sum.end(), 0.0);
+  std::fill(view.count.begin(), view.count.end(), 0);
   for (std::size_t n = 0; n < bands.size(); ++n) {
     const BandSums& b = bands[pick(n)];
+    view += b.view;
     for (std::size_t k = 0; k < bins; ++k) {
       ts[k] += b.test_sum[k], rs[k] += b.ref_sum[k];
       tw[k] += b.test_weight[k], rw[k] += b.ref_weight[k];
@@ -119,9 +130,9 @@ Metrics metrics_of(const std::vector<BandSums>& bands, Pick pick, double scale,
     }
     sq += b.sq, pixels += b.pixels;
   }
-  return {compare_profiles(profile_of(tw, ts, tc, scale, o), profile_of(rw, rs, rc, scale, o), o)
-              .rmse_terminator,
-          pixels ? std::sqrt(sq / double(pixels)) : std::numeric_limits<double>::quiet_NaN()};
+  return {compare_profiles(profile_of(tw, ts, tc, scale, o), profile_of(rw, rs, rc, scale, o), o),
+          pixels ? std::sqrt(sq / double(pixels)) : std::numeric_limits<double>::quiet_NaN(),
+          view_metrics(view).rmse_grazing};
 }
 
 }  // namespace
@@ -131,7 +142,8 @@ ComparisonIntervals comparison_intervals(const Image& test, const Image& referen
                                          int band_count, int resamples, std::uint64_t seed) {
   ComparisonIntervals out;
   const int band_rows = std::max(1, (test.height + band_count - 1) / band_count);
-  const std::vector<BandSums> bands = band_sums(test, reference, options, band_rows);
+  const std::vector<BandSums> bands =
+      band_sums(test, reference, radiance_scale, options, band_rows);
   out.bands = static_cast<int>(bands.size());
   out.resamples = resamples;
   if (bands.empty()) return out;
@@ -140,19 +152,27 @@ ComparisonIntervals comparison_intervals(const Image& test, const Image& referen
   std::mt19937_64 rng(seed);
   auto draw = [&](std::size_t) { return uniform_index(rng, bands.size()); };
 
-  std::vector<double> terminator, image;
+  std::vector<double> terminator, image, view, max_error, position, lit_bias;
   for (int r = 0; r < resamples; ++r) {
     const Metrics m = metrics_of(bands, draw, radiance_scale, options);
-    terminator.push_back(m.terminator);
+    terminator.push_back(m.profile.rmse_terminator);
+    max_error.push_back(m.profile.max_error);
+    position.push_back(m.profile.position_error);
+    lit_bias.push_back(m.profile.lit_bias);
     image.push_back(m.image);
+    view.push_back(m.view);
   }
-  out.rmse_terminator = centred_interval(terminator, estimate.terminator, 0.95);
+  out.rmse_terminator = centred_interval(terminator, estimate.profile.rmse_terminator, 0.95);
+  out.max_error = centred_interval(max_error, estimate.profile.max_error, 0.95);
+  out.position_error = centred_interval(position, estimate.profile.position_error, 0.95, false);
+  out.lit_bias = centred_interval(lit_bias, estimate.profile.lit_bias, 0.95, false);
   double sum = 0.0;
   std::size_t n = 0;
   for (double t : terminator)
     if (std::isfinite(t)) sum += t, ++n;
-  out.rmse_terminator_bias = n ? sum / double(n) - estimate.terminator : 0.0;
+  out.rmse_terminator_bias = n ? sum / double(n) - estimate.profile.rmse_terminator : 0.0;
   out.image_rmse = centred_interval(image, estimate.image, 0.95);
+  out.view_rmse_grazing = centred_interval(view, estimate.view, 0.95);
   return out;
 }
 

@@ -25,8 +25,12 @@
 namespace penumbra {
 
 struct ComparisonIntervals {
-  Interval rmse_terminator;  // profile, fraction of albedo*E/pi
-  Interval image_rmse;       // W m^-2 sr^-1, like ImageMetrics::rmse
+  Interval rmse_terminator;    // profile, fraction of albedo*E/pi
+  Interval image_rmse;         // W m^-2 sr^-1, like ImageMetrics::rmse
+  Interval view_rmse_grazing;  // fraction of albedo*E/pi, like ViewMetrics
+  // The other profile metrics (ProfileMetrics): fraction of albedo*E/pi,
+  // degrees. NaN where the metric is undefined in the estimate.
+  Interval max_error, position_error, lit_bias;
   // mean(replicates) - estimate: how much resampling noise inflates the
   // terminator RMSE (a finite-pixel bias of the same sign in the estimate).
   double rmse_terminator_bias = 0.0;

@@ -235,6 +235,59 @@ ImageMetrics compare_images(const Image& test, const Image& reference, double mi
   return m;
 }
 
+double ViewErrorProfile::mean(std::size_t bin) const {
+  return bin < count.size() && count[bin] ? error_sum[bin] / double(count[bin]) : kNaN;
+}
+
+ViewErrorProfile& ViewErrorProfile::operator+=(const ViewErrorProfile& other) {
+  if (other.bin_degrees != bin_degrees || other.count.size() != count.size())
+    throw std::invalid_argument("view error profiles with different bins");
+  for (std::size_t k = 0; k < count.size(); ++k)
+    error_sum[k] += other.error_sum[k], count[k] += other.count[k];
+  return *this;
+}
+
+ViewErrorProfile view_error_profile(const Image& test, const Image& reference, double scale,
+                                    double min_coverage, int row_begin, int row_end) {
+  const PairChannels ch = pair_channels(test, reference);
+  const int theta = require_channel(reference, "analysis.theta");
+  const int view = reference.channel_index("analysis.view");
+  ViewErrorProfile p;
+  const auto bins = static_cast<std::size_t>(std::ceil(180.0 / p.bin_degrees));
+  p.error_sum.assign(bins, 0.0);
+  p.count.assign(bins, 0);
+  if (view < 0) return p;
+  if (row_end < 0 || row_end > test.height) row_end = test.height;
+  for (int y = std::max(0, row_begin); y < row_end; ++y)
+    for (int x = 0; x < test.width; ++x) {
+      if (!(test.at(x, y, ch.ta) >= min_coverage && reference.at(x, y, ch.ra) >= min_coverage))
+        continue;
+      const double t = reference.at(x, y, theta), v = reference.at(x, y, view);
+      if (!(t < kLitEnd) || !std::isfinite(v)) continue;
+      const double d = (radiance(test, x, y, ch.trgb) - radiance(reference, x, y, ch.rrgb)) / scale;
+      if (!std::isfinite(d)) continue;
+      const auto k = std::min(bins - 1, static_cast<std::size_t>(std::max(0.0, v) / p.bin_degrees));
+      p.error_sum[k] += d;
+      ++p.count[k];
+    }
+  return p;
+}
+
+ViewMetrics view_metrics(const ViewErrorProfile& p) {
+  ViewMetrics m;
+  double sum_sq = 0.0, sum = 0.0;
+  for (std::size_t k = 0; k < p.count.size(); ++k) {
+    const double lo = double(k) * p.bin_degrees;
+    if (lo < kGrazingBegin || lo + p.bin_degrees > kGrazingEnd || !p.count[k]) continue;
+    const double mean = p.mean(k), n = double(p.count[k]);
+    sum_sq += n * mean * mean, sum += n * mean;
+    m.pixels += p.count[k];
+  }
+  m.rmse_grazing = m.pixels ? std::sqrt(sum_sq / double(m.pixels)) : kNaN;
+  m.bias_grazing = m.pixels ? sum / double(m.pixels) : kNaN;
+  return m;
+}
+
 ShadowMetrics compare_shadows(const Image& test, const Image& reference, double scale,
                               double min_coverage) {
   const PairChannels ch = pair_channels(test, reference);

@@ -70,6 +70,47 @@ ProfileMetrics compare_profiles(const Profile& test, const Profile& reference,
 // `from_deg`, linear between bin centres; NaN if it never falls below it.
 double crossing(const Profile& p, double level, std::uint64_t min_count, double from_deg = 0.0);
 
+// The viewer's side: the signed error binned by the view angle theta_o (the
+// reference's analysis.view), over pixels fully covered in both that the
+// light reaches head-on (reference theta < kLitEnd), so that it counts none
+// of the terminator region the profile metrics cover. Binned means cancel
+// the bump's phase as the profile does; what is left is a method's darkening
+// or brightening as a function of where the viewer stands, the flaw of a
+// factor applied on the view side (estevez2019-reciprocal, reference sheet
+// section 3). Bins: [k w, (k+1) w) degrees over [0, 180).
+struct ViewErrorProfile {
+  double bin_degrees = 5.0;
+  std::vector<double> error_sum;     // per bin: sum of (test - reference) / scale
+  std::vector<std::uint64_t> count;  // pixels in the bin
+  double centre(std::size_t bin) const { return (double(bin) + 0.5) * bin_degrees; }
+  double mean(std::size_t bin) const;  // NaN where the bin is empty
+  ViewErrorProfile& operator+=(const ViewErrorProfile& other);
+};
+
+// Over rows [row_begin, row_end) (row_end < 0: to the last row); `scale` =
+// albedo * E / pi. The bootstrap of intervals adds bands of rows. A reference
+// without analysis.view (rendered before Penumbra 0.5) gives empty bins, so
+// the metrics below are NaN: unknown, never zero.
+ViewErrorProfile view_error_profile(const Image& test, const Image& reference, double scale,
+                                    double min_coverage = 0.999, int row_begin = 0,
+                                    int row_end = -1);
+
+// Degrees: the grazing views the viewer metric scores. It stops at 75, 1.7
+// pixels inside a 51-pixel silhouette at 128 px, so that partly covered
+// silhouette pixels, whose number halves when the resolution doubles, are
+// never near it.
+inline constexpr double kGrazingBegin = 60.0, kGrazingEnd = 75.0;
+
+// Pixel-weighted over the bins in [kGrazingBegin, kGrazingEnd): weights are
+// projected areas, the same at every resolution. Fractions of albedo*E/pi.
+struct ViewMetrics {
+  double rmse_grazing = 0.0;  // sqrt(sum n_k mean_k^2 / sum n_k); NaN if no pixel
+  double bias_grazing = 0.0;  // sum n_k mean_k / sum n_k: negative, the test is darker
+  std::uint64_t pixels = 0;
+};
+
+ViewMetrics view_metrics(const ViewErrorProfile& profile);
+
 // Image-space comparison inside the object.
 struct ImageMetrics {
   double mask_iou = 0.0;        // |A>=0.5 in both| / |A>=0.5 in either|

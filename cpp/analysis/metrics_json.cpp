@@ -41,6 +41,14 @@ nlohmann::json image_metrics_json(const ImageMetrics& m) {
           {"nonfinite", m.nonfinite}};
 }
 
+nlohmann::json view_metrics_json(const ViewMetrics& m) {
+  return {{"unit", "fraction of albedo*E/pi"},
+          {"grazing_deg", {kGrazingBegin, kGrazingEnd}},
+          {"rmse_grazing", number(m.rmse_grazing)},
+          {"bias_grazing", number(m.bias_grazing)},
+          {"pixels", m.pixels}};
+}
+
 nlohmann::json shadow_metrics_json(const ShadowMetrics& m) {
   return {
       {"unit", "fraction of albedo*E/pi (max_darkening), of pixels (fractions), pixels (shift)"},

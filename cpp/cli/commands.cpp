@@ -485,6 +485,13 @@ json with_interval(json metrics, const char* key, const Interval& i) {
   return metrics;
 }
 
+json profile_json_with_intervals(const ProfileMetrics& pm, const ComparisonIntervals& ci) {
+  json j = with_interval(profile_metrics_json(pm), "rmse_terminator_ci", ci.rmse_terminator);
+  j = with_interval(std::move(j), "max_error_terminator_ci", ci.max_error);
+  j = with_interval(std::move(j), "position_error_deg_ci", ci.position_error);
+  return with_interval(std::move(j), "lit_bias_ci", ci.lit_bias);
+}
+
 std::string interval_note(const ComparisonIntervals& ci) {
   return fmt::format(
       "intervals: 95 %, paired block bootstrap over {} bands of rows, {} resamples (seed 1), "
@@ -495,8 +502,8 @@ std::string interval_note(const ComparisonIntervals& ci) {
 // The text form of `penumbra compare`: every metric of --json, with units
 // and intervals.
 void print_comparison(const CompareArgs& a, double scale, const ProfileMetrics& pm,
-                      const ImageMetrics& im, const ComparisonIntervals& ci, bool over,
-                      std::ostream& out) {
+                      const ImageMetrics& im, const ViewMetrics& vm, const ComparisonIntervals& ci,
+                      bool over, std::ostream& out) {
   out << fmt::format("reference {}\ntest      {}\n", a.reference, a.test);
   out << fmt::format(
       "profile (1-degree theta bins, fraction of albedo*E/pi = {:.6g} W m^-2 "
@@ -506,14 +513,19 @@ void print_comparison(const CompareArgs& a, double scale, const ProfileMetrics& 
                      pm.rmse_terminator, ci.rmse_terminator.low, ci.rmse_terminator.high);
   out << fmt::format("  (bootstrap bias of that RMSE  {:+.6f})\n", ci.rmse_terminator_bias);
   out << fmt::format("  RMSE overall                  {:.6f}\n", pm.rmse_overall);
-  out << fmt::format("  max error terminator          {:.6f}\n", pm.max_error);
+  out << fmt::format("  max error terminator          {:.6f} [{:.6f}, {:.6f}]\n", pm.max_error,
+                     ci.max_error.low, ci.max_error.high);
   out << fmt::format("  largest bin step              {:.6f} (reference {:.6f})\n", pm.max_step,
                      pm.reference_max_step);
-  out << fmt::format("  terminator position (L<{})  {:.3f} deg (reference {:.3f}, error {:+.3f})\n",
-                     kDarkLevel, pm.position, pm.reference_position, pm.position_error);
+  out << fmt::format(
+      "  terminator position (L<{})  {:.3f} deg (reference {:.3f}, error {:+.3f} [{:+.3f}, "
+      "{:+.3f}])\n",
+      kDarkLevel, pm.position, pm.reference_position, pm.position_error, ci.position_error.low,
+      ci.position_error.high);
   out << fmt::format("  transition width 90%->10%     {:.3f} deg (reference {:.3f})\n", pm.width,
                      pm.reference_width);
-  out << fmt::format("  lit-region bias (<60 deg)     {:+.6f}\n", pm.lit_bias);
+  out << fmt::format("  lit-region bias (<60 deg)     {:+.6f} [{:+.6f}, {:+.6f}]\n", pm.lit_bias,
+                     ci.lit_bias.low, ci.lit_bias.high);
   out << fmt::format("image (pixels fully covered in both: {}):\n", im.pixels);
   out << fmt::format("  mask IoU (alpha>=0.5)         {:.6f}\n", im.mask_iou);
   out << fmt::format(
@@ -523,6 +535,13 @@ void print_comparison(const CompareArgs& a, double scale, const ProfileMetrics& 
   out << fmt::format("  mean error (test-reference)   {:+.6g} W m^-2 sr^-1\n", im.mean_error);
   out << fmt::format("  SSIM (Gaussian 11x11)         {:.6f}\n", im.ssim);
   out << fmt::format("  NaN/Inf values                {}\n", im.nonfinite);
+  out << fmt::format(
+      "viewer (lit pixels, theta < {} deg, binned by view angle; {} pixels at [{}, {}) deg):\n",
+      kLitEnd, vm.pixels, kGrazingBegin, kGrazingEnd);
+  out << fmt::format("  RMSE grazing views            {:.6f} [{:.6f}, {:.6f}] (95 % CI)\n",
+                     vm.rmse_grazing, ci.view_rmse_grazing.low, ci.view_rmse_grazing.high);
+  out << fmt::format("  bias grazing views            {:+.6f} (negative: test darker)\n",
+                     vm.bias_grazing);
   out << interval_note(ci) << "\n";
   if (over)
     out << fmt::format("FAIL: profile RMSE {:.6f} above --max-profile-rmse {}\n", pm.rmse_overall,
@@ -560,6 +579,7 @@ int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err) 
   const Profile pt = terminator_profile(test_with_theta, scale, options);
   const ProfileMetrics pm = compare_profiles(pt, pr, options);
   const ImageMetrics im = compare_images(test, reference);
+  const ViewMetrics vm = view_metrics(view_error_profile(test, reference, scale));
   const ComparisonIntervals ci = comparison_intervals(test_with_theta, reference, scale, options);
   const bool nonfinite = im.nonfinite > 0;
   const bool over = a.max_rmse >= 0.0 && !(pm.rmse_overall <= a.max_rmse);
@@ -572,15 +592,16 @@ int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err) 
                 {"test", a.test},
                 {"radiance_scale", scale},
                 {"radiance_scale_unit", "W m^-2 sr^-1 (albedo * E / pi)"},
-                {"profile",
-                 with_interval(profile_metrics_json(pm), "rmse_terminator_ci", ci.rmse_terminator)},
+                {"profile", profile_json_with_intervals(pm, ci)},
                 {"image", with_interval(image_metrics_json(im), "rmse_ci", ci.image_rmse)},
+                {"view",
+                 with_interval(view_metrics_json(vm), "rmse_grazing_ci", ci.view_rmse_grazing)},
                 {"intervals", interval_note(ci)},
                 {"pass", !nonfinite && !over}}
                .dump(2)
         << "\n";
   } else {
-    print_comparison(a, scale, pm, im, ci, over, out);
+    print_comparison(a, scale, pm, im, vm, ci, over, out);
   }
   return nonfinite || over ? kExitThreshold : kExitOk;
 }

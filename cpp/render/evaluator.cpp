@@ -18,7 +18,7 @@ namespace penumbra {
 
 const std::vector<std::string>& evaluator_channels() {
   static const std::vector<std::string> channels{
-      "R", "G", "B", "A", "analysis.theta", "analysis.deviation", "analysis.G"};
+      "R", "G", "B", "A", "analysis.theta", "analysis.deviation", "analysis.G", "analysis.view"};
   return channels;
 }
 
@@ -205,7 +205,7 @@ class Props {
 };
 
 struct PixelSums {
-  double radiance = 0.0, hits = 0.0, theta = 0.0, deviation = 0.0, g = 0.0;
+  double radiance = 0.0, hits = 0.0, theta = 0.0, deviation = 0.0, g = 0.0, view = 0.0;
 };
 
 template <typename Tracer>
@@ -288,6 +288,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
             sums.theta += degrees(acos_approx(dot(n, light.wi)));
             sums.deviation += degrees(acos_approx(dot(ns, n)));
             sums.g += factor;
+            sums.view += degrees(acos_approx(dot(n, wo)));
             const double cos_theta_s = dot(ns, light.wi);
             if (!(cos_theta_s > 0.0) || light.irradiance == 0.0) continue;
             const LobeValues lobes = evaluate_lobes(scene.material, ns, light.wi, wo);
@@ -311,6 +312,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
           out[4] = static_cast<float>(sums.theta / sums.hits);
           out[5] = static_cast<float>(sums.deviation / sums.hits);
           out[6] = static_cast<float>(sums.g / sums.hits);
+          out[7] = static_cast<float>(sums.view / sums.hits);
         }
       }
       const int done = ++rows_done;

@@ -21,6 +21,8 @@ namespace penumbra {
 //                       base point (for displacement: the base point under the hit)
 //   analysis.deviation  degrees between Ns and that base normal
 //   analysis.G          the terminator factor at the sample (1 for `none`)
+//   analysis.view       degrees between wo and the base-surface normal (the
+//                       view angle: 90 at the silhouette)
 // The analysis channels are means over the samples that hit (0 where none did).
 // They live in the EXR layer "analysis" because "G" alone is the green channel.
 const std::vector<std::string>& evaluator_channels();

@@ -77,7 +77,12 @@ void RenderCache::store(const std::string& key, const Image& image,
 }
 
 void assign_keys(Plan& plan, const std::vector<std::pair<RendererKind, RendererIdentity>>& ids) {
-  for (Job& job : plan.jobs) {
+  assign_keys(plan.jobs, ids);
+}
+
+void assign_keys(std::vector<Job>& jobs,
+                 const std::vector<std::pair<RendererKind, RendererIdentity>>& ids) {
+  for (Job& job : jobs) {
     const auto it = std::find_if(ids.begin(), ids.end(),
                                  [&](const auto& entry) { return entry.first == job.renderer; });
     job.key =

@@ -17,6 +17,7 @@
 namespace penumbra {
 
 struct Plan;
+struct Job;
 
 // What identifies the code that renders with a renderer: its version line
 // ("Blender 3.4.1", "penumbra 0.4.0") and the digest of Penumbra's code and
@@ -58,5 +59,7 @@ class RenderCache {
 
 // Sets every job's key from its canonical scene and its renderer's identity.
 void assign_keys(Plan& plan, const std::vector<std::pair<RendererKind, RendererIdentity>>& ids);
+void assign_keys(std::vector<Job>& jobs,
+                 const std::vector<std::pair<RendererKind, RendererIdentity>>& ids);
 
 }  // namespace penumbra

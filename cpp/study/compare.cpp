@@ -82,6 +82,7 @@ void add_comparisons(const Plan& plan, const RenderedImages& r, std::size_t i, C
     row.profile = compare_profiles(terminator_profile(r.images[i], scale, po),
                                    terminator_profile(r.images[ref], scale, po), po);
     row.image = compare_images(r.images[i], r.images[ref]);
+    row.view = view_metrics(view_error_profile(r.images[i], r.images[ref], scale));
     row.intervals = comparison_intervals(r.images[i], r.images[ref], scale, po);
     if (kind == SectionKind::kLowPoly)
       row.shadow = compare_shadows(r.images[i], r.images[ref], scale);

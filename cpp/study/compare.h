@@ -38,6 +38,7 @@ struct ComparisonRow {
   std::string reference;  // "evaluator:displacement", "blender:analytic"
   ProfileMetrics profile;
   ImageMetrics image;
+  ViewMetrics view;                     // the viewer's side (analysis/metrics.h)
   std::optional<ShadowMetrics> shadow;  // low-poly rows
   ComparisonIntervals intervals;        // 95 % intervals (analysis/intervals.h)
 };

@@ -17,7 +17,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 struct ErrorTable {
   std::vector<std::size_t> variants;  // plan indices
   std::vector<std::string> methods;   // in order of first appearance
-  std::map<std::string, std::vector<double>> term, img;
+  std::map<std::string, std::vector<double>> term, view, view_bias;
 };
 
 ErrorTable error_table(const Plan& plan, const std::vector<ComparisonRow>& rows,
@@ -38,10 +38,12 @@ ErrorTable error_table(const Plan& plan, const std::vector<ComparisonRow>& rows,
     if (!t.term.count(row.method)) {
       t.methods.push_back(row.method);
       t.term[row.method].assign(t.variants.size(), kNaN);
-      t.img[row.method].assign(t.variants.size(), kNaN);
+      t.view[row.method].assign(t.variants.size(), kNaN);
+      t.view_bias[row.method].assign(t.variants.size(), kNaN);
     }
     t.term[row.method][c->second] = row.profile.rmse_terminator;
-    t.img[row.method][c->second] = row.image.rmse / radiance_scale(plan.jobs[row.job].scene);
+    t.view[row.method][c->second] = row.view.rmse_grazing;
+    t.view_bias[row.method][c->second] = row.view.bias_grazing;
   }
   return t;
 }
@@ -94,9 +96,15 @@ MethodStatistics method_statistics(const ErrorTable& t, const std::string& m,
   s.combined_interval = bootstrap_mean_interval(c, kRankingConfidence);
   improvement(relative(t.term.at(m), t.term.at("none")), &s.terminator_improvement,
               &s.terminator_interval);
-  improvement(relative(t.img.at(m), t.img.at("none")), &s.image_improvement, &s.image_interval);
   s.terminator = compare_paired(t.term.at(m), t.term.at("none"), kRankingConfidence);
-  s.image = compare_paired(t.img.at(m), t.img.at("none"), kRankingConfidence);
+  s.view = compare_paired(t.view.at(m), t.view.at("none"), kRankingConfidence);
+  const std::vector<double> bias = finite(t.view_bias.at(m));
+  s.view_bias = mean(bias);
+  s.view_bias_interval = bootstrap_mean_interval(bias, kRankingConfidence);
+  double darker_sum = 0.0;
+  for (double b : bias)
+    if (b < 0.0) ++s.view_darker, darker_sum += b;
+  s.view_darker_mean = s.view_darker ? darker_sum / double(s.view_darker) : 0.0;
   return s;
 }
 
@@ -140,12 +148,13 @@ RankingStatistics ranking_statistics(const Plan& plan, const std::vector<Compari
   if (!t.term.count("none")) return s;  // no raw bump to measure against
   std::map<std::string, std::vector<double>> combined;
   for (const std::string& m : t.methods) {
-    const std::vector<double> rt = relative(t.term.at(m), t.term.at("none"));
-    const std::vector<double> ri = relative(t.img.at(m), t.img.at("none"));
-    std::vector<double>& c = combined[m];
-    c.assign(rt.size(), kNaN);
-    for (std::size_t v = 0; v < rt.size(); ++v) c[v] = 0.5 * (rt[v] + ri[v]);
-    s.methods.push_back(method_statistics(t, m, c));
+    std::vector<double> sum(t.variants.size()), none_sum(t.variants.size());
+    for (std::size_t v = 0; v < t.variants.size(); ++v) {
+      sum[v] = t.term.at(m)[v] + t.view.at(m)[v];
+      none_sum[v] = t.term.at("none")[v] + t.view.at("none")[v];
+    }
+    combined[m] = relative(sum, none_sum);
+    s.methods.push_back(method_statistics(t, m, combined[m]));
   }
   std::sort(s.methods.begin(), s.methods.end(),
             [](const MethodStatistics& a, const MethodStatistics& b) {
@@ -190,14 +199,49 @@ std::string p_text(double p) {
 // W of N variants (sign test p)".
 std::string versus_none(const MethodStatistics& m, std::size_t variants) {
   const bool lowers = m.terminator_improvement >= 0.0;
-  const bool resolved = !m.terminator_interval.contains(0.0) && m.terminator.p < kSignificance;
+  const Interval& i = m.terminator_interval;
+  const std::string tie = i.contains(0.0) ? "; its interval contains 0: a tie"
+                          : m.terminator.p >= kSignificance
+                              ? "; the sign test does not confirm it: a tie"
+                              : "";
   return fmt::format(
       "{} {} the terminator-region profile RMSE of raw bump by {} {} (95 % CI), better in {} of "
       "{} variants ({}){}.",
       named(m.method, m.rejected), lowers ? "lowers" : "raises",
-      percent(std::abs(m.terminator_improvement)), percent_interval(m.terminator_interval),
-      m.terminator.a_better, variants, p_text(m.terminator.p),
-      resolved ? "" : "; within its interval of raw bump: a tie");
+      percent(std::abs(m.terminator_improvement)),
+      percent_interval(lowers ? i : Interval{-i.high, -i.low}), m.terminator.a_better, variants,
+      p_text(m.terminator.p), tie);
+}
+
+// Which methods are darker than the truth where the viewer looks edge-on.
+std::string darker_at_grazing_views(const RankingStatistics& s) {
+  std::string list;
+  for (const MethodStatistics& m : s.methods)
+    if (m.view_darker > 0)
+      list += fmt::format("{}{} in {} of {} variants (mean signed error there {:+.4f})",
+                          list.empty() ? "" : "; ", named(m.method, m.rejected), m.view_darker,
+                          m.variants, m.view_darker_mean);
+  if (list.empty()) return "";
+  const MethodStatistics* none = nullptr;
+  for (const MethodStatistics& m : s.methods)
+    if (m.method == "none") none = &m;
+  return fmt::format(
+      "Darker than the displacement ground truth at grazing views (view angle 60-75 deg, lit "
+      "head-on), where raw bump is {:+.4f} on average: {}.",
+      none ? none->view_bias : std::numeric_limits<double>::quiet_NaN(), list);
+}
+
+// "M adds error at grazing views: ...", for a method significantly worse
+// than raw bump on E_view.
+std::string worse_view(const MethodStatistics& m) {
+  return fmt::format(
+      "{} adds error where the viewer looks at grazing angles: its grazing-view RMSE is {:+.4f} "
+      "[{:+.4f}, {:+.4f}] of albedo*E/pi above raw bump's (worse in {} of {} variants, {}); its "
+      "mean signed error there is {:+.4f} [{:+.4f}, {:+.4f}] ({} than the ground truth){}.",
+      named(m.method, m.rejected), m.view.mean_difference, m.view.interval.low,
+      m.view.interval.high, m.view.b_better, m.view.n, p_text(m.view.p), m.view_bias,
+      m.view_bias_interval.low, m.view_bias_interval.high,
+      m.view_bias < 0.0 ? "darker" : "brighter", m.rejected.empty() ? "" : " (" + m.rejected + ")");
 }
 
 }  // namespace
@@ -228,13 +272,9 @@ std::vector<std::string> headline_sentences(const RankingStatistics& s) {
           fmt::format("[{:+.3f}, {:+.3f}]", p.combined.interval.low, p.combined.interval.high),
           p_text(p.p_holm)));
   for (const MethodStatistics& m : s.methods)
-    if (m.image_interval.high < 0.0 && m.image.p < kSignificance)
-      out.push_back(fmt::format(
-          "{} darkens what a viewer sees: its whole-object image RMSE is {} {} above raw bump's "
-          "(worse in {} of {} variants, {}){}.",
-          named(m.method, m.rejected), percent(-m.image_improvement),
-          percent_interval({-m.image_interval.high, -m.image_interval.low}), m.image.b_better,
-          m.variants, p_text(m.image.p), m.rejected.empty() ? "" : " (" + m.rejected + ")"));
+    if (m.view.interval.low > 0.0 && m.view.p < kSignificance) out.push_back(worse_view(m));
+  if (std::string darker = darker_at_grazing_views(s); !darker.empty())
+    out.push_back(std::move(darker));
   for (const MethodStatistics& m : s.methods)
     if (!m.rejected.empty() && m.rank == best.rank)
       out.push_back(fmt::format("{} is {}; it is ranked for comparison, not recommended.", m.method,

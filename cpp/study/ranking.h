@@ -3,15 +3,21 @@
 // compared with the evaluator's displacement ground truth.
 //
 // Per variant v and method m, two errors against the ground truth, both as
-// fractions of albedo*E/pi:
-//   E_term(m, v)  terminator-region profile RMSE (theta in [60, 100) deg);
-//   E_img(m, v)   image RMSE over every pixel fully covered in both images,
-//                 silhouettes and the lit region included: what a viewer
-//                 sees, which the light-angle profile does not weigh.
+// fractions of albedo*E/pi and both RMS of binned means, so that the bump's
+// phase averages out of each:
+//   E_term(m, v)  the light's side: terminator-region profile RMSE (theta in
+//                 [60, 100) deg, binned by the light angle);
+//   E_view(m, v)  the viewer's side: grazing-view RMSE (lit pixels, theta <
+//                 60 deg, binned by the view angle over [60, 75) deg), where
+//                 a factor applied to wo darkens silhouettes that the
+//                 light-angle profile never weighs (analysis/metrics.h).
 // The ranking metric is the combined relative error
-//   C(m, v) = (E_term(m, v) / E_term(none, v) + E_img(m, v) / E_img(none, v)) / 2,
+//   C(m, v) = (E_term(m, v) + E_view(m, v)) / (E_term(none, v) + E_view(none, v)),
 // 1 for raw bump, lower is better; relative to `none` in each variant, so one
-// hard scene does not dominate the mean. Intervals: 95 % percentile
+// hard scene does not dominate the mean, and a ratio of sums, so that a
+// variant where raw bump's grazing-view error is near 0 does not divide by
+// noise. The whole-image RMSE is reported beside it but does not rank: it is
+// dominated by per-pixel parallax, which no shading method can remove. Intervals: 95 % percentile
 // bootstrap over variants (10,000 resamples, fixed seed). Tests: two-sided
 // exact sign test over variants; between methods, Holm-adjusted across all
 // pairs. Two methods are tied when the interval of their mean paired
@@ -42,10 +48,17 @@ struct MethodStatistics {
   double terminator_improvement = 0.0;
   Interval terminator_interval;
   PairedComparison terminator;  // E_term(m) against E_term(none)
-  double image_improvement = 0.0;
-  Interval image_interval;
-  PairedComparison image;  // E_img(m) against E_img(none)
-  int rank = 0;            // 1-based; tied methods share the rank of the first
+  // E_view(m) - E_view(none), fraction of albedo*E/pi: positive, the
+  // method adds error at grazing views; with the mean signed error there
+  // (negative: darker than the ground truth) over variants.
+  PairedComparison view;
+  double view_bias = 0.0;
+  Interval view_bias_interval;
+  // Variants where the method is darker than the truth at grazing views
+  // (bias < 0), and its mean signed error over those.
+  std::size_t view_darker = 0;
+  double view_darker_mean = 0.0;
+  int rank = 0;  // 1-based; tied methods share the rank of the first
 };
 
 // Two methods, paired on C over the variants.

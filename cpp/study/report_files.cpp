@@ -69,6 +69,22 @@ const std::vector<Column>& bump_columns() {
        [](auto& r) { return number(r.intervals.rmse_terminator.high); }},
       {"image_rmse_ci_low", [](auto& r) { return number(r.intervals.image_rmse.low); }},
       {"image_rmse_ci_high", [](auto& r) { return number(r.intervals.image_rmse.high); }},
+      {"profile_max_error_terminator_ci_low",
+       [](auto& r) { return number(r.intervals.max_error.low); }},
+      {"profile_max_error_terminator_ci_high",
+       [](auto& r) { return number(r.intervals.max_error.high); }},
+      {"position_error_deg_ci_low", [](auto& r) { return number(r.intervals.position_error.low); }},
+      {"position_error_deg_ci_high",
+       [](auto& r) { return number(r.intervals.position_error.high); }},
+      {"lit_bias_ci_low", [](auto& r) { return number(r.intervals.lit_bias.low); }},
+      {"lit_bias_ci_high", [](auto& r) { return number(r.intervals.lit_bias.high); }},
+      {"view_rmse_grazing", [](auto& r) { return number(r.view.rmse_grazing); }},
+      {"view_rmse_grazing_ci_low",
+       [](auto& r) { return number(r.intervals.view_rmse_grazing.low); }},
+      {"view_rmse_grazing_ci_high",
+       [](auto& r) { return number(r.intervals.view_rmse_grazing.high); }},
+      {"view_bias_grazing", [](auto& r) { return number(r.view.bias_grazing); }},
+      {"view_pixels", [](auto& r) { return count(r.view.pixels); }},
   };
   return columns;
 }
@@ -186,10 +202,15 @@ json comparisons_json(const ReportInputs& in, SectionKind kind) {
               {kind == SectionKind::kBump ? "method" : "offset", row.method},
               {"reference", row.reference},
               {"profile", profile_metrics_json(row.profile)},
-              {"image", image_metrics_json(row.image)}};
+              {"image", image_metrics_json(row.image)},
+              {"view", view_metrics_json(row.view)}};
     if (row.shadow) c["shadow"] = shadow_metrics_json(*row.shadow);
     c["profile"]["rmse_terminator_ci"] = interval_json(row.intervals.rmse_terminator);
+    c["profile"]["max_error_terminator_ci"] = interval_json(row.intervals.max_error);
+    c["profile"]["position_error_deg_ci"] = interval_json(row.intervals.position_error);
+    c["profile"]["lit_bias_ci"] = interval_json(row.intervals.lit_bias);
     c["image"]["rmse_ci"] = interval_json(row.intervals.image_rmse);
+    c["view"]["rmse_grazing_ci"] = interval_json(row.intervals.view_rmse_grazing);
     out.push_back(std::move(c));
   }
   return out;
@@ -315,6 +336,8 @@ json units_json() {
                        kIntervalBands, kIntervalResamples)},
           {"angles", "degrees"},
           {"image", "W m^-2 sr^-1"},
+          {"view", "fraction of albedo*E/pi: lit pixels (theta < 60 deg) binned by the view angle"},
+          {"grazing_region_deg", {kGrazingBegin, kGrazingEnd}},
           {"theta", "angle between wi and the base (undisplaced) surface normal"},
           {"terminator_region_deg", {kTerminatorBegin, kTerminatorEnd}},
           {"lit_region_deg", {0.0, kLitEnd}},
@@ -341,9 +364,11 @@ json method_statistics_json(const MethodStatistics& m) {
           {"terminator_improvement", value(m.terminator_improvement)},
           {"terminator_improvement_ci", interval_json(m.terminator_interval)},
           {"terminator_vs_none", paired_json(m.terminator)},
-          {"image_improvement", value(m.image_improvement)},
-          {"image_improvement_ci", interval_json(m.image_interval)},
-          {"image_vs_none", paired_json(m.image)}};
+          {"view_vs_none", paired_json(m.view)},
+          {"view_bias", value(m.view_bias)},
+          {"view_bias_ci", interval_json(m.view_bias_interval)},
+          {"view_darker_variants", m.view_darker},
+          {"view_darker_mean", value(m.view_darker_mean)}};
 }
 
 json ranking_statistics_json(const RankingStatistics& s) {
@@ -399,11 +424,12 @@ json statistics_json(const ReportInputs& in) {
         ranking_statistics_json(ranking_statistics(in.plan, in.comparisons.rows, s)));
   return {
       {"definition",
-       "per variant v and method m: E_term = terminator-region profile RMSE, E_img = image RMSE "
-       "over every pixel covered in both (silhouettes included), both as fractions of "
-       "albedo*E/pi, evaluator against its displacement ground truth; combined relative error "
-       "C = (E_term/E_term(none) + E_img/E_img(none))/2, 1 for raw bump, lower is better; "
-       "improvement = 1 - mean(E/E(none))"},
+       "per variant v and method m, evaluator against its displacement ground truth, both as "
+       "fractions of albedo*E/pi: E_term = terminator-region profile RMSE (binned by the light "
+       "angle, [60, 100) deg); E_view = grazing-view RMSE (lit pixels, theta < 60 deg, binned "
+       "by the view angle, [60, 75) deg); combined relative error C = (E_term + E_view) / "
+       "(E_term(none) + E_view(none)), 1 for raw bump, lower is better; terminator improvement "
+       "= 1 - mean(E_term/E_term(none)); view_vs_none: paired E_view - E_view(none)"},
       {"confidence", kRankingConfidence},
       {"interval", "percentile bootstrap over variants, 10000 resamples, seed 1"},
       {"test",
@@ -425,6 +451,61 @@ json bump_ranking_json(const ReportInputs& in) {
           {"renderer", "evaluator"},
           {"per_scene", per_scene},
           {"overall", bump_rank_json(rank_bump(in.plan, in.comparisons.rows, ""))}};
+}
+
+// The convergence of each variant's evaluator truth (study/convergence.h).
+json ground_truth_json(const ReportInputs& in) {
+  json variants = json::array();
+  std::size_t converged = 0;
+  double worst = 0.0;
+  std::map<std::string, double> floor;  // per scene: the largest change reached
+  for (const VariantConvergence& c : in.convergence) {
+    double& f = floor[in.plan.variants[c.variant].scene];
+    f = std::isfinite(c.reached) ? std::max(f, c.reached) : f;
+    json steps = json::array();
+    for (const ConvergenceStep& s : c.steps)
+      steps.push_back({{"edge_length", s.edge_length},
+                       {"spp", s.spp},
+                       {"edge_change", value(s.edge_change)},
+                       {"spp_change", value(s.spp_change)}});
+    variants.push_back({{"variant", in.plan.variants[c.variant].id},
+                        {"label", in.plan.variants[c.variant].label},
+                        {"edge_length", c.edge_length},
+                        {"spp", c.spp},
+                        {"reached", value(c.reached)},
+                        {"converged", c.converged},
+                        {"why", c.converged ? json() : json(c.why)},
+                        {"steps", steps}});
+    converged += c.converged;
+    worst = std::isfinite(c.reached) ? std::max(worst, c.reached) : worst;
+  }
+  const GroundTruthSettings& g = in.study.ground_truth;
+  std::string headline =
+      in.convergence.empty()
+          ? std::string("no evaluator ground truth to check")
+          : fmt::format(
+                "{} of {} ground truths converged to a change below {:g} of albedo*E/pi "
+                "(largest change reached {:.2g}){}.",
+                converged, in.convergence.size(), g.tolerance, worst,
+                converged == in.convergence.size()
+                    ? ""
+                    : "; the others are flagged below and their numbers are provisional");
+  return {{"definition",
+           "each variant's evaluator truth against itself with the edge length halved and with "
+           "4x the samples per pixel; change = max(terminator-region profile RMSE, grazing-view "
+           "RMSE) between the two, fraction of albedo*E/pi; refined until both changes are "
+           "below the tolerance or the budget ends; the variant's evaluator renders use the "
+           "settings reached"},
+          {"tolerance", g.tolerance},
+          {"max_edge_refinements", g.max_edge_refinements},
+          {"max_spp_refinements", g.max_spp_refinements},
+          {"converged", converged},
+          {"floor_per_scene", floor},
+          {"floor",
+           "per scene, the largest change reached: how far any metric of that scene can move "
+           "with a finer truth; differences below it are not resolved"},
+          {"headline", headline},
+          {"variants", variants}};
 }
 
 json report_json(const ReportInputs& in) {
@@ -449,6 +530,7 @@ json report_json(const ReportInputs& in) {
           {"ranking", bump_ranking_json(in)},
           {"statistics", statistics_json(in)},
           {"agreement", agreement_json(in)},
+          {"ground_truth", ground_truth_json(in)},
           {"missing", offered.missing},
           {"failures", failures},
           {"nonfinite_pixels", in.comparisons.nonfinite},

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "study/compare.h"
+#include "study/convergence.h"
 #include "study/plan.h"
 #include "study/study_file.h"
 
@@ -24,6 +25,7 @@ struct ReportInputs {
   const std::map<RendererKind, std::string>& versions;  // probed renderers only
   const std::vector<std::string>& errors;               // per job; "" when done
   const std::vector<char>& done;                        // per job
+  const std::vector<VariantConvergence>& convergence;   // bump variants with an evaluator truth
 };
 
 // Writes report.json, metrics.csv and (with a low-poly section) lowpoly.csv

@@ -10,6 +10,7 @@
 #include "scene/scene_json.h"
 #include "study/cache.h"
 #include "study/compare.h"
+#include "study/convergence.h"
 #include "study/execute.h"
 #include "study/figures.h"
 #include "study/plan.h"
@@ -132,21 +133,23 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
                     const RenderCache& cache, const StudyOptions& options,
                     const Renderers& renderers, StudyRunStats& stats) {
   Renders r(jobs.size());
+  const std::size_t cached_before = stats.cached;
   const std::vector<std::size_t> todo = use_cache(jobs, cache, options, r, stats);
+  const std::size_t cached = stats.cached - cached_before;
   // The cache must hold what is to be rendered (uncompressed EXR sizes).
   ResourceEstimate needed;
   for (std::size_t i : todo) needed.output_bytes += jobs[i].resources.output_bytes;
   check_resources(needed, std::numeric_limits<double>::infinity(), study_file, cache.folder());
   if (options.log)
-    options.log(fmt::format("{} renders: {} cached, {} to do, {} in parallel", jobs.size(),
-                            stats.cached, todo.size(), options.jobs));
+    options.log(fmt::format("{} renders: {} cached, {} to do, {} in parallel", jobs.size(), cached,
+                            todo.size(), options.jobs));
   ExecuteOptions eo;
   eo.jobs = options.jobs;
   eo.max_started = options.max_new_renders;
   eo.interrupted = options.interrupted;
   eo.log = options.log;
   eo.progress = options.progress;
-  eo.already_done = stats.cached;
+  eo.already_done = cached;
   eo.total = jobs.size();
   const ExecuteResult result = execute_tasks(
       todo.size(), eo,
@@ -197,6 +200,29 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// The convergence phase: check renders go through the cache like any other.
+std::vector<VariantConvergence> converge(const Study& study, Plan& plan, const RenderCache& cache,
+                                         const StudyOptions& options, const Renderers& renderers,
+                                         StudyRunStats& stats) {
+  const RenderBatch batch = [&](const std::vector<Job>& jobs, std::vector<std::string>* errors) {
+    std::vector<Job> keyed = jobs;
+    assign_keys(keyed, renderers.identities);
+    if (options.log)
+      options.log(fmt::format("ground truth: checking convergence ({} renders)", keyed.size()));
+    const Renders r = render_jobs(study.file, keyed, cache, options, renderers, stats);
+    stats.renders += keyed.size();
+    std::vector<std::optional<Image>> images(keyed.size());
+    for (std::size_t i = 0; i < keyed.size(); ++i)
+      if (r.images.done[i]) images[i] = r.images.images[i];
+    *errors = r.errors;
+    return images;
+  };
+  std::vector<VariantConvergence> out =
+      converge_truths(plan, study.ground_truth, options.max_memory_bytes, batch, options.log);
+  assign_keys(plan, renderers.identities);
+  return out;
+}
+
 }  // namespace
 
 StudyRunStats run_study(const Study& study, const StudyOptions& options) {
@@ -217,13 +243,17 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     return stats;
   }
   prepare_folders(out, options, stats);
+  const std::vector<VariantConvergence> convergence =
+      converge(study, plan, cache, options, renderers, stats);
+  if (stats.not_started > 0) return stats;  // interrupted while checking the truths
   const Renders r = render_jobs(study.file, plan.jobs, cache, options, renderers, stats);
   stats.seconds = seconds_since(start);
   if (stats.not_started > 0) return stats;  // interrupted: no report from a partial study
 
   const Comparisons comparisons = compare_study(plan, r.images, out.string());
-  write_report_files({study, plan, comparisons, renderers.versions, r.errors, r.images.done},
-                     out.string());
+  write_report_files(
+      {study, plan, comparisons, renderers.versions, r.errors, r.images.done, convergence},
+      out.string());
   if (options.figures) {
     if (options.log)
       options.log(

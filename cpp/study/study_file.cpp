@@ -279,6 +279,31 @@ std::vector<StudyPlot> read_plots(const json& plots, const std::string& f,
   return out;
 }
 
+GroundTruthSettings read_ground_truth(const json& g, const std::string& f) {
+  if (!g.is_object()) throw InputError(f, "/ground_truth", "expected an object");
+  reject_unknown(g, {"tolerance", "max_edge_refinements", "max_spp_refinements"}, f,
+                 "/ground_truth");
+  GroundTruthSettings out;
+  if (g.contains("tolerance")) {
+    const json& t = g["tolerance"];
+    if (!t.is_number() || !(t.get<double>() > 0.0 && t.get<double>() <= 1.0))
+      throw InputError(
+          f, "/ground_truth/tolerance",
+          "expected a number in (0, 1] (fraction of albedo*E/pi), got " + describe_json(t));
+    out.tolerance = t.get<double>();
+  }
+  for (auto [key, target] : {std::pair{"max_edge_refinements", &out.max_edge_refinements},
+                             std::pair{"max_spp_refinements", &out.max_spp_refinements}}) {
+    if (!g.contains(key)) continue;
+    const long long n = strict_integer(g[key], 0, 5);
+    if (n < 0)
+      throw InputError(f, std::string("/ground_truth/") + key,
+                       "expected an integer in [0, 5], got " + describe_json(g[key]));
+    *target = static_cast<int>(n);
+  }
+  return out;
+}
+
 }  // namespace
 
 Study load_study(const std::string& path) {
@@ -287,7 +312,7 @@ Study load_study(const std::string& path) {
   if (!doc.is_object()) throw InputError(f, "", "expected a JSON object");
   reject_unknown(doc,
                  {"version", "name", "scenes", "set", "axes", "methods", "renderers", "blender_spp",
-                  "plots", "lowpoly"},
+                  "ground_truth", "plots", "lowpoly"},
                  f, "");
   const json& version = require(doc, "version", f, "");
   if (strict_integer(version, 1, 1000) != kStudyFormatVersion)
@@ -325,6 +350,7 @@ Study load_study(const std::string& path) {
           "expected an integer in [1, 65536], got " + describe_json(doc["blender_spp"]));
     s.blender_spp = static_cast<int>(spp);
   }
+  if (doc.contains("ground_truth")) s.ground_truth = read_ground_truth(doc["ground_truth"], f);
   if (doc.contains("plots")) s.plots = read_plots(doc["plots"], f, s.bump.axes);
   return s;
 }

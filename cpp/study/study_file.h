@@ -56,12 +56,27 @@ struct Section {
   int convergence_axis = -1;  // low-poly: index into axes of the tessellation level
 };
 
+// How far the evaluator's ground truth of each bump variant is refined
+// (study/convergence.h). JSON: "ground_truth": {"tolerance": 0.001,
+// "max_edge_refinements": 2, "max_spp_refinements": 3}.
+struct GroundTruthSettings {
+  // Largest accepted change, fraction of albedo*E/pi; (0, 1].
+  double tolerance = 0.001;
+  // Check renders go down to edge_length / 2^n and up to spp * 4^m; each in
+  // [0, 5]. Edge checks cost 4x the memory per step (a 0.0015 sphere mesh
+  // needs 2.6 GB), samples only time. 0 checks nothing along that setting,
+  // and every truth is reported unconverged.
+  int max_edge_refinements = 2;
+  int max_spp_refinements = 3;
+};
+
 struct Study {
   std::string name;
   std::string file;
   Section bump;  // no scenes: a low-poly-only study
   std::optional<Section> lowpoly;
   int blender_spp = 32;
+  GroundTruthSettings ground_truth;
   std::vector<StudyPlot> plots;
 };
 

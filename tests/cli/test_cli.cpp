@@ -65,7 +65,8 @@ TEST_F(Cli, RenderWritesExrWithAnalysisChannelsAndPreview) {
   const Image image = read_image(path("out.exr"));
   EXPECT_EQ(image.width, 40);
   EXPECT_EQ(image.height, 30);
-  for (const char* c : {"R", "G", "B", "A", "analysis.theta", "analysis.deviation", "analysis.G"})
+  for (const char* c :
+       {"R", "G", "B", "A", "analysis.theta", "analysis.deviation", "analysis.G", "analysis.view"})
     EXPECT_GE(image.channel_index(c), 0) << c;
   EXPECT_TRUE(fs::exists(path("out.png")));
   // The preview is over black, as documented: no alpha channel.
@@ -117,13 +118,20 @@ TEST_F(Cli, ExportTakesTheRenderShortcuts) {
 }
 
 TEST_F(Cli, CompareTextShowsSsimLikeTheJson) {
-  ASSERT_EQ(run({"render", kScenes + "/sphere-grating.json", "-o", path("a.exr"), "--width", "16",
-                 "--height", "16"})
+  // 48 px: enough fully covered pixels at grazing views for the viewer metric.
+  ASSERT_EQ(run({"render", kScenes + "/sphere-grating.json", "-o", path("a.exr"), "--width", "48",
+                 "--height", "48", "--spp", "1"})
                 .code,
             kExitOk);
   const Result text = run({"compare", path("a.exr"), path("a.exr")});
   EXPECT_EQ(text.code, kExitOk) << text.err;
   EXPECT_NE(text.out.find("SSIM"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("RMSE grazing views"), std::string::npos) << text.out;
+  const Result j = run({"compare", path("a.exr"), path("a.exr"), "--json"});
+  ASSERT_EQ(j.code, kExitOk) << j.err;
+  const nlohmann::json doc = nlohmann::json::parse(j.out);
+  EXPECT_EQ(doc["view"]["rmse_grazing"], 0.0);
+  EXPECT_EQ(doc["view"]["rmse_grazing_ci"], nlohmann::json({0.0, 0.0}));
 }
 
 TEST_F(Cli, CompareWritesTheDifferenceAndWarnsAboutDifferentScenes) {

@@ -119,7 +119,9 @@ class Faults : public TempDirTest {
                         {"/camera/spp", 2},
                         {"/displacement/edge_length", 0.05}}},
                       {"methods", {"none"}},
-                      {"renderers", {"evaluator", "blender"}}};
+                      {"renderers", {"evaluator", "blender"}},
+                      // No convergence check renders: these tests count renders.
+                      {"ground_truth", {{"max_edge_refinements", 0}}}};
     std::ofstream(path("study.json")) << doc.dump(2);
     return load_study(path("study.json"));
   }

@@ -126,7 +126,9 @@ class CacheInvalidation : public TempDirTest {
                         {"/camera/spp", 2},
                         {"/displacement/edge_length", 0.05}}},
                       {"methods", {"none", "chiang2019"}},
-                      {"renderers", {"evaluator", "blender"}}};
+                      {"renderers", {"evaluator", "blender"}},
+                      // No convergence check renders: the test counts renders.
+                      {"ground_truth", {{"max_edge_refinements", 0}}}};
     std::ofstream(path("study.json")) << doc.dump(2);
   }
   void TearDown() override {

@@ -14,9 +14,9 @@ namespace {
 struct Synthetic {
   Plan plan;
   std::vector<ComparisonRow> rows;
-  // One evaluator row per (variant, method): terminator and image errors
-  // (image as a fraction of albedo*E/pi; the default scene's scale is 0.8).
-  void add(std::size_t v, const std::string& method, double term, double img) {
+  // One evaluator row per (variant, method): terminator and grazing-view
+  // errors and the signed grazing-view error, fractions of albedo*E/pi.
+  void add(std::size_t v, const std::string& method, double term, double view, double bias) {
     while (plan.variants.size() <= v) {
       Variant var;
       var.id = "v" + std::to_string(plan.variants.size());
@@ -28,7 +28,8 @@ struct Synthetic {
     row.job = plan.jobs.size();
     row.method = method;
     row.profile.rmse_terminator = term;
-    row.image.rmse = img * 0.8;
+    row.view.rmse_grazing = view;
+    row.view.bias_grazing = bias;
     plan.jobs.push_back(Job{});
     rows.push_back(row);
   }
@@ -44,10 +45,11 @@ Synthetic table() {
   Synthetic t;
   for (std::size_t v = 0; v < 12; ++v) {
     const double hard = 1.0 + 0.5 * double(v);  // errors differ tenfold across variants
-    t.add(v, "none", 0.10 * hard, 0.02 * hard);
-    t.add(v, "good", 0.05 * hard, 0.02 * hard);  // halves the terminator error everywhere
-    t.add(v, "twin", 0.05 * hard, 0.02 * hard);  // exactly as good
-    t.add(v, "dark", 0.05 * hard, 0.04 * hard);  // same terminator, darkened silhouettes
+    t.add(v, "none", 0.10 * hard, 0.02 * hard, 0.02 * hard);
+    t.add(v, "good", 0.05 * hard, 0.02 * hard, 0.02 * hard);  // halves the terminator error
+    t.add(v, "twin", 0.05 * hard, 0.02 * hard, 0.02 * hard);  // exactly as good
+    // The same terminator gain, but grazing views darkened well below the truth.
+    t.add(v, "dark", 0.05 * hard, 0.10 * hard, -0.10 * hard);
   }
   return t;
 }
@@ -63,18 +65,23 @@ TEST(Ranking, ClearWinnerExactTieAndAViewerPenalty) {
   EXPECT_NEAR(good.terminator_interval.low, 0.5, 1e-12);
   EXPECT_EQ(good.terminator.a_better, 12u);
   EXPECT_DOUBLE_EQ(good.terminator.p, 2.0 / 4096.0);
-  EXPECT_NEAR(good.combined, 0.75, 1e-12);  // (0.5 + 1) / 2
+  EXPECT_NEAR(good.combined, 0.07 / 0.12, 1e-12);  // (0.05 + 0.02) / (0.10 + 0.02)
   // good and twin: an exact tie, one rank, first.
   EXPECT_EQ(good.rank, 1);
   EXPECT_EQ(find(s, "twin").rank, 1);
-  // dark: the same terminator gain, but its image error doubles: C = 1.25,
-  // ranked below raw bump, and the headline says why.
+  // dark: the same terminator gain, but its grazing-view error is 5x raw
+  // bump's: C = 0.15 / 0.12 = 1.25, ranked below raw bump, and the headline
+  // says why and that it is darker than the truth.
   EXPECT_NEAR(find(s, "dark").combined, 1.25, 1e-12);
+  EXPECT_NEAR(find(s, "dark").view.mean_difference, 0.08 * 3.75, 1e-12);  // mean of 0.08 h
+  EXPECT_LT(find(s, "dark").view_bias, 0.0);
   EXPECT_GT(find(s, "dark").rank, find(s, "none").rank);
   bool tie_sentence = false, darkens = false;
   for (const std::string& line : s.headline) {
     tie_sentence |= line.find("good and twin are tied") != std::string::npos;
-    darkens |= line.find("dark darkens what a viewer sees") != std::string::npos;
+    darkens |= line.find("dark adds error where the viewer looks at grazing angles") !=
+                   std::string::npos &&
+               line.find("darker than the ground truth") != std::string::npos;
   }
   EXPECT_TRUE(tie_sentence) << s.headline.front();
   EXPECT_TRUE(darkens);
@@ -87,7 +94,7 @@ TEST(Ranking, PerSceneSelectsItsVariantsAndNoBaselineGivesNoRanking) {
   const Synthetic t = table();
   EXPECT_EQ(ranking_statistics(t.plan, t.rows, "odd").variants, 6u);
   Synthetic without;
-  without.add(0, "good", 0.1, 0.1);
+  without.add(0, "good", 0.1, 0.1, 0.0);
   EXPECT_TRUE(ranking_statistics(without.plan, without.rows, "").methods.empty());
 }
 

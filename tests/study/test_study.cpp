@@ -37,7 +37,9 @@ class Study : public TempDirTest {
     std::ofstream(path(name)) << j.dump(2);
     return path(name);
   }
-  // A small study: 2 variants x (evaluator 1 + 3 methods, POV-Ray 2) renders.
+  // A small study: 2 variants x (evaluator 1 + 3 methods, POV-Ray 2) renders,
+  // and one convergence check of each evaluator truth (3 renders, one of
+  // them the truth itself).
   json tiny() const {
     return {{"version", 1},
             {"name", "tiny"},
@@ -49,7 +51,8 @@ class Study : public TempDirTest {
               {"/displacement/edge_length", 0.02}}},
             {"axes", {{{"pointer", "/height/amplitude"}, {"values", {0.01, 0.02}}}}},
             {"methods", {"none", "chiang2019", "estevez2019"}},
-            {"renderers", {"evaluator", "povray"}}};
+            {"renderers", {"evaluator", "povray"}},
+            {"ground_truth", {{"max_edge_refinements", 1}, {"max_spp_refinements", 1}}}};
   }
 };
 
@@ -68,21 +71,23 @@ TEST_F(Study, InterruptedAndResumedEqualsCleanWithNoRenderDoneTwice) {
   clean.figures = false;
   const StudyRunStats a = run_study(study, clean);
   ASSERT_TRUE(a.complete());
-  EXPECT_EQ(a.renders, 2u * (4 + 2));
-  EXPECT_EQ(a.rendered, a.renders);
+  // The plan, plus 3 check renders per variant; the truth is one of them.
+  EXPECT_EQ(a.renders, 2u * (4 + 2) + 2u * 3);
+  EXPECT_EQ(a.rendered, a.renders - 2);
+  EXPECT_EQ(a.cached, 2u);
 
   StudyOptions first = clean;
   first.output_dir = path("resumed");
   first.max_new_renders = 5;  // the "interrupt"
   const StudyRunStats b1 = run_study(study, first);
   EXPECT_EQ(b1.rendered, 5u);
-  EXPECT_EQ(b1.not_started, a.renders - 5);
+  EXPECT_EQ(b1.not_started, 2u * 3 - 5);                  // stopped inside the convergence checks
   EXPECT_FALSE(fs::exists(path("resumed/report.json")));  // no report from a partial study
   StudyOptions second = first;
   second.max_new_renders = -1;
   const StudyRunStats b2 = run_study(study, second);
-  EXPECT_EQ(b2.cached, 5u);
-  EXPECT_EQ(b2.rendered, a.renders - 5);  // each render exactly once over both runs
+  EXPECT_EQ(b2.cached, 5u + 2u);
+  EXPECT_EQ(b2.rendered, a.rendered - 5);  // each render exactly once over both runs
   ASSERT_TRUE(b2.complete());
   EXPECT_EQ(read_text(path("clean/report.json")), read_text(path("resumed/report.json")));
   EXPECT_EQ(read_text(path("clean/metrics.csv")), read_text(path("resumed/metrics.csv")));
@@ -90,6 +95,12 @@ TEST_F(Study, InterruptedAndResumedEqualsCleanWithNoRenderDoneTwice) {
   const StudyRunStats b3 = run_study(study, second);
   EXPECT_EQ(b3.rendered, 0u);
   EXPECT_EQ(b3.cached, a.renders);
+  // The report says the budget could not converge the truths, and why.
+  const json report = json::parse(read_text(path("clean/report.json")));
+  ASSERT_EQ(report["ground_truth"]["variants"].size(), 2u);
+  EXPECT_FALSE(report["ground_truth"]["variants"][0]["converged"].get<bool>());
+  EXPECT_NE(report["ground_truth"]["headline"].get<std::string>().find("0 of 2"),
+            std::string::npos);
 }
 
 TEST_F(Study, ReportIsWrittenAsDumpedAndCsvHasOneRowPerComparison) {

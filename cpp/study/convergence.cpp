@@ -1,0 +1,215 @@
+#include "study/convergence.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "analysis/metrics.h"
+#include "scene/scene_json.h"
+
+namespace penumbra {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// One variant's state between rounds.
+struct Track {
+  std::size_t variant = 0;
+  long truth_job = -1;  // the plan's evaluator truth
+  double edge_length0 = 0.0;
+  int spp0 = 0;
+  int edge_steps = 0, spp_steps = 0;
+  bool done = false;
+  VariantConvergence result;
+  double edge_length() const { return edge_length0 / double(1 << edge_steps); }
+  int spp() const { return spp0 << (2 * spp_steps); }
+};
+
+// The plan's truth job with other settings; nullopt (and why) when the scene
+// would need more memory than allowed.
+std::optional<Job> truth_at(const Job& truth, double edge_length, int spp, double max_memory_bytes,
+                            std::string* why) {
+  Job job = truth;
+  job.scene_json["displacement"]["edge_length"] = edge_length;
+  job.scene_json["camera"]["spp"] = spp;
+  job.scene = scene_from_json(job.scene_json, job.origin);
+  job.resources = estimate_resources(job.renderer, job.scene);
+  job.label = fmt::format("{}-e{:g}-s{}", truth.label, edge_length, spp);
+  if (job.resources.memory_bytes > max_memory_bytes) {
+    *why = fmt::format("a check at edge length {:g} needs {:.1f} GiB, above the limit of {:.1f}",
+                       edge_length, job.resources.memory_bytes / kGiB, max_memory_bytes / kGiB);
+    return std::nullopt;
+  }
+  return job;
+}
+
+std::vector<Track> tracks_of(const Plan& plan) {
+  std::vector<Track> tracks;
+  for (std::size_t v = 0; v < plan.variants.size(); ++v) {
+    if (plan.variants[v].section != SectionKind::kBump) continue;
+    const long t = plan.truth(v, RendererKind::kEvaluator);
+    if (t < 0) continue;
+    const Scene& scene = plan.jobs[t].scene;
+    Track track;
+    track.variant = v, track.truth_job = t;
+    track.edge_length0 = scene.displacement.edge_length;
+    track.spp0 = scene.camera.spp;
+    track.result.variant = v;
+    tracks.push_back(track);
+  }
+  return tracks;
+}
+
+// The three renders one check needs: the truth, edge halved, spp x 4.
+struct CheckJobs {
+  std::optional<Job> current, edge, spp;
+  std::string why;
+};
+
+CheckJobs check_jobs(const Plan& plan, const Track& t, double max_memory_bytes) {
+  const Job& truth = plan.jobs[t.truth_job];
+  CheckJobs c;
+  c.current = truth_at(truth, t.edge_length(), t.spp(), max_memory_bytes, &c.why);
+  c.edge = truth_at(truth, t.edge_length() / 2.0, t.spp(), max_memory_bytes, &c.why);
+  c.spp = truth_at(truth, t.edge_length(), 4 * t.spp(), max_memory_bytes, &c.why);
+  return c;
+}
+
+// Records a check's changes and moves the track on.
+void advance(Track& t, double edge_change, double spp_change, const GroundTruthSettings& s,
+             const std::string& why) {
+  t.result.steps.push_back({t.edge_length(), t.spp(), edge_change, spp_change});
+  const ConvergenceDecision d =
+      decide_refinement(edge_change, spp_change, t.edge_steps, t.spp_steps, s);
+  if (!d.done) {
+    t.edge_steps += d.refine_edge;
+    t.spp_steps += d.refine_spp;
+    return;
+  }
+  t.done = true;
+  t.result.edge_length = t.edge_length(), t.result.spp = t.spp();
+  t.result.reached = std::max(edge_change, spp_change);
+  if (std::isnan(edge_change) || std::isnan(spp_change)) t.result.reached = kNaN;
+  t.result.converged = d.converged;
+  if (!d.converged)
+    t.result.why = !why.empty() ? why
+                                : fmt::format(
+                                      "the budget ({} edge, {} sample refinements) ended "
+                                      "above the tolerance {:g}",
+                                      s.max_edge_refinements, s.max_spp_refinements, s.tolerance);
+}
+
+// One round: every unfinished track's check, rendered as one batch.
+void run_round(const Plan& plan, std::vector<Track>& tracks, const GroundTruthSettings& s,
+               double max_memory_bytes, const RenderBatch& render) {
+  std::vector<Job> batch;
+  std::vector<std::pair<std::size_t, CheckJobs>> checks;
+  for (std::size_t k = 0; k < tracks.size(); ++k) {
+    if (tracks[k].done) continue;
+    CheckJobs c = check_jobs(plan, tracks[k], max_memory_bytes);
+    for (const std::optional<Job>* j : {&c.current, &c.edge, &c.spp})
+      if (*j) batch.push_back(**j);
+    checks.push_back({k, std::move(c)});
+  }
+  std::vector<std::string> errors;
+  const std::vector<std::optional<Image>> images = render(batch, &errors);
+  std::size_t next = 0;
+  for (auto& [k, c] : checks) {
+    Track& t = tracks[k];
+    const std::size_t first = next;
+    const std::optional<Image>* current = c.current ? &images[next++] : nullptr;
+    const std::optional<Image>* edge = c.edge ? &images[next++] : nullptr;
+    const std::optional<Image>* spp = c.spp ? &images[next++] : nullptr;
+    const double scale = radiance_scale(plan.jobs[t.truth_job].scene);
+    auto change = [&](const std::optional<Image>* refined) {
+      return current && *current && refined && *refined ? truth_change(**current, **refined, scale)
+                                                        : kNaN;
+    };
+    std::string why = c.why;
+    for (std::size_t e = first; e < next; ++e)
+      if (!errors[e].empty() && why.empty()) why = "a check render failed: " + errors[e];
+    advance(t, change(edge), change(spp), s, why);
+  }
+}
+
+// The variant's evaluator jobs at the settings reached.
+void apply(Plan& plan, const VariantConvergence& r) {
+  for (std::size_t j : plan.variants[r.variant].jobs) {
+    Job& job = plan.jobs[j];
+    if (job.renderer != RendererKind::kEvaluator) continue;
+    job.scene_json["displacement"]["edge_length"] = r.edge_length;
+    job.scene_json["camera"]["spp"] = r.spp;
+    job.scene = scene_from_json(job.scene_json, job.origin);
+    job.resources = estimate_resources(job.renderer, job.scene);
+  }
+}
+
+std::string log_line(const Plan& plan, const VariantConvergence& r) {
+  const Variant& v = plan.variants[r.variant];
+  return fmt::format("ground truth {} ({}): {} at edge length {:g}, {} spp (change {:.2g}{})", v.id,
+                     v.label, r.converged ? "converged" : "NOT CONVERGED", r.edge_length, r.spp,
+                     r.reached, r.converged ? "" : "; " + r.why);
+}
+
+}  // namespace
+
+ConvergenceDecision decide_refinement(double edge_change, double spp_change, int edge_steps,
+                                      int spp_steps, const GroundTruthSettings& s) {
+  ConvergenceDecision d;
+  const bool edge_ok = edge_change < s.tolerance, spp_ok = spp_change < s.tolerance;
+  if (edge_ok && spp_ok) {
+    d.done = d.converged = true;
+    return d;
+  }
+  if (std::isnan(edge_change) || std::isnan(spp_change)) {
+    d.done = true;  // a check that did not render cannot be trusted either way
+    return d;
+  }
+  // A refinement is affordable when its own check stays within the budget.
+  d.refine_edge = !edge_ok && edge_steps + 1 < s.max_edge_refinements;
+  // The edge change is measured at the current samples and carries their
+  // noise along hard shadow edges: when the mesh cannot be refined further,
+  // more samples tell a geometric error from that noise.
+  const bool spp_left = spp_steps + 1 < s.max_spp_refinements;
+  d.refine_spp = spp_left && (!spp_ok || (!edge_ok && !d.refine_edge));
+  // A setting that cannot be refined any further will never converge.
+  d.done = (!edge_ok && !d.refine_edge && !d.refine_spp) || (!spp_ok && !d.refine_spp);
+  if (d.done) d.refine_edge = d.refine_spp = false;
+  return d;
+}
+
+double truth_change(const Image& truth, const Image& refined, double radiance_scale) {
+  const ProfileOptions o;
+  const double profile = compare_profiles(terminator_profile(refined, radiance_scale, o),
+                                          terminator_profile(truth, radiance_scale, o), o)
+                             .rmse_terminator;
+  const double view = view_metrics(view_error_profile(refined, truth, radiance_scale)).rmse_grazing;
+  // A truth without grazing views (or without a terminator) constrains only
+  // the other; one without either has no profile to converge.
+  if (std::isnan(profile)) return view;
+  return std::isnan(view) ? profile : std::max(profile, view);
+}
+
+std::vector<VariantConvergence> converge_truths(
+    Plan& plan, const GroundTruthSettings& settings, double max_memory_bytes,
+    const RenderBatch& render, const std::function<void(const std::string&)>& log) {
+  std::vector<Track> tracks = tracks_of(plan);
+  if (settings.max_edge_refinements == 0 || settings.max_spp_refinements == 0) {
+    for (Track& t : tracks)
+      advance(t, kNaN, kNaN, settings, "a refinement budget is 0: nothing was checked");
+  }
+  while (std::any_of(tracks.begin(), tracks.end(), [](const Track& t) { return !t.done; }))
+    run_round(plan, tracks, settings, max_memory_bytes, render);
+  std::vector<VariantConvergence> out;
+  for (const Track& t : tracks) {
+    apply(plan, t.result);
+    if (log) log(log_line(plan, t.result));
+    out.push_back(t.result);
+  }
+  return out;
+}
+
+}  // namespace penumbra
