@@ -245,7 +245,9 @@ std::vector<StudyPlot> read_plots(const json& plots, const std::string& f,
                                                "profile.lit_bias",
                                                "image.rmse",
                                                "image.ssim",
-                                               "image.max_error"};
+                                               "image.max_error",
+                                               "view.rmse_grazing",
+                                               "view.bias_grazing"};
     if (!metric.is_string() || !metrics.count(metric.get<std::string>())) {
       std::string names;
       for (const std::string& m : metrics) names += (names.empty() ? "" : ", ") + m;
