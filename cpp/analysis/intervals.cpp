@@ -106,7 +106,8 @@ Interval centred_interval(std::vector<double> v, double estimate, double confide
 // The two metrics over the bands `pick` selects (all bands: the estimate).
 struct Metrics {
   ProfileMetrics profile;
-  double image, view;
+  double image;
+  ViewMetrics view;
 };
 
 template <typename Pick>
@@ -132,7 +133,7 @@ Metrics metrics_of(const std::vector<BandSums>& bands, Pick pick, double scale,
   }
   return {compare_profiles(profile_of(tw, ts, tc, scale, o), profile_of(rw, rs, rc, scale, o), o),
           pixels ? std::sqrt(sq / double(pixels)) : std::numeric_limits<double>::quiet_NaN(),
-          view_metrics(view).rmse_grazing};
+          view_metrics(view)};
 }
 
 }  // namespace
@@ -152,7 +153,7 @@ ComparisonIntervals comparison_intervals(const Image& test, const Image& referen
   std::mt19937_64 rng(seed);
   auto draw = [&](std::size_t) { return uniform_index(rng, bands.size()); };
 
-  std::vector<double> terminator, image, view, max_error, position, lit_bias;
+  std::vector<double> terminator, image, view, view_bias, max_error, position, lit_bias;
   for (int r = 0; r < resamples; ++r) {
     const Metrics m = metrics_of(bands, draw, radiance_scale, options);
     terminator.push_back(m.profile.rmse_terminator);
@@ -160,7 +161,8 @@ ComparisonIntervals comparison_intervals(const Image& test, const Image& referen
     position.push_back(m.profile.position_error);
     lit_bias.push_back(m.profile.lit_bias);
     image.push_back(m.image);
-    view.push_back(m.view);
+    view.push_back(m.view.rmse_grazing);
+    view_bias.push_back(m.view.bias_grazing);
   }
   out.rmse_terminator = centred_interval(terminator, estimate.profile.rmse_terminator, 0.95);
   out.max_error = centred_interval(max_error, estimate.profile.max_error, 0.95);
@@ -172,7 +174,8 @@ ComparisonIntervals comparison_intervals(const Image& test, const Image& referen
     if (std::isfinite(t)) sum += t, ++n;
   out.rmse_terminator_bias = n ? sum / double(n) - estimate.profile.rmse_terminator : 0.0;
   out.image_rmse = centred_interval(image, estimate.image, 0.95);
-  out.view_rmse_grazing = centred_interval(view, estimate.view, 0.95);
+  out.view_rmse_grazing = centred_interval(view, estimate.view.rmse_grazing, 0.95);
+  out.view_bias_grazing = centred_interval(view_bias, estimate.view.bias_grazing, 0.95, false);
   return out;
 }
 

@@ -28,6 +28,7 @@ struct ComparisonIntervals {
   Interval rmse_terminator;    // profile, fraction of albedo*E/pi
   Interval image_rmse;         // W m^-2 sr^-1, like ImageMetrics::rmse
   Interval view_rmse_grazing;  // fraction of albedo*E/pi, like ViewMetrics
+  Interval view_bias_grazing;  // signed, same unit
   // The other profile metrics (ProfileMetrics): fraction of albedo*E/pi,
   // degrees. NaN where the metric is undefined in the estimate.
   Interval max_error, position_error, lit_bias;

@@ -540,8 +540,9 @@ void print_comparison(const CompareArgs& a, double scale, const ProfileMetrics& 
       kLitEnd, vm.pixels, kGrazingBegin, kGrazingEnd);
   out << fmt::format("  RMSE grazing views            {:.6f} [{:.6f}, {:.6f}] (95 % CI)\n",
                      vm.rmse_grazing, ci.view_rmse_grazing.low, ci.view_rmse_grazing.high);
-  out << fmt::format("  bias grazing views            {:+.6f} (negative: test darker)\n",
-                     vm.bias_grazing);
+  out << fmt::format(
+      "  bias grazing views            {:+.6f} [{:+.6f}, {:+.6f}] (negative: test darker)\n",
+      vm.bias_grazing, ci.view_bias_grazing.low, ci.view_bias_grazing.high);
   out << interval_note(ci) << "\n";
   if (over)
     out << fmt::format("FAIL: profile RMSE {:.6f} above --max-profile-rmse {}\n", pm.rmse_overall,
@@ -594,8 +595,9 @@ int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err) 
                 {"radiance_scale_unit", "W m^-2 sr^-1 (albedo * E / pi)"},
                 {"profile", profile_json_with_intervals(pm, ci)},
                 {"image", with_interval(image_metrics_json(im), "rmse_ci", ci.image_rmse)},
-                {"view",
-                 with_interval(view_metrics_json(vm), "rmse_grazing_ci", ci.view_rmse_grazing)},
+                {"view", with_interval(with_interval(view_metrics_json(vm), "rmse_grazing_ci",
+                                                     ci.view_rmse_grazing),
+                                       "bias_grazing_ci", ci.view_bias_grazing)},
                 {"intervals", interval_note(ci)},
                 {"pass", !nonfinite && !over}}
                .dump(2)

@@ -84,6 +84,10 @@ const std::vector<Column>& bump_columns() {
       {"view_rmse_grazing_ci_high",
        [](auto& r) { return number(r.intervals.view_rmse_grazing.high); }},
       {"view_bias_grazing", [](auto& r) { return number(r.view.bias_grazing); }},
+      {"view_bias_grazing_ci_low",
+       [](auto& r) { return number(r.intervals.view_bias_grazing.low); }},
+      {"view_bias_grazing_ci_high",
+       [](auto& r) { return number(r.intervals.view_bias_grazing.high); }},
       {"view_pixels", [](auto& r) { return count(r.view.pixels); }},
   };
   return columns;
@@ -211,6 +215,7 @@ json comparisons_json(const ReportInputs& in, SectionKind kind) {
     c["profile"]["lit_bias_ci"] = interval_json(row.intervals.lit_bias);
     c["image"]["rmse_ci"] = interval_json(row.intervals.image_rmse);
     c["view"]["rmse_grazing_ci"] = interval_json(row.intervals.view_rmse_grazing);
+    c["view"]["bias_grazing_ci"] = interval_json(row.intervals.view_bias_grazing);
     out.push_back(std::move(c));
   }
   return out;

@@ -157,6 +157,18 @@ TEST_F(Study, MalformedStudiesNameFileAndPointer) {
        },
        "/renderers/1", "expected"},
       {[](json& j) { j["renderers"] = {"povray"}; }, "/renderers", "must include"},
+      {[](json& j) {
+         j["ground_truth"] = {{"tolerance", 0}};
+       },
+       "/ground_truth/tolerance", "expected a number in (0, 1]"},
+      {[](json& j) {
+         j["ground_truth"] = {{"max_spp_refinements", 9}};
+       },
+       "/ground_truth/max_spp_refinements", "expected an integer in [0, 5]"},
+      {[](json& j) {
+         j["ground_truth"] = {{"spp", 4}};
+       },
+       "/ground_truth/spp", "unknown key"},
       {[](json& j) { j["axes"][0]["values"] = json::array(); }, "/axes/0/values", "non-empty"},
       {[](json& j) { j["axes"][0]["pointer"] = "height"; }, "/axes/0/pointer", "JSON pointer"},
       {[](json& j) {
