@@ -4,6 +4,17 @@ Usage (Blender 3.4):
 
     blender -b --factory-startup -noaudio --python-exit-code 1 \\
         --python harness/blender_render.py -- JOB.json OUTPUT.exr [--threads N]
+    blender -b --factory-startup -noaudio --python-exit-code 1 \\
+        --python harness/blender_render.py -- --serve
+
+With --serve, one Blender renders job after job, so that its start-up (about
+1 s) is paid once: each line on stdin is a request, a JSON object
+{"job": "/abs/JOB.json", "output": "/abs/OUT.exr", "threads": N}; the
+answer is OUT.exr (renamed into place when done) or OUT.exr.error (one line:
+why), and a log line on stdout.  A bad job does not end the server; end of
+input does.  Every job starts from Blender's factory settings with an empty
+scene, in both modes, so that a job's pixels do not depend on what the same
+process rendered before.
 
 JOB.json ("penumbra-blender-job" version 2, see SCHEMA) gives a camera, a sun,
 a triangle mesh in three raw little-endian files beside it (float32 positions,
@@ -136,6 +147,9 @@ def check(v, spec, path=""):
     elif kind == "unit":
         if abs(math.sqrt(sum(x * x for x in _vec(v, path, 3))) - 1) > 1e-3:
             raise JobError(f"{path}: expected a unit vector")
+    elif kind == "path":
+        if not isinstance(v, str) or not os.path.isabs(v) or "\0" in v:
+            raise JobError(f"{path}: expected an absolute path")
     elif kind == "file":
         if (not isinstance(v, str) or v in ("", ".", "..")
                 or any(c in v for c in "/\\\0")):
@@ -300,7 +314,15 @@ def build_material(job, ob):
     ob.data.materials.append(mat)
 
 
+def reset_blender():
+    """Factory settings and an empty scene: no state from an earlier job."""
+    result = bpy.ops.wm.read_factory_settings(use_empty=True)
+    if "FINISHED" not in result:
+        raise JobError("Blender could not reset to factory settings")
+
+
 def build_scene(job, folder, threads):
+    reset_blender()
     scene = bpy.context.scene
     for o in list(bpy.data.objects):
         bpy.data.objects.remove(o, do_unlink=True)
@@ -406,8 +428,17 @@ def write_exr(scene, raw, tmp):
         raise JobError(f"{tmp}: EXR was not written")
 
 
+USAGE = ("usage: blender -b --factory-startup -noaudio --python-exit-code 1 "
+         "--python blender_render.py -- (JOB.json OUTPUT.exr [--threads N] "
+         "| --serve)")
+REQUEST = {"job": ("path",), "output": ("path",), "threads": ("int", 1, 1024)}
+
+
 def parse_args(argv):
+    """(job, output, threads) for one job; None for --serve."""
     args = argv[argv.index("--") + 1:] if "--" in argv else []
+    if args == ["--serve"]:
+        return None
     threads = 0
     if len(args) == 4 and args[2] == "--threads":
         threads = int(args[3]) if args[3].isdigit() else -1
@@ -416,14 +447,12 @@ def parse_args(argv):
                            f"got {args[3]!r}")
         args = args[:2]
     if len(args) != 2:
-        raise JobError("usage: blender -b --factory-startup -noaudio "
-                       "--python-exit-code 1 --python blender_render.py -- "
-                       "JOB.json OUTPUT.exr [--threads N]")
+        raise JobError(USAGE)
     return args[0], args[1], threads
 
 
-def main():
-    job_path, out_path, threads = parse_args(sys.argv)
+def render_job(job_path, out_path, threads):
+    """Render one job file into out_path (atomically); one log line."""
     try:
         with open(job_path, "rb") as f:
             job = json.loads(f.read().decode("utf-8"))
@@ -462,6 +491,45 @@ def main():
           f"{scene.render.resolution_x}x{scene.render.resolution_y}, "
           f"{scene.render.threads} threads, setup {t1 - t0:.2f} s, "
           f"render {t2 - t1:.2f} s -> {out_path}", flush=True)
+
+
+def answer_error(out_path, message):
+    """OUT.exr.error, renamed into place: the server's answer to a failure."""
+    tmp = f"{out_path}.error.tmp-{os.getpid()}"
+    with open(tmp, "w", encoding="utf-8") as f:
+        f.write(message.replace("\n", " ") + "\n")
+    os.replace(tmp, f"{out_path}.error")
+
+
+def serve_request(line):
+    """One request line; failures of the job become its .error answer."""
+    try:
+        request = json.loads(line)
+        check(request, REQUEST)
+    except (ValueError, JobError) as e:  # no output to answer on: fatal
+        raise JobError(f"bad request on stdin: {e}") from None
+    out_path = request["output"]
+    try:
+        render_job(request["job"], out_path, request["threads"])
+    except (JobError, OSError) as e:
+        message = f"{PROG}: {e}"
+    except Exception as e:  # noqa: BLE001 - answer, then serve on
+        message = f"{PROG}: internal error: {type(e).__name__}: {e}"
+    else:
+        return
+    print(message, file=sys.stderr, flush=True)
+    answer_error(out_path, message)
+
+
+def main():
+    args = parse_args(sys.argv)
+    if args is not None:
+        render_job(*args)
+        return
+    print(f"{PROG}: serving (Blender {bpy.app.version_string})", flush=True)
+    for line in sys.stdin:
+        if line.strip():
+            serve_request(line)
 
 
 if __name__ == "__main__":

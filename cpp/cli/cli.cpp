@@ -183,6 +183,45 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       ->check(CLI::Range(0.001, 1e6))
       ->capture_default_str();
   run_cmd->add_flag("-q,--quiet", run_args.quiet, "no progress");
+  run_cmd
+      ->add_option("--executor", run_args.executor,
+                   "local: render here, --jobs at a time; slurm: submit the missing renders as "
+                   "a Slurm job array and a report job that depends on it, then return")
+      ->check(CLI::IsMember({"local", "slurm"}))
+      ->capture_default_str();
+  run_cmd->add_option("--partition", run_args.slurm.partition,
+                      "slurm: partition of the array and report jobs (default: the cluster's)");
+  run_cmd
+      ->add_option("--array-limit", run_args.slurm.array_limit,
+                   "slurm: array tasks running at once")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  run_cmd
+      ->add_option("--renders-per-task", run_args.slurm.renders_per_task,
+                   "slurm: renders per array task")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  run_cmd->add_option("--sbatch-arg", run_args.slurm.sbatch_args,
+                      "slurm: an argument for every sbatch call, as it is "
+                      "(--sbatch-arg=--time=2:00:00; repeatable)");
+  run_cmd
+      ->add_option("--slurm-chain", run_args.slurm.chain,
+                   "internal: the report job's chain of submissions")
+      ->group("");
+
+  RunBatchArgs batch_args;
+  CLI::App* batch_cmd = app.add_subcommand(
+      "run-batch",
+      "render one array task of a Slurm study's batch file into its cache (run by sbatch)");
+  batch_cmd->add_option("batch", batch_args.batch, "batch file (STUDY_DIR/slurm/batch-*.json)")
+      ->required();
+  batch_cmd->add_option("--task", batch_args.task, "task index (default: SLURM_ARRAY_TASK_ID)")
+      ->check(CLI::NonNegativeNumber);
+
+  std::string status_folder;
+  CLI::App* status_cmd =
+      app.add_subcommand("status", "progress of a study folder's Slurm submissions");
+  status_cmd->add_option("folder", status_folder, "study output folder")->required();
 
   std::string report_folder;
   CLI::App* report_cmd = app.add_subcommand(
@@ -233,6 +272,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     if (*compare_cmd) return command_compare(c, out, err);
     if (*calibrate_cmd) return command_calibrate(cal, cal_quiet, out, err);
     if (*run_cmd) return command_run(run_args, out, err);
+    if (*batch_cmd) return command_run_batch(batch_args, out, err);
+    if (*status_cmd) return command_status(status_folder, out);
     if (*contour_cmd) return command_contour(contour_methods, contour_step, contour_output, out);
     if (*bench) return command_bench(bench_size, bench_spp, out);
   } catch (const InputError& e) {

@@ -33,6 +33,7 @@
 #include "renderers/renderers.h"
 #include "scene/scene_json.h"
 #include "study/calibration.h"
+#include "study/execute.h"
 #include "study/figures.h"
 #include "study/study.h"
 #include "util/data_files.h"
@@ -638,17 +639,106 @@ std::string duration_text(double s) {
 }
 
 int print_dry_run(const Study& study, const StudyRunStats& stats, const std::string& dir,
-                  std::ostream& out) {
+                  double max_memory_gib, std::ostream& out) {
   std::string per;
   for (const auto& [renderer, count] : stats.planned)
     per += fmt::format("{}{} {}", per.empty() ? "" : ", ", count, renderer);
   out << fmt::format(
       "study {}: {} renders ({}); {} found in {}/cache, {} to render; nothing written (dry run)\n",
       study.name, stats.renders, per, stats.cached, dir, stats.renders - stats.cached);
+  out << fmt::format(
+      "cache: the renders to do write at most {:.3f} GiB (uncompressed EXR); the largest needs "
+      "about {:.3f} GiB of memory (--max-memory {:.3g} GiB); ground-truth convergence checks "
+      "come on top (up to 3 renders per variant and round)\n",
+      stats.planned_output_bytes / kGiB, stats.planned_peak_memory_bytes / kGiB, max_memory_gib);
+  return kExitOk;
+}
+
+// The Slurm options of `penumbra run`, with the command its report job runs:
+// this run again, by absolute paths, so that it runs from any folder.
+SlurmOptions slurm_options(const RunArgs& a, const std::string& output_dir) {
+  SlurmOptions s = a.slurm;
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) throw std::runtime_error("cannot find the penumbra executable (/proc/self/exe)");
+  s.continue_argv = {self.string(),
+                     "run",
+                     fs::absolute(a.study).string(),
+                     "-o",
+                     fs::absolute(output_dir).string(),
+                     "--executor",
+                     "slurm",
+                     "--timeout",
+                     fmt::format("{}", a.timeout),
+                     "--max-memory",
+                     fmt::format("{}", a.max_memory_gib),
+                     "--array-limit",
+                     std::to_string(s.array_limit),
+                     "--renders-per-task",
+                     std::to_string(s.renders_per_task)};
+  if (a.no_figures) s.continue_argv.push_back("--no-figures");
+  if (!s.partition.empty())
+    s.continue_argv.insert(s.continue_argv.end(), {"--partition", s.partition});
+  for (const std::string& arg : s.sbatch_args) s.continue_argv.push_back("--sbatch-arg=" + arg);
+  return s;
+}
+
+int print_submission(const SlurmSubmission& sub, const std::string& dir, std::ostream& out) {
+  if (sub.submitted > 0)
+    out << fmt::format(
+        "submitted {} renders to Slurm as array job {} ({} tasks); job {} writes the report when "
+        "they end (or submits what is still missing); `penumbra status {}` shows progress\n",
+        sub.submitted, sub.array_job, sub.tasks, sub.report_job, dir);
+  if (sub.still_queued > 0)
+    out << fmt::format(
+        "{} renders are still queued or running in an earlier submission; nothing submitted "
+        "twice\n",
+        sub.still_queued);
   return kExitOk;
 }
 
 }  // namespace
+
+int command_run_batch(const RunBatchArgs& a, std::ostream& out, std::ostream& err) {
+  int task = a.task;
+  if (task < 0) {
+    const char* env = std::getenv("SLURM_ARRAY_TASK_ID");
+    if (!env) throw UsageError("run-batch: no --task and no SLURM_ARRAY_TASK_ID");
+    task = std::atoi(env);
+  }
+  const char* cpus = std::getenv("SLURM_CPUS_PER_TASK");
+  const int threads = cpus && std::atoi(cpus) > 0 ? std::atoi(cpus) : 1;
+  const StopSignals stop;
+  SlurmTaskResult r;
+  try {
+    r = run_slurm_task(a.batch, task, threads, [&](const std::string& line) {
+      err << "penumbra run-batch: " << line << "\n" << std::flush;
+    });
+  } catch (const TaskCancelled&) {
+    err << "penumbra run-batch: stopped; unfinished renders are submitted again by the report "
+           "job\n";
+    return StopSignals::exit_code();
+  }
+  out << fmt::format(
+      "task {}: {} rendered, {} already cached, {} failed (recorded beside the "
+      "cache entries)\n",
+      task, r.rendered, r.cached, r.failed);
+  return r.failed > 0 ? kExitFailure : kExitOk;
+}
+
+int command_status(const std::string& folder, std::ostream& out) {
+  if (!fs::is_directory(folder)) throw InputError(folder, "", "expected a study output folder");
+  const SlurmStatus status = slurm_status(folder);
+  if (status.batches.empty()) out << fmt::format("{}: no Slurm submissions\n", folder);
+  for (const SlurmStatus::Batch& b : status.batches)
+    out << fmt::format("array job {} (report job {}): {} renders: {} done, {} failed, {} not yet\n",
+                       b.array_job.empty() ? "?" : b.array_job,
+                       b.report_job.empty() ? "?" : b.report_job, b.renders, b.done, b.failed,
+                       b.renders - b.done - b.failed);
+  out << (status.report_written ? fmt::format("report: {}/report.json\n", folder)
+                                : std::string("report: not written yet\n"));
+  return kExitOk;
+}
 
 int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   const Study study = load_study(a.study);
@@ -662,6 +752,7 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   o.interrupted = &g_interrupted;
   o.dry_run = a.dry_run;
   o.max_memory_bytes = a.max_memory_gib * kGiB;
+  if (a.executor == "slurm") o.slurm = slurm_options(a, o.output_dir);
   const bool tty = ::isatty(STDERR_FILENO);
   std::mutex mutex;
   if (!a.quiet && tty) {
@@ -689,7 +780,7 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   }
   const StopSignals stop;
   const StudyRunStats stats = run_study(study, o);
-  if (a.dry_run) return print_dry_run(study, stats, o.output_dir, out);
+  if (a.dry_run) return print_dry_run(study, stats, o.output_dir, a.max_memory_gib, out);
   if (!a.quiet && tty) err << "\n";
   out << fmt::format(
       "study {}: {} renders ({} rendered now, {} from the cache, {} failed, {} not started) in "
@@ -697,6 +788,8 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
       study.name, stats.renders, stats.rendered, stats.cached, stats.failed, stats.not_started,
       stats.seconds);
   for (const std::string& f : stats.failures) out << "  failed: " << f << "\n";
+  if (stats.slurm && stats.not_started > 0)
+    return print_submission(*stats.slurm, o.output_dir, out);
   if (stats.not_started > 0) {
     out << fmt::format(
         "stopped before the end; run the same command again to resume (finished "

@@ -13,6 +13,7 @@
 #include "cli/cli.h"
 #include "renderers/renderers.h"
 #include "study/calibration.h"
+#include "study/slurm.h"
 
 namespace penumbra {
 
@@ -77,6 +78,13 @@ struct RunArgs {
   long max_renders = -1;
   bool no_figures = false, quiet = false, dry_run = false;
   double max_memory_gib = kDefaultMaxMemoryBytes / kGiB;
+  std::string executor = "local";  // local or slurm
+  SlurmOptions slurm;              // --partition, --array-limit, ... (chain: --slurm-chain)
+};
+
+struct RunBatchArgs {
+  std::string batch;
+  int task = -1;  // default: SLURM_ARRAY_TASK_ID
 };
 
 int command_methods(bool as_json, std::ostream& out);
@@ -87,6 +95,10 @@ int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err);
 int command_calibrate(const CalibrationOptions& options, bool quiet, std::ostream& out,
                       std::ostream& err);
 int command_run(const RunArgs& a, std::ostream& out, std::ostream& err);
+// An array task of a Slurm study (study/slurm.h).
+int command_run_batch(const RunBatchArgs& a, std::ostream& out, std::ostream& err);
+// What a study folder's Slurm submissions have done so far.
+int command_status(const std::string& folder, std::ostream& out);
 // Redraws the figures and report.html of a study folder from its report.json.
 int command_report(const std::string& folder, std::ostream& out);
 int command_contour(const std::vector<std::string>& ids, double step, const std::string& output,

@@ -4,12 +4,15 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <thread>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
 
 #include "export/export.h"
 #include "image/image_io.h"
@@ -191,6 +194,170 @@ RendererRun render_povray(const Scene& scene, const RenderSettings& settings) {
   return with_geometry(RendererKind::kPovray, colour, ext.seconds, scene, settings, work);
 }
 
+// Blender processes are ended and replaced after this many jobs, which
+// bounds what Blender may leak across resets.
+constexpr int kMaxJobsPerSession = 64;
+
+std::vector<std::string> blender_argv(const std::string& exe, const std::string& script,
+                                      const std::vector<std::string>& script_args) {
+  std::vector<std::string> argv{
+      exe,    "-b", "--factory-startup", "-noaudio", "--python-exit-code", "1", "--python",
+      script, "--"};
+  argv.insert(argv.end(), script_args.begin(), script_args.end());
+  return argv;
+}
+
+// The bytes appended to `path` since `offset`.
+std::string read_from(const std::string& path, std::uintmax_t offset) {
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(offset));
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+std::uintmax_t file_size_or_zero(const std::string& path) {
+  std::error_code ec;
+  const std::uintmax_t n = fs::file_size(path, ec);
+  return ec ? 0 : n;
+}
+
+}  // namespace
+
+struct BlenderSessions::Session {
+  std::thread::id owner;
+  std::string executable, script, log_path, cwd;
+  std::unique_ptr<Coprocess> process;
+  int served = 0, starts = 0;
+};
+
+BlenderSessions::BlenderSessions(std::string folder) : folder_(std::move(folder)) {}
+
+BlenderSessions::~BlenderSessions() {
+  for (auto& s : idle_)
+    if (s->process) s->process->close(5.0);
+  idle_.clear();
+  std::error_code ec;
+  if (!work_.empty()) fs::remove_all(work_, ec);
+}
+
+std::unique_ptr<BlenderSessions::Session> BlenderSessions::acquire(const std::string& executable,
+                                                                   const std::string& script) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  // A process ends with the thread that started it (Coprocess), so a thread
+  // only ever uses the processes it started itself.
+  const std::thread::id self = std::this_thread::get_id();
+  std::erase_if(
+      idle_, [](const std::unique_ptr<Session>& s) { return !s->process || !s->process->alive(); });
+  for (auto it = idle_.begin(); it != idle_.end(); ++it)
+    if ((*it)->owner == self && (*it)->executable == executable && (*it)->script == script) {
+      std::unique_ptr<Session> s = std::move(*it);
+      idle_.erase(it);
+      return s;
+    }
+  if (work_.empty()) {
+    std::string pattern =
+        (fs::path(folder_) / work_folder_pattern(to_string(RendererKind::kBlender))).string();
+    if (!::mkdtemp(pattern.data()))
+      throw RendererError(fmt::format("cannot create a work folder in {}", folder_));
+    work_ = fs::absolute(pattern).string();
+  }
+  auto s = std::make_unique<Session>();
+  s->owner = self;
+  s->executable = executable, s->script = script, s->cwd = work_;
+  s->log_path = (fs::path(work_) / fmt::format("blender-{}.log", next_id_++)).string();
+  return s;
+}
+
+void BlenderSessions::release(std::unique_ptr<Session> session) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  started_ += std::exchange(session->starts, 0);
+  if (session->process && session->process->alive()) idle_.push_back(std::move(session));
+}
+
+int BlenderSessions::started() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return started_;
+}
+
+namespace {
+
+// The failure of a served job: the process ended (crash, timeout, stopped)
+// or answered with an .error file.
+[[noreturn]] void blender_job_failed(const std::optional<ProcessResult>& ended,
+                                     const std::string& answer, const RenderSettings& settings,
+                                     WorkDir& work, const std::string& rerun) {
+  if (ended && ended->cancelled) {
+    work.keep = false;
+    throw RenderCancelled("blender was stopped (interrupted)");
+  }
+  std::string what = "failed: " + printable(answer, 400);
+  if (ended && ended->timed_out)
+    what = fmt::format("timed out after {:.0f} s (the limit; raise it with --timeout)",
+                       settings.timeout_s);
+  else if (ended && ended->signal != 0)
+    what = fmt::format("was killed by signal {}", ended->signal);
+  else if (ended)
+    what = fmt::format("exited with status {} before the render was done", ended->exit_code);
+  throw RendererError(fmt::format(
+      "blender {}; log {} (work files kept in {}; rerun by hand: {}), "
+      "last lines:\n{}",
+      what, settings.log_path, work.path.string(), rerun, tail_lines(settings.log_path, 12)));
+}
+
+// Renders the job in `work` with a serving Blender process (started if it
+// is not running); its log lines for this job are copied to the job's log.
+// Returns the wall time of the job.
+double serve_blender_job(BlenderSessions::Session& s, WorkDir& work,
+                         const RenderSettings& settings) {
+  if (s.process && (!s.process->alive() || s.served >= kMaxJobsPerSession)) {
+    s.process->close(5.0);
+    s.process.reset();
+  }
+  if (!s.process) {
+    s.process = std::make_unique<Coprocess>(blender_argv(s.executable, s.script, {"--serve"}),
+                                            s.cwd, s.log_path);
+    s.served = 0, ++s.starts;
+  }
+  ++s.served;
+  const fs::path output = work.path / "render.exr";
+  const std::string error_path = output.string() + ".error";
+  const std::uintmax_t log_offset = file_size_or_zero(s.log_path);
+  nlohmann::json request{{"job", (work.path / kBlenderJobFile).string()},
+                         {"output", output.string()},
+                         {"threads", thread_count(settings)}};
+  const auto t0 = std::chrono::steady_clock::now();
+  s.process->send_line(request.dump());  // a process gone shows in the wait
+  const std::optional<ProcessResult> ended = s.process->wait_until(
+      [&] { return fs::exists(output) || fs::exists(error_path); }, settings.timeout_s);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (s.log_path != settings.log_path) {
+    const std::string lines = read_from(s.log_path, log_offset);
+    std::ofstream(settings.log_path, std::ios::binary | std::ios::app) << lines;
+  }
+  if (ended || !fs::exists(output)) {
+    std::ifstream in(error_path);
+    std::string answer;
+    std::getline(in, answer);
+    std::string rerun = fmt::format(
+        "cd {} && {}", work.path.string(),
+        fmt::join(blender_argv(s.executable, s.script, {kBlenderJobFile, "render.exr"}), " "));
+    blender_job_failed(ended, answer, settings, work, rerun);
+  }
+  return seconds;
+}
+
+// Hands the session back to the pool whatever happens.
+struct SessionLease {
+  BlenderSessions* pool;
+  std::unique_ptr<BlenderSessions::Session> session;
+  ~SessionLease() {
+    if (pool)
+      pool->release(std::move(session));
+    else if (session && session->process)
+      session->process->close(5.0);
+  }
+};
+
 RendererRun render_blender(const Scene& scene, const RenderSettings& settings) {
   const BlenderExport job = export_blender(scene);
   const std::string exe = executable_for(RendererKind::kBlender, settings);
@@ -201,21 +368,18 @@ RendererRun render_blender(const Scene& scene, const RenderSettings& settings) {
   write_file(work.path / kBlenderPositionsFile, m.positions.data(), m.positions.size() * 4);
   write_file(work.path / kBlenderNormalsFile, m.normals.data(), m.normals.size() * 4);
   write_file(work.path / kBlenderTrianglesFile, m.triangles.data(), m.triangles.size() * 4);
-  const std::vector<std::string> argv{exe,
-                                      "-b",
-                                      "--factory-startup",
-                                      "-noaudio",
-                                      "--python-exit-code",
-                                      "1",
-                                      "--python",
-                                      script,
-                                      "--",
-                                      kBlenderJobFile,
-                                      "render.exr",
-                                      "--threads",
-                                      std::to_string(thread_count(settings))};
-  const ExternalRun ext = run_external(RendererKind::kBlender, argv, work, "render.exr", settings);
-  return with_geometry(RendererKind::kBlender, ext.image, ext.seconds, scene, settings, work);
+  SessionLease lease{settings.blender_sessions, nullptr};
+  if (lease.pool) {
+    lease.session = lease.pool->acquire(exe, script);
+  } else {  // a process of its own, logging straight into the job's log
+    lease.session = std::make_unique<BlenderSessions::Session>();
+    lease.session->executable = exe, lease.session->script = script;
+    lease.session->cwd = work.path.string(), lease.session->log_path = settings.log_path;
+  }
+  const double seconds = serve_blender_job(*lease.session, work, settings);
+  const Image colour =
+      read_renderer_image(RendererKind::kBlender, (work.path / "render.exr").string());
+  return with_geometry(RendererKind::kBlender, colour, seconds, scene, settings, work);
 }
 
 RendererRun render_dispatch(RendererKind renderer, const Scene& scene,
@@ -321,6 +485,10 @@ std::string pixel_code_digest(RendererKind renderer, const RenderSettings& setti
     }
   }
   throw std::logic_error("unknown renderer");
+}
+
+std::string renderer_executable(RendererKind renderer, const RenderSettings& settings) {
+  return renderer == RendererKind::kEvaluator ? std::string() : executable_for(renderer, settings);
 }
 
 std::string renderer_version(RendererKind renderer, const RenderSettings& settings) {

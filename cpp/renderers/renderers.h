@@ -5,6 +5,8 @@
 // align, so theta and deviation are those of the same base-surface points).
 #pragma once
 
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -29,6 +31,8 @@ class RenderCancelled : public RendererError {
   using RendererError::RendererError;
 };
 
+class BlenderSessions;
+
 struct RenderSettings {
   double timeout_s = 600.0;  // per external render, wall clock
   int threads = 0;           // per render; 0: all cores
@@ -43,6 +47,41 @@ struct RenderSettings {
   // renderers); the work folder is created beside it and removed on success.
   std::string log_path;
   RenderOptions progress;  // evaluator progress
+  // Blender processes that render job after job (a study's); null: each
+  // Blender render starts and ends its own.
+  BlenderSessions* blender_sessions = nullptr;
+};
+
+// Blender processes kept running between renders (harness/blender_render.py
+// --serve), so that Blender's start-up (about 1 s of a 1-4 s render) is paid
+// once per process rather than per render. A render takes an idle process
+// that its own thread started, or starts one: a process ends with the thread
+// that started it (util/process.h), so each worker thread has its own. Each job starts
+// from Blender's factory settings, so its pixels do not depend on what the
+// process rendered before (tested). A process that fails, times out or was
+// stopped is ended; the next render starts a fresh one. Their logs live in a
+// work folder inside `folder`, removed by the destructor, which also ends the
+// processes.
+class BlenderSessions {
+ public:
+  explicit BlenderSessions(std::string folder);
+  ~BlenderSessions();
+  BlenderSessions(const BlenderSessions&) = delete;
+  BlenderSessions& operator=(const BlenderSessions&) = delete;
+
+  struct Session;
+  // An idle process of this executable and script, or a new one (started
+  // lazily by its first render).
+  std::unique_ptr<Session> acquire(const std::string& executable, const std::string& script);
+  void release(std::unique_ptr<Session> session);
+  // Processes started so far (a benchmark and the tests read it).
+  int started() const;
+
+ private:
+  std::string folder_, work_;
+  mutable std::mutex mutex_;
+  std::vector<std::unique_ptr<Session>> idle_;
+  int started_ = 0, next_id_ = 0;
 };
 
 struct RendererRun {
@@ -66,6 +105,11 @@ std::string pixel_code_digest(RendererKind renderer, const RenderSettings& setti
 // the renderer prints for --version; part of cache keys. The probe is killed
 // after min(60 s, settings.timeout_s).
 std::string renderer_version(RendererKind renderer, const RenderSettings& settings);
+
+// The executable `renderer` runs (settings, the PENUMBRA_* variable, then
+// PATH); RendererError naming the Debian package when there is none. Empty
+// for the evaluator.
+std::string renderer_executable(RendererKind renderer, const RenderSettings& settings);
 
 // What a render will need, estimated before it starts (rough upper bounds,
 // within a factor of about 2): peak memory of the images, the ground-truth or

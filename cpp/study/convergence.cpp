@@ -147,14 +147,14 @@ void apply(Plan& plan, const VariantConvergence& r) {
   }
 }
 
-std::string log_line(const Plan& plan, const VariantConvergence& r) {
+}  // namespace
+
+std::string convergence_log_line(const Plan& plan, const VariantConvergence& r) {
   const Variant& v = plan.variants[r.variant];
   return fmt::format("ground truth {} ({}): {} at edge length {:g}, {} spp (change {:.2g}{})", v.id,
                      v.label, r.converged ? "converged" : "NOT CONVERGED", r.edge_length, r.spp,
                      r.reached, r.converged ? "" : "; " + r.why);
 }
-
-}  // namespace
 
 ConvergenceDecision decide_refinement(double edge_change, double spp_change, int edge_steps,
                                       int spp_steps, const GroundTruthSettings& s) {
@@ -193,9 +193,9 @@ double truth_change(const Image& truth, const Image& refined, double radiance_sc
   return std::isnan(view) ? profile : std::max(profile, view);
 }
 
-std::vector<VariantConvergence> converge_truths(
-    Plan& plan, const GroundTruthSettings& settings, double max_memory_bytes,
-    const RenderBatch& render, const std::function<void(const std::string&)>& log) {
+std::vector<VariantConvergence> converge_truths(Plan& plan, const GroundTruthSettings& settings,
+                                                double max_memory_bytes,
+                                                const RenderBatch& render) {
   std::vector<Track> tracks = tracks_of(plan);
   if (settings.max_edge_refinements == 0 || settings.max_spp_refinements == 0) {
     for (Track& t : tracks)
@@ -206,7 +206,6 @@ std::vector<VariantConvergence> converge_truths(
   std::vector<VariantConvergence> out;
   for (const Track& t : tracks) {
     apply(plan, t.result);
-    if (log) log(log_line(plan, t.result));
     out.push_back(t.result);
   }
   return out;

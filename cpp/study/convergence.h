@@ -68,9 +68,11 @@ using RenderBatch = std::function<std::vector<std::optional<Image>>(
 // Runs the checks for every bump variant with an evaluator truth, in rounds
 // (one batch of renders per round, all variants together), then sets the
 // settings reached on the variant's evaluator jobs. Keys must be assigned
-// again afterwards. `log`: one line per variant.
+// again afterwards.
 std::vector<VariantConvergence> converge_truths(Plan& plan, const GroundTruthSettings& settings,
-                                                double max_memory_bytes, const RenderBatch& render,
-                                                const std::function<void(const std::string&)>& log);
+                                                double max_memory_bytes, const RenderBatch& render);
+
+// "ground truth v003 (...): converged at edge length 0.006, 16 spp (change ...)".
+std::string convergence_log_line(const Plan& plan, const VariantConvergence& r);
 
 }  // namespace penumbra

@@ -1,8 +1,10 @@
 #include "study/study.h"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <limits>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -14,6 +16,7 @@
 #include "study/execute.h"
 #include "study/figures.h"
 #include "study/plan.h"
+#include "study/rendering.h"
 #include "study/report_files.h"
 #include "util/files.h"
 
@@ -21,35 +24,6 @@ namespace penumbra {
 namespace fs = std::filesystem;
 
 namespace {
-
-// What the renderers are: versions (a missing renderer fails its renders,
-// not the study) and the digests of the code behind their pixels.
-struct Renderers {
-  std::map<RendererKind, std::string> versions, unavailable;
-  std::vector<std::pair<RendererKind, RendererIdentity>> identities;
-};
-
-Renderers probe_renderers(const Study& study, double timeout_s) {
-  std::vector<RendererKind> kinds = study.bump.renderers;
-  if (study.lowpoly)
-    for (RendererKind r : study.lowpoly->renderers)
-      if (std::find(kinds.begin(), kinds.end(), r) == kinds.end()) kinds.push_back(r);
-  Renderers out;
-  for (RendererKind r : kinds) {
-    RenderSettings probe;
-    probe.timeout_s = timeout_s;
-    RendererIdentity id;
-    try {
-      id.version = out.versions[r] = renderer_version(r, probe);
-      id.code_digest = pixel_code_digest(r, probe);
-    } catch (const std::exception& e) {
-      out.versions.erase(r);
-      out.unavailable[r] = e.what();
-    }
-    out.identities.push_back({r, id});
-  }
-  return out;
-}
 
 void warn(const StudyOptions& options, StudyRunStats& stats, const std::string& text) {
   stats.warnings.push_back(text);
@@ -97,35 +71,49 @@ std::vector<std::size_t> use_cache(const std::vector<Job>& jobs, const RenderCac
   return todo;
 }
 
-// Renders `job` and writes it into the cache; returns the image. Throws
-// RendererError, TaskCancelled when interrupted.
-Image render_into_cache(const Job& job, const RenderCache& cache, const StudyOptions& options,
-                        const Renderers& renderers) {
-  if (const auto missing = renderers.unavailable.find(job.renderer);
-      missing != renderers.unavailable.end())
-    throw RendererError(missing->second);
-  RenderSettings settings;
-  settings.timeout_s = options.timeout_s;
-  settings.threads = threads_per_job(options.jobs);
-  settings.log_path = cache.log_path(job.key);
-  std::error_code ignored;
-  fs::remove(settings.log_path, ignored);
-  RendererRun run;
-  try {
-    run = render_with(job.renderer, job.scene, settings);
-  } catch (const RenderCancelled&) {
-    throw TaskCancelled{};
-  }
-  cache.store(job.key, run.image,
-              {{"penumbra:version", kPenumbraVersion},
-               {"penumbra:renderer", to_string(job.renderer)},
-               {"penumbra:renderer_version", renderers.versions.at(job.renderer)},
-               {"penumbra:scene", job.scene_json.dump()},
-               {"penumbra:method", job.method},
-               {"penumbra:representation", to_string(job.representation)},
-               {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
-  if (job.renderer == RendererKind::kEvaluator) fs::remove(settings.log_path, ignored);
-  return std::move(run.image);
+// Copies each job's result to the later jobs with the same key; counts what
+// never started.
+void settle_duplicates(const std::vector<Job>& jobs, Renders& r, StudyRunStats& stats) {
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (r.same_as[i] >= 0) {
+      const auto j = static_cast<std::size_t>(r.same_as[i]);
+      r.images.done[i] = r.images.done[j], r.attempted[i] = r.attempted[j];
+      r.errors[i] = r.errors[j];
+      r.images.images[i] = r.images.images[j];
+    }
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (!r.images.done[i] && !r.attempted[i]) ++stats.not_started;
+}
+
+// The Slurm executor's render phase: failures its array tasks recorded count
+// as failed renders, the rest is submitted (or still queued) and not started
+// here.
+void slurm_phase(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo,
+                 const RenderCache& cache, const StudyOptions& options, const Renderers& renderers,
+                 Renders& r, StudyRunStats& stats) {
+  // One submission per run, whose report job is the one continuation: later
+  // rounds of this run wait for it.
+  if (todo.empty() || (stats.slurm && stats.slurm->submitted > 0))
+    return settle_duplicates(jobs, r, stats);
+  const SlurmSubmission sub =
+      submit_renders(jobs, todo, options.output_dir, cache, renderers.identities, options.timeout_s,
+                     *options.slurm, r.errors);
+  for (std::size_t i : todo)
+    if (!r.errors[i].empty()) {
+      r.attempted[i] = 1;
+      ++stats.failed;
+      stats.failures.push_back(jobs[i].label + ": " +
+                               r.errors[i].substr(0, r.errors[i].find('\n')));
+    }
+  if (options.log && sub.submitted > 0)
+    options.log(
+        fmt::format("slurm: submitted {} renders as array job {} ({} tasks); the report "
+                    "follows as job {}",
+                    sub.submitted, sub.array_job, sub.tasks, sub.report_job));
+  if (options.log && sub.still_queued > 0)
+    options.log(fmt::format("slurm: {} renders are still queued or running", sub.still_queued));
+  stats.slurm = sub;
+  settle_duplicates(jobs, r, stats);
 }
 
 // The render phase: the cache, then what it lacks; counts what never started.
@@ -140,6 +128,10 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
   ResourceEstimate needed;
   for (std::size_t i : todo) needed.output_bytes += jobs[i].resources.output_bytes;
   check_resources(needed, std::numeric_limits<double>::infinity(), study_file, cache.folder());
+  if (options.slurm) {
+    slurm_phase(jobs, todo, cache, options, renderers, r, stats);
+    return r;
+  }
   if (options.log)
     options.log(fmt::format("{} renders: {} cached, {} to do, {} in parallel", jobs.size(), cached,
                             todo.size(), options.jobs));
@@ -154,7 +146,8 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
   const ExecuteResult result = execute_tasks(
       todo.size(), eo,
       [&](std::size_t t) {
-        r.images.images[todo[t]] = render_into_cache(jobs[todo[t]], cache, options, renderers);
+        r.images.images[todo[t]] = render_into_cache(jobs[todo[t]], cache, options.timeout_s,
+                                                     threads_per_job(options.jobs), renderers);
       },
       [&](std::size_t t) { return jobs[todo[t]].label; });
   for (std::size_t t = 0; t < todo.size(); ++t) {
@@ -168,15 +161,7 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
                                r.errors[i].substr(0, r.errors[i].find('\n')));
     }
   }
-  for (std::size_t i = 0; i < jobs.size(); ++i)
-    if (r.same_as[i] >= 0) {
-      const auto j = static_cast<std::size_t>(r.same_as[i]);
-      r.images.done[i] = r.images.done[j], r.attempted[i] = r.attempted[j];
-      r.errors[i] = r.errors[j];
-      r.images.images[i] = r.images.images[j];
-    }
-  for (std::size_t i = 0; i < jobs.size(); ++i)
-    if (!r.images.done[i] && !r.attempted[i]) ++stats.not_started;
+  settle_duplicates(jobs, r, stats);
   return r;
 }
 
@@ -204,21 +189,42 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 std::vector<VariantConvergence> converge(const Study& study, Plan& plan, const RenderCache& cache,
                                          const StudyOptions& options, const Renderers& renderers,
                                          StudyRunStats& stats) {
+  // On Slurm each round is a submission; the external renderers' jobs do
+  // not depend on the truths' settings, so the first one carries them too
+  // and they render while the truths converge.
+  bool carry_external = options.slurm.has_value();
   const RenderBatch batch = [&](const std::vector<Job>& jobs, std::vector<std::string>* errors) {
     std::vector<Job> keyed = jobs;
     assign_keys(keyed, renderers.identities);
+    const std::size_t checks = keyed.size();
     if (options.log)
-      options.log(fmt::format("ground truth: checking convergence ({} renders)", keyed.size()));
-    const Renders r = render_jobs(study.file, keyed, cache, options, renderers, stats);
-    stats.renders += keyed.size();
-    std::vector<std::optional<Image>> images(keyed.size());
-    for (std::size_t i = 0; i < keyed.size(); ++i)
+      options.log(fmt::format("ground truth: checking convergence ({} renders)", checks));
+    // Only with a round that must be submitted anyway: a run submits once.
+    const bool submits = std::any_of(keyed.begin(), keyed.end(),
+                                     [&](const Job& j) { return !cache.contains(j.key); });
+    if (submits && std::exchange(carry_external, false))
+      for (const Job& j : plan.jobs)
+        if (j.renderer != RendererKind::kEvaluator) keyed.push_back(j);
+    StudyRunStats carried;  // the external jobs are counted in the main phase
+    const Renders r = render_jobs(study.file, keyed, cache, options, renderers,
+                                  keyed.size() == checks ? stats : carried);
+    if (keyed.size() != checks) {
+      stats.slurm = carried.slurm;
+      stats.not_started += carried.not_started;
+    }
+    stats.renders += checks;
+    std::vector<std::optional<Image>> images(checks);
+    for (std::size_t i = 0; i < checks; ++i)
       if (r.images.done[i]) images[i] = r.images.images[i];
-    *errors = r.errors;
+    errors->assign(r.errors.begin(), r.errors.begin() + static_cast<long>(checks));
     return images;
   };
   std::vector<VariantConvergence> out =
-      converge_truths(plan, study.ground_truth, options.max_memory_bytes, batch, options.log);
+      converge_truths(plan, study.ground_truth, options.max_memory_bytes, batch);
+  // Verdicts on renders that never ran (interrupted, submitted to Slurm) are
+  // no verdicts: the run stops before the report.
+  if (options.log && stats.not_started == 0)
+    for (const VariantConvergence& r : out) options.log(convergence_log_line(plan, r));
   assign_keys(plan, renderers.identities);
   return out;
 }
@@ -228,7 +234,13 @@ std::vector<VariantConvergence> converge(const Study& study, Plan& plan, const R
 StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const fs::path out(options.output_dir);
-  const Renderers renderers = probe_renderers(study, options.timeout_s);
+  // A Slurm study probes from many short processes (report jobs): once per
+  // host and renderer executable is enough.
+  const std::string probes =
+      options.slurm && !options.dry_run
+          ? (out / "slurm" / fmt::format("versions.{}.json", host_tag())).string()
+          : "";
+  Renderers renderers = probe_renderers(study_renderers(study), options.timeout_s, probes);
   Plan plan = plan_study(study, options.max_memory_bytes);
   assign_keys(plan, renderers.identities);
   const RenderCache cache((out / "cache").string());
@@ -238,15 +250,25 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   if (options.dry_run) {
     for (const Job& job : plan.jobs) {
       ++stats.planned[to_string(job.renderer)];
-      if (cache.contains(job.key)) ++stats.cached;
+      if (cache.contains(job.key))
+        ++stats.cached;
+      else
+        stats.planned_output_bytes += job.resources.output_bytes;
+      stats.planned_peak_memory_bytes =
+          std::max(stats.planned_peak_memory_bytes, job.resources.memory_bytes);
     }
     return stats;
   }
   prepare_folders(out, options, stats);
+  auto blender_sessions = std::make_unique<BlenderSessions>((out / "cache").string());
+  renderers.blender_sessions = blender_sessions.get();
   const std::vector<VariantConvergence> convergence =
       converge(study, plan, cache, options, renderers, stats);
   if (stats.not_started > 0) return stats;  // interrupted while checking the truths
   const Renders r = render_jobs(study.file, plan.jobs, cache, options, renderers, stats);
+  stats.blender_processes = blender_sessions->started();
+  blender_sessions.reset();  // the processes end here, not after the figures
+  renderers.blender_sessions = nullptr;
   stats.seconds = seconds_since(start);
   if (stats.not_started > 0) return stats;  // interrupted: no report from a partial study
 

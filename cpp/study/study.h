@@ -10,10 +10,12 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "renderers/renderers.h"
+#include "study/slurm.h"
 #include "study/study_file.h"
 
 namespace penumbra {
@@ -35,6 +37,9 @@ struct StudyOptions {
   // anything is written.
   double max_memory_bytes = kDefaultMaxMemoryBytes;
   std::string python;  // default: PENUMBRA_PYTHON, /usr/bin/python3, python3
+  // Render on a Slurm cluster instead of local threads (study/slurm.h): the
+  // run submits what the cache lacks and returns; its report job continues.
+  std::optional<SlurmOptions> slurm;
 };
 
 struct StudyRunStats {
@@ -47,8 +52,14 @@ struct StudyRunStats {
   double seconds = 0.0;
   std::string report_html;                     // path, when written
   std::map<std::string, std::size_t> planned;  // dry run: renders per renderer
-  std::vector<std::string> warnings;           // damaged cache entries, stale files removed
+  // Dry run: the most the renders still to do may write into the cache
+  // (uncompressed EXR), and the largest estimated memory of one render.
+  double planned_output_bytes = 0.0, planned_peak_memory_bytes = 0.0;
+  std::vector<std::string> warnings;  // damaged cache entries, stale files removed
   std::size_t stale_removed = 0;
+  int blender_processes = 0;
+  std::optional<SlurmSubmission>
+      slurm;  // what a Slurm run submitted  // Blender processes started; each serves many renders
   bool complete() const { return failed == 0 && not_started == 0; }
 };
 

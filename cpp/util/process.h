@@ -2,6 +2,7 @@
 // stderr captured in a log file.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,6 +31,42 @@ struct ProcessResult {
 // group. So no renderer, and nothing a renderer started, outlives its call.
 ProcessResult run_process(const std::vector<std::string>& argv, const std::string& cwd,
                           const std::string& log_path, double timeout_s);
+
+// A long-lived child that serves many requests (a renderer rendering job
+// after job, so that its start-up is paid once): started like run_process,
+// under the same guard, but with stdin a pipe that send_line() writes to.
+// Requests end when the child leaves a sign the caller checks (a file).
+// The destructor closes stdin (a well-behaved child then exits) and ends the
+// group after a short grace. The guard's parent-death signal follows the
+// thread that started it (PR_SET_PDEATHSIG), so a coprocess ends with that
+// thread at the latest: users check alive() and start a new one.
+class Coprocess {
+ public:
+  Coprocess(const std::vector<std::string>& argv, const std::string& cwd,
+            const std::string& log_path);
+  ~Coprocess();
+  Coprocess(const Coprocess&) = delete;
+  Coprocess& operator=(const Coprocess&) = delete;
+
+  // False when the child no longer reads (it exited).
+  bool send_line(const std::string& line);
+  // Waits until `done()` holds (returns nullopt), the child exits, the
+  // timeout passes or cancel_processes() is called; in the last three cases
+  // the group is ended and the result says how, as run_process's would
+  // (seconds: this wait's wall time). Once ended, returns that result again.
+  std::optional<ProcessResult> wait_until(const std::function<bool()>& done, double timeout_s);
+  // Still running: neither ended by wait_until nor exited on its own (a
+  // guard also ends its group when the thread that started it exits).
+  bool alive();
+  // Closes stdin, waits up to `grace_s` for the child to exit, then ends the group.
+  void close(double grace_s);
+
+ private:
+  void finish(ProcessResult& result);
+  int pid_ = -1, status_fd_ = -1, input_ = -1;
+  bool finished_ = false;
+  ProcessResult final_;
+};
 
 // Ends every running and future run_process call (Ctrl-C, SIGTERM); safe to
 // call from a signal handler. reset_cancel_processes() allows new ones again.

@@ -5,6 +5,7 @@
 
 #include <iterator>
 
+#include "fake_blender.h"
 #include "temp_dir_test.h"
 
 #include <sys/stat.h>
@@ -16,6 +17,7 @@
 #include <regex>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -44,6 +46,20 @@ class Renderers : public TempDirTest {
     ::chmod(p.c_str(), 0755);
     return p;
   }
+  // Settings for a fake Blender at path("blender") (the test writes it) and
+  // path("good.exr"), an image of hostile_scene()'s size for it to answer with.
+  RenderSettings fake_serving_blender_settings() const {
+    Image good;
+    good.width = good.height = 32;
+    good.channels = {"R", "G", "B", "A"};
+    good.pixels.assign(32 * 32 * 4, 0.5f);
+    write_exr(good, path("good.exr"));
+    RenderSettings settings;
+    settings.log_path = path("render.log");
+    settings.timeout_s = 30;
+    settings.executable = path("blender");
+    return settings;
+  }
   std::vector<std::string> files() const {
     std::vector<std::string> found;
     for (const auto& e : fs::directory_iterator(dir_))
@@ -52,6 +68,11 @@ class Renderers : public TempDirTest {
     return found;
   }
 };
+
+std::string read_text(const std::string& file) {
+  std::ifstream in(file);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
 
 json calibration_scene(const std::string& shape) {
   return read_json_file(kSource + "/scenes/calibration/" + shape + ".json");
@@ -168,11 +189,128 @@ TEST_F(Renderers, FailingRendererReportsTheLogTailAndLeavesNoImage) {
   EXPECT_NE(tail_lines(settings.log_path, 5).find("first line"), std::string::npos);
 }
 
+// Batched Blender: one serving process renders job after job. Each job starts
+// from factory settings, so a job's pixels must not depend on what the
+// process rendered before: the same bits as the job in a process of its own.
+TEST_F(Renderers, ServedBlenderJobsAreBitIdenticalToOneProcessPerJob) {
+  auto scene = [](const char* representation, int spp) {
+    json doc = calibration_scene("sphere");
+    doc["representation"] = representation;
+    doc["camera"]["width"] = doc["camera"]["height"] = 24;
+    doc["camera"]["spp"] = spp;
+    return scene_from_json(doc, "<served>");
+  };
+  const Scene first = scene("displacement", 4), second = scene("bump", 8);
+  RenderSettings settings;
+  settings.timeout_s = 300;
+  settings.threads = 1;
+  settings.log_path = path("alone.log");
+  const Image alone = render_with(RendererKind::kBlender, second, settings).image;
+  BlenderSessions sessions(dir_.string());
+  settings.blender_sessions = &sessions;
+  settings.log_path = path("served-first.log");
+  render_with(RendererKind::kBlender, first, settings);
+  settings.log_path = path("served-second.log");
+  const Image served = render_with(RendererKind::kBlender, second, settings).image;
+  EXPECT_EQ(sessions.started(), 1) << "one process served both";
+  ASSERT_EQ(served.pixels.size(), alone.pixels.size());
+  EXPECT_EQ(std::memcmp(served.pixels.data(), alone.pixels.data(), alone.pixels.size() * 4), 0);
+  // Each job's log holds that job's line from the shared process log.
+  EXPECT_NE(read_text(path("served-second.log")).find("mode bump"), std::string::npos);
+  EXPECT_EQ(read_text(path("served-second.log")).find("mode mesh"), std::string::npos);
+}
+
+// The serving script answers a job it cannot render with an .error file and
+// serves on.
+TEST_F(Renderers, ServingBlenderAnswersABadJobAndServesOn) {
+  const auto blender = find_executable("blender");
+  ASSERT_TRUE(blender) << "blender is not installed (apt-get install blender)";
+  json doc = calibration_scene("sphere");
+  doc["representation"] = "smooth";
+  doc["camera"]["width"] = doc["camera"]["height"] = 8;
+  doc["camera"]["spp"] = 1;
+  const BlenderExport job = export_blender(scene_from_json(doc, "<served>"));
+  std::ofstream(path("job.json")) << job.job_json;
+  auto raw = [&](const char* name, const void* data, std::size_t bytes) {
+    std::ofstream(path(name), std::ios::binary).write(static_cast<const char*>(data), bytes);
+  };
+  raw(kBlenderPositionsFile, job.mesh.positions.data(), job.mesh.positions.size() * 4);
+  raw(kBlenderNormalsFile, job.mesh.normals.data(), job.mesh.normals.size() * 4);
+  raw(kBlenderTrianglesFile, job.mesh.triangles.data(), job.mesh.triangles.size() * 4);
+  Coprocess blender_process(
+      {*blender, "-b", "--factory-startup", "-noaudio", "--python-exit-code", "1", "--python",
+       kSource + "/harness/blender_render.py", "--", "--serve"},
+      dir_.string(), path("serve.log"));
+  auto request = [&](const std::string& job_file, const std::string& output) {
+    EXPECT_TRUE(blender_process.send_line(
+        json{{"job", path(job_file)}, {"output", path(output)}, {"threads", 1}}.dump()));
+    return blender_process.wait_until(
+        [&] { return fs::exists(path(output)) || fs::exists(path(output + ".error")); }, 120);
+  };
+  EXPECT_FALSE(request("missing.json", "bad.exr"));
+  EXPECT_NE(read_text(path("bad.exr.error")).find("missing.json: cannot read JSON job"),
+            std::string::npos);
+  EXPECT_FALSE(request("job.json", "good.exr"));
+  EXPECT_TRUE(fs::exists(path("good.exr"))) << tail_lines(path("serve.log"), 10);
+  EXPECT_TRUE(blender_process.alive());
+  blender_process.close(30);
+  EXPECT_FALSE(blender_process.alive());
+}
+
+// The C++ side of the protocol with a fake: a job answered with an .error
+// fails alone and the process serves on; a process that dies fails its job
+// and the next render starts a new one.
+TEST_F(Renderers, ServingBlenderIsKeptAfterAFailedJobAndReplacedAfterACrash) {
+  RenderSettings settings = fake_serving_blender_settings();
+  const std::string count = path("count");
+  std::ofstream(settings.executable) << fake_blender_text(
+      "n=$(cat '" + count + "' 2>/dev/null || echo 0); n=$((n+1)); echo $n > '" + count +
+      "'\ncase $n in 1) echo 'blender_render.py: bad job' > render.exr.error;; 2) exit 1;; "
+      "*) cp '" +
+      path("good.exr") + "' render.exr;; esac");
+  ::chmod(settings.executable.c_str(), 0755);
+  BlenderSessions sessions(dir_.string());
+  settings.blender_sessions = &sessions;
+  auto failure = [&] {
+    try {
+      render_with(RendererKind::kBlender, hostile_scene(), settings);
+    } catch (const RendererError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no failure");
+  };
+  EXPECT_NE(failure().find("failed: blender_render.py: bad job"), std::string::npos);
+  EXPECT_EQ(sessions.started(), 1);
+  EXPECT_NE(failure().find("exited with status 1 before the render was done"), std::string::npos);
+  EXPECT_EQ(sessions.started(), 1);
+  EXPECT_NO_THROW(render_with(RendererKind::kBlender, hostile_scene(), settings));
+  EXPECT_NO_THROW(render_with(RendererKind::kBlender, hostile_scene(), settings));
+  EXPECT_EQ(sessions.started(), 2) << "a new process after the crash, then reused";
+}
+
+// A serving process ends with the thread that started it: a render on
+// another thread, after that thread has gone, must start its own rather than
+// use (and fail with) the dead one.
+TEST_F(Renderers, ServingBlenderOfAThreadThatEndedIsNotReused) {
+  RenderSettings settings = fake_serving_blender_settings();
+  std::ofstream(settings.executable)
+      << fake_blender_text("cp '" + path("good.exr") + "' render.exr");
+  ::chmod(settings.executable.c_str(), 0755);
+  BlenderSessions sessions(dir_.string());
+  settings.blender_sessions = &sessions;
+  std::thread([&] { render_with(RendererKind::kBlender, hostile_scene(), settings); }).join();
+  EXPECT_NO_THROW(render_with(RendererKind::kBlender, hostile_scene(), settings));
+  EXPECT_NO_THROW(render_with(RendererKind::kBlender, hostile_scene(), settings));
+  EXPECT_EQ(sessions.started(), 2) << "one per thread; the main thread's reused";
+}
+
 TEST_F(Renderers, HangingRendererIsKilledAtTheTimeout) {
   RenderSettings settings;
   settings.log_path = path("render.log");
   settings.timeout_s = 0.5;
-  settings.executable = fake("blender", "echo started; sleep 60");
+  settings.executable = path("blender");
+  std::ofstream(settings.executable) << fake_blender_text("echo started; sleep 60");
+  ::chmod(settings.executable.c_str(), 0755);
   try {
     render_with(RendererKind::kBlender, hostile_scene(), settings);
     FAIL() << "expected RendererError";

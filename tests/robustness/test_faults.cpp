@@ -4,6 +4,7 @@
 // missing. Fake renderers are shell scripts named by PENUMBRA_BLENDER.
 #include <gtest/gtest.h>
 
+#include "fake_blender.h"
 #include "temp_dir_test.h"
 
 #include <signal.h>
@@ -86,14 +87,11 @@ class Faults : public TempDirTest {
     ::unsetenv("PENUMBRA_BLENDER");
     TempDirTest::TearDown();
   }
-  // A fake Blender: answers --version, else runs `body` in its work folder
-  // (Penumbra expects render.exr there).
+  // A fake Blender: answers --version, else runs `body` per render in its
+  // work folder (Penumbra expects render.exr there).
   std::string fake_blender(const std::string& body, const std::string& version_body = "") {
     const std::string p = path("fake-blender");
-    std::ofstream(p) << "#!/bin/sh\ncase \"$*\" in *--version*) "
-                     << (version_body.empty() ? "" : version_body + ";")
-                     << " echo 'Blender 3.4.1'; exit 0;; esac\n"
-                     << body << "\n";
+    std::ofstream(p) << fake_blender_text(body, version_body);
     ::chmod(p.c_str(), 0755);
     ::setenv("PENUMBRA_BLENDER", p.c_str(), 1);
     return p;

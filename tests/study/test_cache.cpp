@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "fake_blender.h"
 #include "image/image_io.h"
 #include "renderers/code_digest.h"
 #include "renderers/renderers.h"
@@ -111,9 +112,7 @@ class CacheInvalidation : public TempDirTest {
     im.pixels.assign(16 * 16 * 4, 0.25f);
     write_exr(im, path("blender.exr"));
     const std::string fake = path("fake-blender");
-    std::ofstream(fake) << "#!/bin/sh\ncase \"$*\" in *--version*) echo 'Blender 3.4.1'; exit 0;; "
-                           "esac\ncp '"
-                        << path("blender.exr") << "' render.exr\n";
+    std::ofstream(fake) << fake_blender_text("cp '" + path("blender.exr") + "' render.exr");
     ::chmod(fake.c_str(), 0755);
     std::filesystem::copy_file(kSource + "/harness/blender_render.py", path("script.py"));
     ::setenv("PENUMBRA_BLENDER", fake.c_str(), 1);

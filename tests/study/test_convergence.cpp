@@ -104,7 +104,7 @@ class Convergence : public TempDirTest {
 
 TEST_F(Convergence, StopsAtTheFirstSettingsWhoseChangesAreBelowTheTolerance) {
   Plan p = plan();
-  const auto loose = converge_truths(p, budget(1.0, 2, 3), 8.0 * kGiB, batch(), nullptr);
+  const auto loose = converge_truths(p, budget(1.0, 2, 3), 8.0 * kGiB, batch());
   ASSERT_EQ(loose.size(), 1u);
   EXPECT_TRUE(loose[0].converged);
   EXPECT_EQ(loose[0].steps.size(), 1u);  // one check: truth, edge / 2, spp x 4
@@ -115,7 +115,7 @@ TEST_F(Convergence, StopsAtTheFirstSettingsWhoseChangesAreBelowTheTolerance) {
   const double first = std::max(loose[0].steps[0].edge_change, loose[0].steps[0].spp_change);
   ASSERT_GT(first, 0.0);
   Plan q = plan();
-  const auto tight = converge_truths(q, budget(0.9 * first, 3, 4), 8.0 * kGiB, batch(), nullptr);
+  const auto tight = converge_truths(q, budget(0.9 * first, 3, 4), 8.0 * kGiB, batch());
   ASSERT_EQ(tight.size(), 1u);
   const VariantConvergence& c = tight[0];
   ASSERT_GE(c.steps.size(), 2u);
@@ -140,7 +140,7 @@ TEST_F(Convergence, StopsAtTheFirstSettingsWhoseChangesAreBelowTheTolerance) {
 
 TEST_F(Convergence, ReportsAVariantItsBudgetCannotConverge) {
   Plan p = plan();
-  const auto r = converge_truths(p, budget(1e-12, 1, 1), 8.0 * kGiB, batch(), nullptr);
+  const auto r = converge_truths(p, budget(1e-12, 1, 1), 8.0 * kGiB, batch());
   ASSERT_EQ(r.size(), 1u);
   EXPECT_FALSE(r[0].converged);
   EXPECT_NE(r[0].why.find("budget"), std::string::npos) << r[0].why;
@@ -154,8 +154,7 @@ TEST_F(Convergence, AMemoryLimitStopsTheMeshRefinementAndSaysSo) {
   const double truth_memory = p.jobs[p.truth(0, RendererKind::kEvaluator)].resources.memory_bytes;
   // Enough for the truth (and its spp x 4 check, the same mesh), not for its
   // edge / 2 check: 4x the triangles.
-  const auto r =
-      converge_truths(p, budget(1e-12, 2, 3), truth_memory * (1.0 + 1e-9), batch(), nullptr);
+  const auto r = converge_truths(p, budget(1e-12, 2, 3), truth_memory * (1.0 + 1e-9), batch());
   ASSERT_EQ(r.size(), 1u);
   EXPECT_FALSE(r[0].converged);
   EXPECT_NE(r[0].why.find("GiB"), std::string::npos) << r[0].why;
@@ -163,7 +162,7 @@ TEST_F(Convergence, AMemoryLimitStopsTheMeshRefinementAndSaysSo) {
 
 TEST_F(Convergence, AZeroBudgetRendersNothingAndFlagsEveryTruth) {
   Plan p = plan();
-  const auto r = converge_truths(p, budget(0.001, 0, 3), 8.0 * kGiB, batch(), nullptr);
+  const auto r = converge_truths(p, budget(0.001, 0, 3), 8.0 * kGiB, batch());
   ASSERT_EQ(r.size(), 1u);
   EXPECT_FALSE(r[0].converged);
   EXPECT_EQ(renders, 0u);

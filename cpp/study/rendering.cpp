@@ -1,0 +1,105 @@
+#include "study/rendering.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "image/image_io.h"
+#include "scene/scene_json.h"
+#include "study/execute.h"
+#include "util/files.h"
+#include "util/strict_json.h"
+#include "util/version.h"
+
+namespace penumbra {
+namespace fs = std::filesystem;
+
+std::vector<RendererKind> study_renderers(const Study& study) {
+  std::vector<RendererKind> kinds = study.bump.renderers;
+  if (study.lowpoly)
+    for (RendererKind r : study.lowpoly->renderers)
+      if (std::find(kinds.begin(), kinds.end(), r) == kinds.end()) kinds.push_back(r);
+  return kinds;
+}
+
+namespace {
+
+// renderer_version, remembered in `probe_cache` by the executable's path,
+// size and modification time (a changed executable is probed again).
+std::string cached_version(RendererKind r, const RenderSettings& settings,
+                           const std::string& probe_cache) {
+  const std::string exe = renderer_executable(r, settings);
+  if (probe_cache.empty() || exe.empty()) return renderer_version(r, settings);
+  std::error_code ec;
+  const auto size = fs::file_size(exe, ec);
+  const auto mtime = fs::last_write_time(exe, ec).time_since_epoch().count();
+  if (ec) return renderer_version(r, settings);
+  const std::string id = fmt::format("{}|{}|{}", exe, size, mtime);
+  nlohmann::json known = nlohmann::json::object();
+  try {
+    if (fs::exists(probe_cache)) known = read_json_file(probe_cache);
+  } catch (const InputError&) {  // half-written by a killed process: probe again
+  }
+  if (known.is_object() && known.contains(id) && known[id].is_string()) return known[id];
+  const std::string version = renderer_version(r, settings);
+  if (!known.is_object()) known = nlohmann::json::object();
+  known[id] = version;
+  fs::create_directories(fs::path(probe_cache).parent_path(), ec);
+  write_text_file(probe_cache, known.dump(1) + "\n");
+  return version;
+}
+
+}  // namespace
+
+Renderers probe_renderers(const std::vector<RendererKind>& kinds, double timeout_s,
+                          const std::string& probe_cache) {
+  Renderers out;
+  for (RendererKind r : kinds) {
+    RenderSettings probe;
+    probe.timeout_s = timeout_s;
+    RendererIdentity id;
+    try {
+      id.version = out.versions[r] = cached_version(r, probe, probe_cache);
+      id.code_digest = pixel_code_digest(r, probe);
+    } catch (const std::exception& e) {
+      out.versions.erase(r);
+      out.unavailable[r] = e.what();
+    }
+    out.identities.push_back({r, id});
+  }
+  return out;
+}
+
+Image render_into_cache(const Job& job, const RenderCache& cache, double timeout_s, int threads,
+                        const Renderers& renderers) {
+  if (const auto missing = renderers.unavailable.find(job.renderer);
+      missing != renderers.unavailable.end())
+    throw RendererError(missing->second);
+  RenderSettings settings;
+  settings.timeout_s = timeout_s;
+  settings.threads = threads;
+  settings.log_path = cache.log_path(job.key);
+  settings.blender_sessions = renderers.blender_sessions;
+  std::error_code ignored;
+  fs::remove(settings.log_path, ignored);
+  RendererRun run;
+  try {
+    run = render_with(job.renderer, job.scene, settings);
+  } catch (const RenderCancelled&) {
+    throw TaskCancelled{};
+  }
+  cache.store(job.key, run.image,
+              {{"penumbra:version", kPenumbraVersion},
+               {"penumbra:renderer", to_string(job.renderer)},
+               {"penumbra:renderer_version", renderers.versions.at(job.renderer)},
+               {"penumbra:scene", job.scene_json.dump()},
+               {"penumbra:method", job.method},
+               {"penumbra:representation", to_string(job.representation)},
+               {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
+  if (job.renderer == RendererKind::kEvaluator) fs::remove(settings.log_path, ignored);
+  return std::move(run.image);
+}
+
+}  // namespace penumbra
