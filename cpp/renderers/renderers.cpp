@@ -207,6 +207,24 @@ std::vector<std::string> blender_argv(const std::string& exe, const std::string&
   return argv;
 }
 
+// Penumbra's environment with the folder of Blender's executable first in
+// PATH. Blender's embedded Python finds its standard library from the first
+// `python3` on PATH: a pyenv, conda or virtualenv one first would give it a
+// library without numpy (or of another version), and every render would fail.
+std::vector<std::string> blender_environment(const std::string& exe) {
+  std::vector<std::string> env;
+  std::string path = "PATH=" + fs::path(exe).parent_path().string();
+  for (char** e = environ; e && *e; ++e) {
+    const std::string entry = *e;
+    if (entry.rfind("PATH=", 0) == 0)
+      path += ":" + entry.substr(5);
+    else
+      env.push_back(entry);
+  }
+  env.push_back(path);
+  return env;
+}
+
 // The bytes appended to `path` since `offset`.
 std::string read_from(const std::string& path, std::uintmax_t offset) {
   std::ifstream in(path, std::ios::binary);
@@ -314,7 +332,7 @@ double serve_blender_job(BlenderSessions::Session& s, WorkDir& work,
   }
   if (!s.process) {
     s.process = std::make_unique<Coprocess>(blender_argv(s.executable, s.script, {"--serve"}),
-                                            s.cwd, s.log_path);
+                                            s.cwd, s.log_path, blender_environment(s.executable));
     s.served = 0, ++s.starts;
   }
   ++s.served;

@@ -73,8 +73,8 @@ void close_inherited(std::initializer_list<int> keep) {
 // Runs in the forked child; only async-signal-safe calls (Penumbra has
 // threads). Becomes the leader of a new process group, forks the renderer
 // into it, waits, and writes the renderer's raw wait status to `status_fd`.
-[[noreturn]] void guard_process(char* const* args, const char* cwd, int input, int log,
-                                int status_fd, pid_t penumbra) {
+[[noreturn]] void guard_process(char* const* args, char* const* envp, const char* cwd, int input,
+                                int log, int status_fd, pid_t penumbra) {
   ::setpgid(0, 0);
   // The guard never execs, so O_CLOEXEC does not shield it: close what it
   // inherited from Penumbra, above all the write ends of other coprocesses'
@@ -107,7 +107,10 @@ void close_inherited(std::initializer_list<int> keep) {
     ::dup2(out, 1);
     ::dup2(out, 2);
     if (::chdir(cwd) != 0) ::_exit(126);
-    ::execv(args[0], args);
+    if (envp)
+      ::execve(args[0], args, envp);
+    else
+      ::execv(args[0], args);
     ::_exit(127);
   }
   int status = 127 << 8;  // as if exec failed, when fork did
@@ -188,13 +191,18 @@ struct Guarded {
 // Forks the guard, which runs `argv` in its own process group with stdin from
 // `input` (-1: /dev/null) and stdout + stderr appended to `log_path`.
 Guarded start_guarded(const std::vector<std::string>& argv, const std::string& cwd,
-                      const std::string& log_path, int input) {
+                      const std::string& log_path, int input,
+                      const std::vector<std::string>& environment = {}) {
   if (argv.empty()) throw std::invalid_argument("run_process: empty argv");
   // Everything the child touches is prepared before fork(): between fork and
   // exec only async-signal-safe calls are allowed (TBB threads exist).
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
+  std::vector<char*> env;
+  for (const std::string& e : environment) env.push_back(const_cast<char*>(e.c_str()));
+  env.push_back(nullptr);
+  char* const* envp = environment.empty() ? nullptr : env.data();
   const int log = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   if (log < 0)
     throw std::runtime_error(
@@ -214,7 +222,7 @@ Guarded start_guarded(const std::vector<std::string>& argv, const std::string& c
   }
   if (g.pid == 0) {
     ::close(status_pipe[0]);
-    guard_process(args.data(), cwd.c_str(), input, log, status_pipe[1], penumbra);
+    guard_process(args.data(), envp, cwd.c_str(), input, log, status_pipe[1], penumbra);
   }
   ::setpgid(g.pid, g.pid);  // also here, so that the group exists before any kill(-pid)
   ::close(log);
@@ -250,7 +258,7 @@ ProcessResult run_process(const std::vector<std::string>& argv, const std::strin
 }
 
 Coprocess::Coprocess(const std::vector<std::string>& argv, const std::string& cwd,
-                     const std::string& log_path) {
+                     const std::string& log_path, const std::vector<std::string>& environment) {
   // A coprocess that dies must not take Penumbra with it when written to.
   // Children get the default back (guard_process).
   ::signal(SIGPIPE, SIG_IGN);
@@ -259,7 +267,7 @@ Coprocess::Coprocess(const std::vector<std::string>& argv, const std::string& cw
     throw std::runtime_error(fmt::format("cannot create a pipe: {}", std::strerror(errno)));
   Guarded g;
   try {
-    g = start_guarded(argv, cwd, log_path, input[0]);
+    g = start_guarded(argv, cwd, log_path, input[0], environment);
   } catch (...) {
     ::close(input[0]), ::close(input[1]);
     throw;

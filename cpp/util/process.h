@@ -42,8 +42,10 @@ ProcessResult run_process(const std::vector<std::string>& argv, const std::strin
 // thread at the latest: users check alive() and start a new one.
 class Coprocess {
  public:
+  // `environment`: the child's whole environment ("NAME=value"); empty:
+  // Penumbra's own.
   Coprocess(const std::vector<std::string>& argv, const std::string& cwd,
-            const std::string& log_path);
+            const std::string& log_path, const std::vector<std::string>& environment = {});
   ~Coprocess();
   Coprocess(const Coprocess&) = delete;
   Coprocess& operator=(const Coprocess&) = delete;

@@ -304,6 +304,43 @@ TEST_F(Renderers, ServingBlenderOfAThreadThatEndedIsNotReused) {
   EXPECT_EQ(sessions.started(), 2) << "one per thread; the main thread's reused";
 }
 
+// Blender's embedded Python takes its standard library from the first
+// python3.11 on PATH (Debian's Blender 3.4). A foreign Python first on PATH
+// (pyenv's, conda's, a virtualenv's) made every Blender render fail; here a
+// copy of Debian's interpreter beside a stdlib of one empty os.py, which
+// Python takes for its home and then cannot start from. Penumbra must put
+// Blender's own folder first.
+TEST_F(Renderers, BlenderRendersWithAForeignPythonFirstOnPath) {
+  const auto blender = find_executable("blender");
+  ASSERT_TRUE(blender) << "blender is not installed (apt-get install blender)";
+  fs::create_directories(path("foreign/bin"));
+  fs::create_directories(path("foreign/lib"));
+  for (const auto& e : fs::directory_iterator("/usr/bin")) {
+    const std::string name = e.path().filename().string();
+    if (!std::regex_match(name, std::regex(R"(python3\.[0-9]+)"))) continue;
+    fs::copy_file(e.path(), path("foreign/bin/" + name));
+    fs::create_directories(path("foreign/lib/" + name + "/lib-dynload"));
+    std::ofstream(path("foreign/lib/" + name + "/os.py")) << "";
+  }
+  const std::string old_path = std::getenv("PATH") ? std::getenv("PATH") : "";
+  ::setenv("PATH", (path("foreign/bin") + ":" + old_path).c_str(), 1);
+  json doc = calibration_scene("sphere");
+  doc["representation"] = "smooth";
+  doc["camera"]["width"] = doc["camera"]["height"] = 8;
+  doc["camera"]["spp"] = 1;
+  RenderSettings settings;
+  settings.log_path = path("render.log");
+  settings.timeout_s = 120;
+  std::string error;
+  try {
+    render_with(RendererKind::kBlender, scene_from_json(doc, "<foreign>"), settings);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  ::setenv("PATH", old_path.c_str(), 1);
+  EXPECT_EQ(error, "");
+}
+
 TEST_F(Renderers, HangingRendererIsKilledAtTheTimeout) {
   RenderSettings settings;
   settings.log_path = path("render.log");

@@ -156,11 +156,7 @@ def main():
         sys.exit(77)
     if up.returncode != 0:
         fail("the local Slurm cluster did not start")
-    # Blender's Python takes its standard library from the first python3 on
-    # PATH: a pyenv or virtualenv one (which lacks numpy) must not come first.
-    path = ":".join(d for d in os.environ.get("PATH", "").split(":")
-                    if ".pyenv" not in d and "/venv" not in d)
-    env = dict(os.environ, SLURM_CONF=os.path.join(cluster, "slurm.conf"), PATH=path)
+    env = dict(os.environ, SLURM_CONF=os.path.join(cluster, "slurm.conf"))
     try:
         local = os.path.join(work, "local")
         t0 = time.monotonic()
