@@ -297,26 +297,31 @@ std::string identity_mismatch(const json& batch, const Renderers& here) {
 SlurmTaskResult run_slurm_task(const std::string& batch_file, int task, int threads,
                                const std::function<void(const std::string&)>& log) {
   const json batch = read_json_file(batch_file);
-  if (batch.value("format", "") != kBatchFormat || batch.value("version", 0) != 1)
-    throw InputError(batch_file, "/format", "expected a penumbra-slurm-batch file, version 1");
   std::vector<Job> jobs;
+  std::string study_folder, mismatch;
+  double timeout_s = 0.0;
+  Renderers renderers;
+  // A batch file is Penumbra's own, but it sits in a shared folder: one that
+  // is damaged or hand-edited is bad input naming the file, never a crash.
   try {
+    if (!batch.is_object() || batch.value("format", "") != kBatchFormat ||
+        batch.value("version", 0) != 1)
+      throw InputError(batch_file, "/format", "expected a penumbra-slurm-batch file, version 1");
     jobs = task_jobs(batch, task, batch_file);
+    study_folder = batch.at("study_folder").get<std::string>();
+    timeout_s = batch.at("timeout_s").get<double>();
+    std::vector<RendererKind> kinds;
+    for (const Job& j : jobs)
+      if (std::find(kinds.begin(), kinds.end(), j.renderer) == kinds.end())
+        kinds.push_back(j.renderer);
+    const std::string probes =
+        (fs::path(study_folder) / "slurm" / fmt::format("versions.{}.json", host_tag())).string();
+    renderers = probe_renderers(kinds, std::min(60.0, timeout_s), probes);
+    mismatch = identity_mismatch(batch, renderers);
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(batch_file, "/jobs", std::string("malformed: ") + e.what());
+    throw InputError(batch_file, "", std::string("malformed batch file: ") + e.what());
   }
-  const RenderCache cache(
-      (fs::path(batch.at("study_folder").get<std::string>()) / "cache").string());
-  std::vector<RendererKind> kinds;
-  for (const Job& j : jobs)
-    if (std::find(kinds.begin(), kinds.end(), j.renderer) == kinds.end())
-      kinds.push_back(j.renderer);
-  const double timeout_s = batch.at("timeout_s");
-  const std::string probes = (fs::path(batch.at("study_folder").get<std::string>()) / "slurm" /
-                              fmt::format("versions.{}.json", host_tag()))
-                                 .string();
-  Renderers renderers = probe_renderers(kinds, std::min(60.0, timeout_s), probes);
-  const std::string mismatch = identity_mismatch(batch, renderers);
+  const RenderCache cache((fs::path(study_folder) / "cache").string());
   BlenderSessions sessions(cache.folder());
   renderers.blender_sessions = &sessions;
   SlurmTaskResult result;
