@@ -172,6 +172,23 @@ def region(r, default):
     return [float(t) for t in r] if ok else default
 
 
+# A page with a section (image grid, profile figure, metrics table) per
+# variant stays readable up to a few dozen variants; a sweep of 10^4 would
+# take hours of plotting and a page no browser opens. Past this many, the
+# page shows variants evenly spaced over the study's order (first and last
+# included) and says so; every number stays in report.json and metrics.csv.
+MAX_VARIANT_SECTIONS = 48
+
+
+def shown_variants(variants, limit=MAX_VARIANT_SECTIONS):
+    """The variants that get a section of their own, in study order."""
+    n = len(variants)
+    if n <= limit:
+        return list(variants)
+    picks = sorted({round(i * (n - 1) / (limit - 1)) for i in range(limit)})
+    return [variants[i] for i in picks]
+
+
 class Report:
     """OUT/report.json checked: its arrays, its axes, and every image it
     names (read here, as data: URIs, so that a bad path fails before any
@@ -193,6 +210,8 @@ class Report:
         self.ranking = obj(doc.get('ranking'))
         self.variants = objs(doc.get('variants'))
         self.comps = objs(doc.get('comparisons'))
+        self.shown = shown_variants(self.variants)
+        shown_ids = {id(v) for v in self.shown}
         self.uris = {}
         for v in self.variants:
             for r in objs(v.get('renders')):
@@ -200,7 +219,8 @@ class Report:
                     ctx = f'variant {v.get("id")}: {key}'
                     if r.get(key) is not None:
                         path = inside(out, r[key], src, ctx)
-                        self.uris[r[key]] = data_uri(path, src, ctx)
+                        if id(v) in shown_ids:
+                            self.uris[r[key]] = data_uri(path, src, ctx)
         lp = doc.get('lowpoly')
         self.lowpoly = None if lp is None else LowPoly(lp, out, src)
         self.units = obj(doc.get('units'))

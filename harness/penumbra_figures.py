@@ -330,7 +330,7 @@ def report_figures(report):
     """Every figure of a report into OUT/figures, in the order report.py
     prints them: ranking, profiles per variant, sweeps, then the low-poly
     section. Returns {'ranking': PNG or None, 'profiles': [PNG per
-    variant], 'sweeps': [sweep_figures()], 'lowpoly': lowpoly_figures() or
+    shown variant (report.shown)], 'sweeps': [sweep_figures()], 'lowpoly': lowpoly_figures() or
     None, 'written': [every path]}."""
     figdir = os.path.join(report.out, 'figures')
     os.makedirs(figdir, exist_ok=True)
@@ -342,7 +342,7 @@ def report_figures(report):
                               figdir)
     figs['statistics'] = stats[0] if stats else None
     written += stats
-    for v in report.variants:
+    for v in report.shown:
         paths = profile_figure(v, colors, report.terminator, figdir)
         figs['profiles'].append(paths[0])
         written += paths

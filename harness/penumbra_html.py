@@ -193,6 +193,18 @@ def sweeps_context(report, sweeps):
             for k, s in enumerate(sweeps)]
 
 
+def variants_note(report):
+    """Says which variants have a section when not all of them do."""
+    n, k = len(report.variants), len(report.shown)
+    if k == n:
+        return None
+    return (f'{n} variants: the {k} sections below show variants evenly '
+            f'spaced over the study\'s order (the first and the last '
+            f'included). Every variant\'s numbers are in metrics.csv and '
+            f'report.json; the ranking, statistics and sweeps above and '
+            f'below use them all.')
+
+
 def report_context(report, figs):
     """The template context of the whole page."""
     rk, study = report.ranking, report.study
@@ -220,7 +232,8 @@ def report_context(report, figs):
             'bump; the dashed line)') if stats_fig else None,
         **renderer_tables(report),
         'variants': [variant_context(v, report, f, missing)
-                     for v, f in zip(report.variants, figs['profiles'])],
+                     for v, f in zip(report.shown, figs['profiles'])],
+        'variants_note': variants_note(report),
         'sweeps': sweeps_context(report, figs['sweeps']),
         'has_plots': bool(report.doc.get('plots')),
         'lowpoly': lowpoly_context(report.lowpoly, figs['lowpoly'],

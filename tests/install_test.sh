@@ -17,4 +17,8 @@ bin="$tmp/prefix/bin/penumbra"
 "$bin" contour --method none --method chiang2019 --step 5 -o contour > /dev/null
 test -s contour/contour.json
 ls contour | grep -q '\.png$'
+# PNG goes through the OpenImageIO module, loaded from PREFIX/lib/penumbra.
+"$bin" render "$tmp/prefix/share/penumbra/scenes/calibration/sphere.json" --width 8 --height 8 \
+  --spp 1 -q -o "$tmp/a.exr" --preview "$tmp/a.png"
+test -s "$tmp/a.png"
 echo "install test: ok ($tmp/prefix)"

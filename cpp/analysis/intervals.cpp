@@ -74,17 +74,6 @@ std::vector<BandSums> band_sums(const Image& test, const Image& ref, double scal
   return bands;
 }
 
-Profile profile_of(const std::vector<double>& weight, const std::vector<double>& sum,
-                   const std::vector<std::uint64_t>& count, double scale, const ProfileOptions& o) {
-  Profile p;
-  p.bin_degrees = o.bin_degrees;
-  p.count = count;
-  p.value.assign(sum.size(), 0.0);
-  for (std::size_t k = 0; k < sum.size(); ++k)
-    if (weight[k] > 0.0) p.value[k] = sum[k] / weight[k] / scale;
-  return p;
-}
-
 // The spread of the replicates (their percentile interval minus their mean)
 // placed around the estimate. A plain percentile interval of an RMSE sits
 // above the estimate: resampling bands adds noise to every bin, which the
@@ -110,30 +99,63 @@ struct Metrics {
   ViewMetrics view;
 };
 
+// The sums of a resample, kept between resamples so that each one allocates
+// nothing. Only `active` bins (those with pixels in some band) are ever
+// touched; the others stay 0, as a fresh sum would leave them.
+struct Resample {
+  std::vector<std::size_t> active;
+  std::vector<double> ts, rs, tw, rw;
+  std::vector<std::uint64_t> tc, rc;
+  ViewErrorProfile view;
+  Profile test, reference;
+
+  explicit Resample(const std::vector<BandSums>& bands) {
+    const std::size_t bins = bands[0].test_sum.size();
+    for (std::size_t k = 0; k < bins; ++k)
+      for (const BandSums& b : bands)
+        if (b.test_count[k] > 0 || b.ref_count[k] > 0) {
+          active.push_back(k);
+          break;
+        }
+    ts.assign(bins, 0.0), rs.assign(bins, 0.0), tw.assign(bins, 0.0), rw.assign(bins, 0.0);
+    tc.assign(bins, 0), rc.assign(bins, 0);
+    view = bands[0].view;
+  }
+};
+
+void fill_profile(const std::vector<std::size_t>& active, const std::vector<double>& weight,
+                  const std::vector<double>& sum, const std::vector<std::uint64_t>& count,
+                  double scale, const ProfileOptions& o, Profile* p) {
+  p->bin_degrees = o.bin_degrees;
+  p->count = count;
+  p->value.assign(sum.size(), 0.0);
+  for (std::size_t k : active)
+    if (weight[k] > 0.0) p->value[k] = sum[k] / weight[k] / scale;
+}
+
 template <typename Pick>
 Metrics metrics_of(const std::vector<BandSums>& bands, Pick pick, double scale,
-                   const ProfileOptions& o) {
-  const std::size_t bins = bands[0].test_sum.size();
-  std::vector<double> ts(bins, 0.0), rs(bins, 0.0), tw(bins, 0.0), rw(bins, 0.0);
-  std::vector<std::uint64_t> tc(bins, 0), rc(bins, 0);
+                   const ProfileOptions& o, Resample& r) {
+  for (std::size_t k : r.active) r.ts[k] = r.rs[k] = r.tw[k] = r.rw[k] = 0.0, r.tc[k] = r.rc[k] = 0;
+  std::fill(r.view.error_sum.begin(), r.view.error_sum.end(), 0.0);
+  std::fill(r.view.count.begin(), r.view.count.end(), 0);
   double sq = 0.0;
   std::size_t pixels = 0;
-  ViewErrorProfile view = bands[0].view;
-  std::fill(view.error_sum.begin(), view.error_sum.end(), 0.0);
-  std::fill(view.count.begin(), view.count.end(), 0);
   for (std::size_t n = 0; n < bands.size(); ++n) {
     const BandSums& b = bands[pick(n)];
-    view += b.view;
-    for (std::size_t k = 0; k < bins; ++k) {
-      ts[k] += b.test_sum[k], rs[k] += b.ref_sum[k];
-      tw[k] += b.test_weight[k], rw[k] += b.ref_weight[k];
-      tc[k] += b.test_count[k], rc[k] += b.ref_count[k];
+    r.view += b.view;
+    for (std::size_t k : r.active) {
+      r.ts[k] += b.test_sum[k], r.rs[k] += b.ref_sum[k];
+      r.tw[k] += b.test_weight[k], r.rw[k] += b.ref_weight[k];
+      r.tc[k] += b.test_count[k], r.rc[k] += b.ref_count[k];
     }
     sq += b.sq, pixels += b.pixels;
   }
-  return {compare_profiles(profile_of(tw, ts, tc, scale, o), profile_of(rw, rs, rc, scale, o), o),
+  fill_profile(r.active, r.tw, r.ts, r.tc, scale, o, &r.test);
+  fill_profile(r.active, r.rw, r.rs, r.rc, scale, o, &r.reference);
+  return {compare_profiles(r.test, r.reference, o),
           pixels ? std::sqrt(sq / double(pixels)) : std::numeric_limits<double>::quiet_NaN(),
-          view_metrics(view)};
+          view_metrics(r.view)};
 }
 
 }  // namespace
@@ -148,14 +170,18 @@ ComparisonIntervals comparison_intervals(const Image& test, const Image& referen
   out.bands = static_cast<int>(bands.size());
   out.resamples = resamples;
   if (bands.empty()) return out;
+  Resample scratch(bands);
   const Metrics estimate = metrics_of(
-      bands, [](std::size_t n) { return n; }, radiance_scale, options);
+      bands, [](std::size_t n) { return n; }, radiance_scale, options, scratch);
   std::mt19937_64 rng(seed);
   auto draw = [&](std::size_t) { return uniform_index(rng, bands.size()); };
 
   std::vector<double> terminator, image, view, view_bias, max_error, position, lit_bias;
+  for (std::vector<double>* v :
+       {&terminator, &image, &view, &view_bias, &max_error, &position, &lit_bias})
+    v->reserve(std::size_t(std::max(0, resamples)));
   for (int r = 0; r < resamples; ++r) {
-    const Metrics m = metrics_of(bands, draw, radiance_scale, options);
+    const Metrics m = metrics_of(bands, draw, radiance_scale, options, scratch);
     terminator.push_back(m.profile.rmse_terminator);
     max_error.push_back(m.profile.max_error);
     position.push_back(m.profile.position_error);

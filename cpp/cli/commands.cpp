@@ -301,7 +301,10 @@ int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
   check_extension(a.output, ".exr", "-o");
   if (!a.preview.empty()) check_extension(a.preview, ".png", "--preview");
   check_writable(a.output);
-  if (!a.preview.empty()) check_writable(a.preview);
+  if (!a.preview.empty()) {
+    check_writable(a.preview);
+    load_image_formats();  // before rendering, not after
+  }
   const fs::path folder =
       fs::path(a.output).parent_path().empty() ? fs::path(".") : fs::path(a.output).parent_path();
   check_resources(estimate_resources(*renderer, scene), a.max_memory_gib * kGiB, origin,
@@ -638,6 +641,29 @@ std::string duration_text(double s) {
   return t >= 60 ? fmt::format("{}m{:02d}s", t / 60, t % 60) : fmt::format("{}s", t);
 }
 
+// One line per kind of render still to do, with where its rate comes from.
+void print_cost(const CostEstimate& cost, std::ostream& out) {
+  if (cost.lines.empty()) return;
+  out << fmt::format(
+      "estimated cost of the renders to do: {:.3f} core-hours (cores x wall time; {} on {} "
+      "cores), before ground-truth convergence checks:\n",
+      cost.core_seconds / 3600.0,
+      duration_text(cost.core_seconds / std::max(1u, std::thread::hardware_concurrency())),
+      std::max(1u, std::thread::hardware_concurrency()));
+  for (const CostLine& line : cost.lines) {
+    const std::string kind =
+        fmt::format("{} {}{}", to_string(line.renderer), to_string(line.representation),
+                    line.tessellated ? " (low-poly)" : "");
+    const std::string basis =
+        line.measured > 0 ? fmt::format("median of {} cached renders of this study", line.measured)
+                          : "built-in rate measured on a 2-core machine; none cached yet";
+    out << fmt::format(
+        "  {:<32} {:>7} renders {:>10.4f} core-h  ({:.3g} core-s per 10^6 "
+        "pixel samples: {})\n",
+        kind, line.renders, line.core_seconds / 3600.0, line.core_seconds_per_msample, basis);
+  }
+}
+
 int print_dry_run(const Study& study, const StudyRunStats& stats, const std::string& dir,
                   double max_memory_gib, std::ostream& out) {
   std::string per;
@@ -651,6 +677,7 @@ int print_dry_run(const Study& study, const StudyRunStats& stats, const std::str
       "about {:.3f} GiB of memory (--max-memory {:.3g} GiB); ground-truth convergence checks "
       "come on top (up to 3 renders per variant and round)\n",
       stats.planned_output_bytes / kGiB, stats.planned_peak_memory_bytes / kGiB, max_memory_gib);
+  print_cost(stats.cost, out);
   return kExitOk;
 }
 
@@ -855,6 +882,14 @@ double peak_rss_mib() {
   return double(usage.ru_maxrss) / 1024.0;  // Linux reports KiB
 }
 
+// User and system CPU time of this process so far (all threads).
+double process_cpu_seconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  const auto seconds = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
+  return seconds(usage.ru_utime) + seconds(usage.ru_stime);
+}
+
 // The benchmark scene of the evaluator issue: a 512x512, 16 spp bump cylinder.
 json bench_scene(int size, int spp) {
   return {
@@ -882,16 +917,20 @@ json bench_scene(int size, int spp) {
 int command_bench(int size, int spp, std::ostream& out) {
   out << fmt::format(
       "penumbra bench: {}x{}, {} spp, bump cylinder (grating, A = 0.01), {} threads\n", size, size,
-      spp, tbb::info::default_concurrency());
-  out << fmt::format("{:<24} {:>10} {:>16}\n", "method", "wall s", "M samples/s");
+      spp, tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  out << fmt::format("{:<24} {:>10} {:>10} {:>16} {:>20}\n", "method", "wall s", "CPU s",
+                     "M samples/s", "M samples/CPU-s");
   for (const MethodInfo& m : all_methods()) {
     json document = bench_scene(size, spp);
     document["terminator"] = {{"method", m.id}};
     const Scene scene = scene_from_json(document, "<bench>");
     RenderStats stats;
+    const double cpu_before = process_cpu_seconds();
     render(scene, {}, &stats);
-    out << fmt::format("{:<24} {:>10.3f} {:>16.2f}\n", m.id, stats.seconds,
-                       double(stats.camera_samples) / stats.seconds / 1e6);
+    const double cpu = process_cpu_seconds() - cpu_before;
+    const double msamples = double(stats.camera_samples) / 1e6;
+    out << fmt::format("{:<24} {:>10.3f} {:>10.3f} {:>16.2f} {:>20.2f}\n", m.id, stats.seconds, cpu,
+                       msamples / stats.seconds, msamples / cpu);
   }
   const double rss_before = peak_rss_mib();
   json document = bench_scene(size, spp);

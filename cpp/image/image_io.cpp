@@ -5,17 +5,19 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
 
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imagebufalgo.h>
-#include <OpenImageIO/imageio.h>
+#include <dlfcn.h>
 #include <fmt/format.h>
 
+#include "image/exr_file.h"
+#include "image/oiio_module.h"
+#include "util/data_files.h"
 #include "util/files.h"
 #include "util/hash.h"
 
@@ -33,14 +35,56 @@ void commit(const std::string& temporary, const std::string& path) {
   }
 }
 
-void write_buffer(OIIO::ImageBuf& buffer, const std::string& path) {
+// Writes through a temporary name in the target folder, then renames:
+// `write(temporary)` returns "" or why it failed.
+template <typename Write>
+void write_via_temporary(const std::string& path, Write write) {
   const std::string temporary = temporary_name(path);
-  if (!buffer.write(temporary)) {
+  const std::string why = write(temporary);
+  if (!why.empty()) {
     std::error_code ec;
     fs::remove(temporary, ec);
-    throw OutputError(fmt::format("{}: cannot write: {}", path, buffer.geterror()));
+    throw OutputError(fmt::format("{}: cannot write: {}", path, why));
   }
   commit(temporary, path);
+}
+
+// Where the module lies: beside the executable in a build folder, under
+// PREFIX/lib once installed; the same two places as data_file() looks in.
+const OiioModule* load_oiio_module() {
+  const fs::path exe_dir = executable_folder();
+  std::string tried;
+  for (const fs::path& folder : {exe_dir / "lib", exe_dir.parent_path() / "lib"}) {
+    const fs::path file = (folder / "penumbra" / "libpenumbra_oiio.so").lexically_normal();
+    void* handle = ::dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!handle) {
+      tried += fmt::format("\n  {}", ::dlerror());
+      continue;
+    }
+    using Entry = const OiioModule* (*)();
+    const auto entry = reinterpret_cast<Entry>(::dlsym(handle, "penumbra_oiio_module"));
+    const OiioModule* module = entry ? entry() : nullptr;
+    if (module && module->abi == kOiioModuleAbi) return module;
+    tried += fmt::format("\n  {}: not a module of this Penumbra build", file.string());
+  }
+  throw std::runtime_error(
+      "image formats other than OpenEXR need Penumbra's OpenImageIO module "
+      "(libpenumbra_oiio.so), which could not be loaded:" +
+      tried);
+}
+
+// Loaded once, on the first non-EXR file; a failed load is retried on the
+// next call (a throwing static initialiser runs again).
+const OiioModule& oiio() {
+  static const OiioModule* module = load_oiio_module();
+  return *module;
+}
+
+// The sRGB transfer function of IEC 61966-2-1, to 8 bits with rounding.
+unsigned char encode_srgb8(float linear) {
+  const double v = std::clamp(double(linear), 0.0, 1.0);
+  const double encoded = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
+  return static_cast<unsigned char>(std::lround(encoded * 255.0));
 }
 
 }  // namespace
@@ -66,57 +110,46 @@ void check_writable(const std::string& path) {
   ::unlink(probe.c_str());
 }
 
+void load_image_formats() {
+  oiio();
+}
+
 void write_exr(const Image& image, const std::string& path,
                const std::vector<std::pair<std::string, std::string>>& metadata) {
-  OIIO::ImageSpec spec(image.width, image.height, static_cast<int>(image.channels.size()),
-                       OIIO::TypeDesc::FLOAT);
-  spec.channelnames = image.channels;
-  spec.alpha_channel = 3;
-  spec.attribute("compression", "zip");
-  spec.attribute("oiio:ColorSpace", "Linear");
-  for (const auto& [key, value] : metadata) spec.attribute(key, value);
-  // OpenImageIO stamps the current time as capDate unless a DateTime is
-  // given; an empty one writes none, so the same render gives the same bytes.
-  spec.attribute("DateTime", "");
-  const std::string temporary = temporary_name(path);
-  auto output = OIIO::ImageOutput::create(temporary);
-  const bool ok = output && output->open(temporary, spec) &&
-                  output->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) &&
-                  output->close();
-  if (!ok) {
-    const std::string why = output ? output->geterror() : OIIO::geterror();
-    output.reset();
-    std::error_code ec;
-    fs::remove(temporary, ec);
-    throw OutputError(fmt::format("{}: cannot write: {}", path, why));
-  }
-  output.reset();
-  commit(temporary, path);
+  write_via_temporary(path, [&](const std::string& temporary) {
+    try {
+      write_exr_file(image, temporary, metadata);
+      return std::string();
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+  });
 }
 
 void write_preview_png(const Image& image, const std::string& path) {
-  OIIO::ImageSpec spec(image.width, image.height, static_cast<int>(image.channels.size()),
-                       OIIO::TypeDesc::FLOAT);
-  spec.channelnames = image.channels;
-  OIIO::ImageBuf source(spec, const_cast<float*>(image.pixels.data()));
-  const int rgb[] = {0, 1, 2};
-  // Composited over black: premultiplied RGB is exactly that, and the PNG
-  // carries no alpha (a viewer would otherwise show a transparent background).
-  OIIO::ImageBuf linear = OIIO::ImageBufAlgo::channels(source, 3, rgb);
-  OIIO::ImageBuf encoded = OIIO::ImageBufAlgo::colorconvert(linear, "linear", "sRGB", false);
-  if (encoded.has_error())
-    throw std::runtime_error(
-        fmt::format("{}: colour conversion failed: {}", path, encoded.geterror()));
-  encoded.set_write_format(OIIO::TypeDesc::UINT8);
-  write_buffer(encoded, path);
+  const int r = image.channel_index("R"), g = image.channel_index("G"),
+            b = image.channel_index("B");
+  if (r < 0 || g < 0 || b < 0)
+    throw std::runtime_error(fmt::format("{}: a preview needs channels R, G and B", path));
+  // Premultiplied RGB is the image composited over black, so the PNG carries
+  // no alpha (a viewer would otherwise show a transparent background).
+  std::vector<unsigned char> rgb(std::size_t(image.width) * image.height * 3);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      unsigned char* out = &rgb[(std::size_t(y) * image.width + x) * 3];
+      out[0] = encode_srgb8(image.at(x, y, r));
+      out[1] = encode_srgb8(image.at(x, y, g));
+      out[2] = encode_srgb8(image.at(x, y, b));
+    }
+  write_png_rgb8(path, image.width, image.height, rgb);
 }
 
 void write_png_rgb8(const std::string& path, int width, int height,
                     const std::vector<unsigned char>& rgb) {
-  OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-  OIIO::ImageBuf buffer(spec);
-  buffer.set_pixels(OIIO::ROI::All(), OIIO::TypeDesc::UINT8, rgb.data());
-  write_buffer(buffer, path);
+  const OiioModule& module = oiio();
+  write_via_temporary(path, [&](const std::string& temporary) {
+    return module.write_rgb8(temporary, width, height, rgb.data());
+  });
 }
 
 void write_binary_file(const std::string& path, const void* data, std::size_t bytes) {
@@ -155,32 +188,27 @@ std::string image_checksum(const Image& image) {
   return fmt::format("{:016x}", h);
 }
 
+std::map<std::string, std::string> read_image_attributes(const std::string& path) {
+  if (is_exr_file(path)) return read_exr_attributes(path);
+  std::map<std::string, std::string> attributes;
+  read_image(path, &attributes);
+  return attributes;
+}
+
 std::string read_image_attribute(const std::string& path, const std::string& name) {
-  auto input = OIIO::ImageInput::open(path);
-  if (!input) throw std::runtime_error(fmt::format("{}: cannot read: {}", path, OIIO::geterror()));
-  return input->spec().get_string_attribute(name);
+  const auto attributes = read_image_attributes(path);
+  const auto it = attributes.find(name);
+  return it == attributes.end() ? std::string() : it->second;
 }
 
 Image read_image(const std::string& path, std::map<std::string, std::string>* attributes) {
-  // ImageInput rather than ImageBuf: ImageBuf reads through OpenImageIO's
-  // shared ImageCache, which serves a file's old pixels after it was replaced
-  // (cache entries are rewritten by rename).
-  auto input = OIIO::ImageInput::open(path);
-  if (!input) throw std::runtime_error(fmt::format("{}: cannot read: {}", path, OIIO::geterror()));
-  const OIIO::ImageSpec spec = input->spec();
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
-    throw std::runtime_error(fmt::format("{}: an empty image ({}x{}, {} channels)", path,
-                                         spec.width, spec.height, spec.nchannels));
+  if (is_exr_file(path)) return read_exr_file(path, attributes);
   Image image;
-  image.width = spec.width;
-  image.height = spec.height;
-  image.channels = spec.channelnames;
-  image.pixels.resize(std::size_t(spec.width) * spec.height * spec.nchannels);
-  if (!input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
-    throw std::runtime_error(fmt::format("{}: cannot read: {}", path, input->geterror()));
-  if (attributes)
-    for (const OIIO::ParamValue& p : spec.extra_attribs)
-      if (p.type() == OIIO::TypeDesc::STRING) (*attributes)[p.name().string()] = p.get_string();
+  const std::string why = oiio().read(path, &image, attributes);
+  if (!why.empty()) throw std::runtime_error(fmt::format("{}: cannot read: {}", path, why));
+  if (image.width <= 0 || image.height <= 0 || image.channels.empty())
+    throw std::runtime_error(fmt::format("{}: an empty image ({}x{}, {} channels)", path,
+                                         image.width, image.height, image.channels.size()));
   return image;
 }
 

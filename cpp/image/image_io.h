@@ -1,4 +1,5 @@
-// Image files through OpenImageIO. Writes go to a temporary name in the
+// Image files: OpenEXR directly, other formats through OpenImageIO (loaded
+// on demand, see oiio_module.h). Writes go to a temporary name in the
 // target folder and are renamed into place, so a failed or interrupted write
 // never leaves a file that looks like a result.
 #pragma once
@@ -22,6 +23,10 @@ class OutputError : public std::runtime_error {
 // Fails early, before a long render, when `path` cannot be created.
 void check_writable(const std::string& path);
 
+// Loads the OpenImageIO module that formats other than OpenEXR need, so that
+// a command fails before its work rather than after; throws why it cannot.
+void load_image_formats();
+
 // Linear 32-bit float OpenEXR, ZIP compressed, with string metadata.
 void write_exr(const Image& image, const std::string& path,
                const std::vector<std::pair<std::string, std::string>>& metadata = {});
@@ -36,6 +41,8 @@ void write_binary_file(const std::string& path, const void* data, std::size_t by
 void write_text_file(const std::string& path, const std::string& text);
 // A string attribute of an image file's header ("" if absent).
 std::string read_image_attribute(const std::string& path, const std::string& name);
+// Every string attribute of an image file's header (EXR: without its pixels).
+std::map<std::string, std::string> read_image_attributes(const std::string& path);
 // 16 hex digits: FNV-1a over the size, channel names and float bits of the
 // pixels. Stored in cache entries so that damage to them is detected.
 std::string image_checksum(const Image& image);

@@ -462,7 +462,10 @@ ResourceEstimate estimate_resources(RendererKind renderer, const Scene& scene) {
   }
   const double mesh_bytes = triangles * kBytesPerTriangle;
   e.memory_bytes = image_bytes + mesh_bytes;
-  e.output_bytes = pixels * 7 * 4 + 65536.0;  // + header
+  // Every channel a cache entry can hold (the evaluator's 8 floats), plus a
+  // header with the scene JSON and attributes: about 2 KiB measured on the
+  // shipped scenes; 16 KiB leaves room for long scene files.
+  e.output_bytes = pixels * double(evaluator_channels().size()) * 4 + 16384.0;
   e.pointer = mesh_bytes > image_bytes ? mesh_pointer : std::string("/camera/width");
   e.detail = fmt::format("{}x{} px: {}", scene.camera.width, scene.camera.height, gib(image_bytes));
   if (triangles > 0)

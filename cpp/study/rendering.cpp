@@ -1,13 +1,16 @@
 #include "study/rendering.h"
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
+#include <thread>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "image/image_io.h"
 #include "scene/scene_json.h"
+#include "study/cost.h"
 #include "study/execute.h"
 #include "util/files.h"
 #include "util/strict_json.h"
@@ -85,19 +88,27 @@ Image render_into_cache(const Job& job, const RenderCache& cache, double timeout
   std::error_code ignored;
   fs::remove(settings.log_path, ignored);
   RendererRun run;
+  const auto start = std::chrono::steady_clock::now();
   try {
     run = render_with(job.renderer, job.scene, settings);
   } catch (const RenderCancelled&) {
     throw TaskCancelled{};
   }
-  cache.store(job.key, run.image,
-              {{"penumbra:version", kPenumbraVersion},
-               {"penumbra:renderer", to_string(job.renderer)},
-               {"penumbra:renderer_version", renderers.versions.at(job.renderer)},
-               {"penumbra:scene", job.scene_json.dump()},
-               {"penumbra:method", job.method},
-               {"penumbra:representation", to_string(job.representation)},
-               {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
+  const double wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  cache.store(
+      job.key, run.image,
+      {{"penumbra:version", kPenumbraVersion},
+       {kCostWallAttribute, fmt::format("{:.3f}", wall_seconds)},
+       {kCostThreadsAttribute,
+        std::to_string(threads > 0 ? threads : std::max(1u, std::thread::hardware_concurrency()))},
+       {"penumbra:host", host_tag()},
+       {"penumbra:renderer", to_string(job.renderer)},
+       {"penumbra:renderer_version", renderers.versions.at(job.renderer)},
+       {"penumbra:scene", job.scene_json.dump()},
+       {"penumbra:method", job.method},
+       {"penumbra:representation", to_string(job.representation)},
+       {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
   if (job.renderer == RendererKind::kEvaluator) fs::remove(settings.log_path, ignored);
   return std::move(run.image);
 }

@@ -248,15 +248,20 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   StudyRunStats stats;
   stats.renders = plan.jobs.size();
   if (options.dry_run) {
-    for (const Job& job : plan.jobs) {
+    std::vector<char> to_render(plan.jobs.size(), 0);
+    for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
+      const Job& job = plan.jobs[i];
       ++stats.planned[to_string(job.renderer)];
-      if (cache.contains(job.key))
+      if (cache.contains(job.key)) {
         ++stats.cached;
-      else
+      } else {
+        to_render[i] = 1;
         stats.planned_output_bytes += job.resources.output_bytes;
+      }
       stats.planned_peak_memory_bytes =
           std::max(stats.planned_peak_memory_bytes, job.resources.memory_bytes);
     }
+    stats.cost = estimate_cost(plan, cache, to_render);
     return stats;
   }
   prepare_folders(out, options, stats);

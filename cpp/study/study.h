@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "renderers/renderers.h"
+#include "study/cost.h"
 #include "study/slurm.h"
 #include "study/study_file.h"
 
@@ -57,9 +58,9 @@ struct StudyRunStats {
   double planned_output_bytes = 0.0, planned_peak_memory_bytes = 0.0;
   std::vector<std::string> warnings;  // damaged cache entries, stale files removed
   std::size_t stale_removed = 0;
-  int blender_processes = 0;
-  std::optional<SlurmSubmission>
-      slurm;  // what a Slurm run submitted  // Blender processes started; each serves many renders
+  int blender_processes = 0;             // Blender processes started; each serves many renders
+  std::optional<SlurmSubmission> slurm;  // what a Slurm run submitted
+  CostEstimate cost;                     // dry run: of the renders to do
   bool complete() const { return failed == 0 && not_started == 0; }
 };
 

@@ -258,6 +258,45 @@ TEST_F(Study, LowPolyStudyComparesEveryOffsetWithTheAnalyticSurface) {
   }
 }
 
+// A sweep with more variants than the page shows (harness/penumbra_data.py,
+// MAX_VARIANT_SECTIONS = 48): the page has 48 variant sections, the first
+// and the last among them, says how many there are, and report.json and
+// metrics.csv keep every variant.
+TEST_F(Study, AReportOfManyVariantsShowsASampleAndSaysSo) {
+  json j = tiny();
+  json amplitudes = json::array();
+  for (int i = 0; i < 60; ++i) amplitudes.push_back(0.002 + 0.0005 * i);
+  j["axes"] = {{{"pointer", "/height/amplitude"}, {"values", amplitudes}}};
+  j["set"]["/camera/width"] = j["set"]["/camera/height"] = 8;
+  j["set"]["/camera/spp"] = 1;
+  j["methods"] = {"chiang2019"};
+  j["renderers"] = {"evaluator"};
+  j["ground_truth"] = {{"max_edge_refinements", 0}, {"max_spp_refinements", 0}};
+  StudyOptions o;
+  o.output_dir = path("many");
+  o.jobs = 2;
+  const StudyRunStats stats = run_study(load_study(write("many.json", j)), o);
+  ASSERT_TRUE(stats.complete()) << (stats.failures.empty() ? "" : stats.failures[0]);
+  const std::string html = read_text(stats.report_html);
+  std::size_t sections = 0;
+  for (std::size_t at = html.find("<h2 id=\"v-"); at != std::string::npos;
+       at = html.find("<h2 id=\"v-", at + 1))
+    ++sections;
+  EXPECT_EQ(sections, 48u);
+  EXPECT_NE(html.find("60 variants: the 48 sections below"), std::string::npos);
+  const json report = json::parse(read_text(path("many/report.json")));
+  ASSERT_EQ(report["variants"].size(), 60u);
+  const std::string first = report["variants"][0]["id"], last = report["variants"][59]["id"];
+  EXPECT_NE(html.find("<h2 id=\"v-" + first + "\""), std::string::npos) << first;
+  EXPECT_NE(html.find("<h2 id=\"v-" + last + "\""), std::string::npos) << last;
+  std::size_t profile_figures = 0;
+  for (const auto& entry : fs::directory_iterator(path("many/figures")))
+    if (entry.path().extension() == ".png" &&
+        entry.path().filename().string().rfind("profile", 0) == 0)
+      ++profile_figures;
+  EXPECT_EQ(profile_figures, 48u);
+}
+
 // The smoke study end to end, every renderer, then its report.html in
 // headless Chromium: no console errors, every image decoded.
 TEST_F(Study, SmokeStudyReportLoadsInChromium) {

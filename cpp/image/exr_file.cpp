@@ -1,0 +1,121 @@
+#include "image/exr_file.h"
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfStandardAttributes.h>
+#include <ImfStringAttribute.h>
+#include <fmt/format.h>
+
+namespace penumbra {
+namespace {
+
+// OpenImageIO's order: the colour and alpha channels first, so that code
+// and tools that take "the first three channels" see R, G, B.
+int channel_rank(const std::string& name) {
+  static const std::array<const char*, 4> first{"R", "G", "B", "A"};
+  for (std::size_t i = 0; i < first.size(); ++i)
+    if (name == first[i]) return static_cast<int>(i);
+  return static_cast<int>(first.size());
+}
+
+// Interleaved float slices of `image`, shifted so that pixel (x0, y0) of the
+// file's data window lands on the first pixel.
+Imf::FrameBuffer frame_buffer(Image& image, int x0, int y0) {
+  const std::size_t nc = image.channels.size();
+  const std::size_t x_stride = nc * sizeof(float);
+  const std::size_t y_stride = x_stride * std::size_t(image.width);
+  Imf::FrameBuffer buffer;
+  for (std::size_t c = 0; c < nc; ++c) {
+    char* base = reinterpret_cast<char*>(image.pixels.data() + c) -
+                 std::ptrdiff_t(x0) * std::ptrdiff_t(x_stride) -
+                 std::ptrdiff_t(y0) * std::ptrdiff_t(y_stride);
+    buffer.insert(image.channels[c], Imf::Slice(Imf::FLOAT, base, x_stride, y_stride));
+  }
+  return buffer;
+}
+
+void string_attributes(const Imf::Header& header, std::map<std::string, std::string>* out) {
+  for (auto it = header.begin(); it != header.end(); ++it)
+    if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
+      (*out)[it.name()] = s->value();
+}
+
+}  // namespace
+
+bool is_exr_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char magic[4] = {};
+  if (!in.read(reinterpret_cast<char*>(magic), sizeof magic)) return false;
+  return magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01;
+}
+
+void write_exr_file(const Image& image, const std::string& path,
+                    const std::vector<std::pair<std::string, std::string>>& attributes) {
+  try {
+    Imf::Header header(image.width, image.height);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    for (const std::string& name : image.channels)
+      header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    for (const auto& [key, value] : attributes) header.insert(key, Imf::StringAttribute(value));
+    // The frame buffer only reads from the image; OpenEXR's Slice takes char*.
+    Image& pixels = const_cast<Image&>(image);
+    Imf::OutputFile file(path.c_str(), header);
+    file.setFrameBuffer(frame_buffer(pixels, 0, 0));
+    file.writePixels(image.height);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(e.what());
+  }
+}
+
+Image read_exr_file(const std::string& path, std::map<std::string, std::string>* attributes) {
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imf::Header& header = file.header();
+    const Imath::Box2i window = header.dataWindow();
+    Image image;
+    image.width = window.max.x - window.min.x + 1;
+    image.height = window.max.y - window.min.y + 1;
+    for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
+      if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
+        throw std::runtime_error(
+            fmt::format("channel \"{}\" is subsampled, which Penumbra does not read", it.name()));
+      image.channels.emplace_back(it.name());
+    }
+    std::stable_sort(image.channels.begin(), image.channels.end(),
+                     [](const std::string& a, const std::string& b) {
+                       return channel_rank(a) < channel_rank(b);
+                     });
+    if (image.width <= 0 || image.height <= 0 || image.channels.empty())
+      throw std::runtime_error(fmt::format("an empty image ({}x{}, {} channels)", image.width,
+                                           image.height, image.channels.size()));
+    image.pixels.assign(std::size_t(image.width) * image.height * image.channels.size(), 0.0f);
+    file.setFrameBuffer(frame_buffer(image, window.min.x, window.min.y));
+    file.readPixels(window.min.y, window.max.y);
+    if (attributes) string_attributes(header, attributes);
+    return image;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(fmt::format("{}: cannot read: {}", path, e.what()));
+  }
+}
+
+std::map<std::string, std::string> read_exr_attributes(const std::string& path) {
+  try {
+    Imf::InputFile file(path.c_str());
+    std::map<std::string, std::string> attributes;
+    string_attributes(file.header(), &attributes);
+    return attributes;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(fmt::format("{}: cannot read: {}", path, e.what()));
+  }
+}
+
+}  // namespace penumbra

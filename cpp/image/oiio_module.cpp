@@ -1,0 +1,48 @@
+// Built as the loadable module penumbra_oiio (see oiio_module.h); the only
+// file in Penumbra that includes OpenImageIO.
+#include "image/oiio_module.h"
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imageio.h>
+
+namespace penumbra {
+namespace {
+
+std::string write_rgb8(const std::string& path, int width, int height, const unsigned char* rgb) {
+  OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+  OIIO::ImageBuf buffer(spec);
+  buffer.set_pixels(OIIO::ROI::All(), OIIO::TypeDesc::UINT8, rgb);
+  if (buffer.write(path)) return {};
+  const std::string why = buffer.geterror();
+  return why.empty() ? "OpenImageIO gave no reason" : why;
+}
+
+std::string read(const std::string& path, Image* image,
+                 std::map<std::string, std::string>* attributes) {
+  // ImageInput rather than ImageBuf: ImageBuf reads through OpenImageIO's
+  // shared ImageCache, which serves a file's old pixels after it was replaced.
+  auto input = OIIO::ImageInput::open(path);
+  if (!input) return OIIO::geterror();
+  const OIIO::ImageSpec spec = input->spec();
+  image->width = spec.width;
+  image->height = spec.height;
+  image->channels = spec.channelnames;
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) return {};
+  image->pixels.resize(std::size_t(spec.width) * spec.height * spec.nchannels);
+  if (!input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image->pixels.data()))
+    return input->geterror();
+  if (attributes)
+    for (const OIIO::ParamValue& p : spec.extra_attribs)
+      if (p.type() == OIIO::TypeDesc::STRING) (*attributes)[p.name().string()] = p.get_string();
+  return {};
+}
+
+}  // namespace
+}  // namespace penumbra
+
+extern "C" __attribute__((visibility("default"))) const penumbra::OiioModule*
+penumbra_oiio_module() {
+  static const penumbra::OiioModule module{penumbra::kOiioModuleAbi, penumbra::write_rgb8,
+                                           penumbra::read};
+  return &module;
+}
