@@ -655,8 +655,12 @@ void print_cost(const CostEstimate& cost, std::ostream& out) {
         fmt::format("{} {}{}", to_string(line.renderer), to_string(line.representation),
                     line.tessellated ? " (low-poly)" : "");
     const std::string basis =
-        line.measured > 0 ? fmt::format("median of {} cached renders of this study", line.measured)
-                          : "built-in rate measured on a 2-core machine; none cached yet";
+        line.measured > 0
+            ? fmt::format(
+                  "median of {} cached renders of this study; their range {:.4f} to "
+                  "{:.4f} core-h",
+                  line.measured, line.core_seconds_low / 3600.0, line.core_seconds_high / 3600.0)
+            : "built-in rate measured on a 2-core machine, no spread known; none cached yet";
     out << fmt::format(
         "  {:<32} {:>7} renders {:>10.4f} core-h  ({:.3g} core-s per 10^6 "
         "pixel samples: {})\n",

@@ -112,27 +112,34 @@ std::optional<double> built_in_rate(RendererKind renderer, Representation repres
 CostEstimate estimate_cost(const Plan& plan, const RenderCache& cache,
                            const std::vector<char>& to_render) {
   constexpr std::size_t kMaxMeasured = 64;
-  std::map<Kind, std::vector<double>> rates;
   std::map<Kind, CostLine> lines;
   std::map<Kind, double> work;  // 10^6 pixel samples to render
   for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
-    const Job& job = plan.jobs[i];
-    const Kind kind = kind_of(job);
-    if (to_render[i]) {
-      CostLine& line = lines[kind];
-      std::tie(line.renderer, line.representation, line.tessellated) = kind;
-      ++line.renders;
-      work[kind] += msamples(job.scene);
-    } else if (rates[kind].size() < kMaxMeasured) {
-      if (const auto rate = measured_rate(job, cache)) rates[kind].push_back(*rate);
-    }
+    if (!to_render[i]) continue;
+    const Kind kind = kind_of(plan.jobs[i]);
+    CostLine& line = lines[kind];
+    std::tie(line.renderer, line.representation, line.tessellated) = kind;
+    ++line.renders;
+    work[kind] += msamples(plan.jobs[i].scene);
+  }
+  // Headers are read only for kinds that have renders to price.
+  std::map<Kind, std::vector<double>> rates;
+  for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
+    const Kind kind = kind_of(plan.jobs[i]);
+    if (to_render[i] || !lines.count(kind) || rates[kind].size() >= kMaxMeasured) continue;
+    if (const auto rate = measured_rate(plan.jobs[i], cache)) rates[kind].push_back(*rate);
   }
   CostEstimate estimate;
   for (auto& [kind, line] : lines) {
-    const std::vector<double>& measured = rates[kind];
+    std::vector<double>& measured = rates[kind];
     line.measured = measured.size();
     line.core_seconds_per_msample = measured.empty() ? rate_for(kind) : median(measured);
     line.core_seconds = line.core_seconds_per_msample * work[kind];
+    if (!measured.empty()) {
+      std::sort(measured.begin(), measured.end());
+      line.core_seconds_low = measured.front() * work[kind];
+      line.core_seconds_high = measured.back() * work[kind];
+    }
     estimate.core_seconds += line.core_seconds;
     estimate.lines.push_back(line);
   }

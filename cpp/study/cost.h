@@ -32,6 +32,10 @@ struct CostLine {
   // 0: the built-in rate.
   std::size_t measured = 0;
   double core_seconds_per_msample = 0.0;  // the rate used (per 10^6 pixel samples)
+  // Measured lines: the cost at the slowest and the fastest rate of the
+  // cached renders read (their full range, not a confidence interval);
+  // built-in lines: both 0, no spread known.
+  double core_seconds_low = 0.0, core_seconds_high = 0.0;
 };
 
 struct CostEstimate {

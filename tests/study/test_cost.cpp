@@ -109,6 +109,8 @@ TEST_F(Cost, CachedRendersOfTheSameKindSetTheRateAsTheirMedian) {
     EXPECT_EQ(line.renders, 2u);                                     // the second variant's
     EXPECT_DOUBLE_EQ(line.core_seconds_per_msample, 4.0 / 4096e-6);  // median of 2 and 6 core-s
     EXPECT_DOUBLE_EQ(line.core_seconds, 2 * 4.0);
+    EXPECT_DOUBLE_EQ(line.core_seconds_low, 2 * 2.0);  // the fastest entry's rate
+    EXPECT_DOUBLE_EQ(line.core_seconds_high, 2 * 6.0);
   }
   EXPECT_TRUE(seen);
 }
