@@ -1,6 +1,10 @@
 """Render one Penumbra Blender job with Cycles (CPU) into a linear OpenEXR.
 
-Usage (Blender 3.4):
+Supported: Blender 3.4 to 4.4 (BLENDER_SUPPORTED); tested with 3.4 (Debian
+12).  Any other version is refused before anything is rendered, with one line
+on stderr and exit status 1.
+
+Usage:
 
     blender -b --factory-startup -noaudio --python-exit-code 1 \\
         --python harness/blender_render.py -- JOB.json OUTPUT.exr [--threads N]
@@ -48,11 +52,36 @@ from mathutils import Matrix, Vector
 
 PROG = "blender_render.py"
 MAX_TERMS = 32
+# First and last Blender release (major, minor) this script accepts.  3.4 is
+# the release the calibration bounds were measured with and the oldest it has
+# run on.  4.5 is refused: its Cycles replaced Chiang et al.'s term in
+# bump_shadowing_term with Conty Estevez et al.'s (Blender commit 11e282522)
+# and added a hemisphere test for every closure (commit 3b1e329ac), so the
+# Bump node would no longer render "chiang2019".  Releases in between are
+# accepted on the strength of Blender's API change logs (the
+# version-dependent paths below cite them); a property one of them lacks
+# still fails the job with a line naming it (configure).
+BLENDER_SUPPORTED = ((3, 4), (4, 4))
+BLENDER_TESTED = "3.4"
 INT32 = 2**31 - 1
 
 
 class JobError(Exception):
     """Invalid job, input data or Blender; the message names the cause."""
+
+
+def blender_version_problem(version):
+    """Why this script refuses Blender `version` (bpy.app.version), or None.
+
+    Pure, so that it can be tested without Blender.
+    """
+    first, last = BLENDER_SUPPORTED
+    if first <= tuple(version[:2]) <= last:
+        return None
+    return (f"Blender {'.'.join(map(str, version))} is not supported: this "
+            f"script supports Blender {first[0]}.{first[1]} to "
+            f"{last[0]}.{last[1]} (tested with {BLENDER_TESTED}); set "
+            "PENUMBRA_BLENDER to a supported blender executable")
 
 
 # --------------------------------------------------------------- validation
@@ -233,7 +262,14 @@ def build_mesh(job, folder):
         raise JobError("/mesh: Blender changed the mesh while building it")
     if smooth:
         # Custom split normals: Cycles then shades with these vertex normals.
-        configure(me, "Mesh", use_auto_smooth=True, auto_smooth_angle=math.pi)
+        # Up to 4.0 they count only with auto smooth on (an angle of pi marks
+        # no edge sharp); 4.1 removed the option (4.1 API change log,
+        # bpy.types.Mesh) and uses custom normals whenever they are set, with
+        # no edge sharp unless marked so (Blender PR #108014, "Mesh: Replace
+        # auto smooth with node group"): the same normals either way.
+        if hasattr(me, "use_auto_smooth"):
+            configure(me, "Mesh", use_auto_smooth=True,
+                      auto_smooth_angle=math.pi)
         me.normals_split_custom_set_from_vertices(nrm)
     kept = np.empty(m, dtype=bool)
     me.polygons.foreach_get("use_smooth", kept)
@@ -294,7 +330,13 @@ def build_material(job, ob):
     bsdf.inputs["Color"].default_value = (a, a, a, 1.0)
     bsdf.inputs["Roughness"].default_value = 0.0
     nt.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
-    configure(mat.cycles, "Material.cycles", displacement_method="BUMP")
+    # 4.1 moved the displacement method from the Cycles settings to the
+    # material (4.1 API change log: CyclesMaterialSettings.displacement_method
+    # removed; bpy.types.Material.displacement_method in the 4.2 reference).
+    if hasattr(mat.cycles, "displacement_method"):
+        configure(mat.cycles, "Material.cycles", displacement_method="BUMP")
+    else:
+        configure(mat, "Material", displacement_method="BUMP")
     mode, amp = job["shading"]["mode"], job["height"]["amplitude"]
     if mode == "bump-displacement":
         disp = nt.nodes.new("ShaderNodeDisplacement")
@@ -319,6 +361,26 @@ def reset_blender():
     result = bpy.ops.wm.read_factory_settings(use_empty=True)
     if "FINISHED" not in result:
         raise JobError("Blender could not reset to factory settings")
+
+
+def build_sun(lj):
+    """The distant light: a sun of the job's strength, shining along
+    -direction, with sharp shadows; returns its (unlinked) object."""
+    ld = bpy.data.lights.new("penumbra_sun", type="SUN")
+    configure(ld, "SunLight", energy=lj["strength"], angle=0.0,
+              color=(1.0, 1.0, 1.0), use_shadow=True)
+    # 4.2 removed Light.cycles.cast_shadow (4.2 API change log,
+    # bpy.types.CyclesLightSettings); use_shadow above is then the light's
+    # only shadow switch.
+    if hasattr(ld.cycles, "cast_shadow"):
+        configure(ld.cycles, "Light.cycles", cast_shadow=True)
+    lo = bpy.data.objects.new("penumbra_sun", ld)
+    d = Vector(lj["direction"]).normalized()
+    lo.rotation_mode = "QUATERNION"
+    lo.rotation_quaternion = d.to_track_quat("Z", "Y")  # local +Z -> d
+    if (lo.rotation_quaternion.to_matrix().col[2] - d).length > 1e-5:
+        raise JobError("internal: sun orientation check failed")
+    return lo
 
 
 def build_scene(job, folder, threads):
@@ -382,18 +444,7 @@ def build_scene(job, folder, threads):
     co.matrix_world = Matrix(cam["matrix_world"])
     scene.camera = co
 
-    lj = job["light"]
-    ld = bpy.data.lights.new("penumbra_sun", type="SUN")
-    configure(ld, "SunLight", energy=lj["strength"], angle=0.0,
-              color=(1.0, 1.0, 1.0), use_shadow=True)
-    configure(ld.cycles, "Light.cycles", cast_shadow=True)
-    lo = bpy.data.objects.new("penumbra_sun", ld)
-    d = Vector(lj["direction"]).normalized()
-    lo.rotation_mode = "QUATERNION"
-    lo.rotation_quaternion = d.to_track_quat("Z", "Y")  # local +Z -> d
-    if (lo.rotation_quaternion.to_matrix().col[2] - d).length > 1e-5:
-        raise JobError("internal: sun orientation check failed")
-
+    lo = build_sun(job["light"])
     ob = build_mesh(job, folder)
     build_material(job, ob)
     for o in (co, lo, ob):
@@ -522,6 +573,9 @@ def serve_request(line):
 
 
 def main():
+    problem = blender_version_problem(bpy.app.version)
+    if problem:
+        raise JobError(problem)
     args = parse_args(sys.argv)
     if args is not None:
         render_job(*args)

@@ -3,8 +3,8 @@
 Plain dicts the templates (templates/macros.html.j2) know how to draw:
   table   {'head': [str], 'rows': [[cell]], 'row_class': str}
   cell    {'text': str, 'cls': str}  (cls: '', 'n' right-aligned number,
-          'n na' greyed n/a)
-  figure  {'src': data: URI, 'alt': str, 'caption': str ('' for none)}
+          'n na' greyed n/a, 'na' greyed text)
+  figure  {'src': URL or data: URI, 'alt': str, 'caption': str ('' for none)}
   grid    {'cols': [str], 'rows': [{'head': str, 'cells': [grid cell]}]}
   grid cell {'figure': figure or None, 'na': str or None} (both None: an
           empty cell)
@@ -16,7 +16,9 @@ from penumbra_data import data_uri, fmt
 def cell(c):
     """A table cell: strings as they are; ints as they are, right-aligned;
     anything else a number formatted by fmt (a (value, scale) tuple is
-    scaled), right-aligned, greyed when n/a."""
+    scaled), right-aligned, greyed when n/a; a dict is a cell already."""
+    if isinstance(c, dict):
+        return c
     if isinstance(c, str) or type(c) is int:
         return {'text': str(c), 'cls': 'n' if type(c) is int else ''}
     t = fmt(*c) if isinstance(c, tuple) else fmt(c)

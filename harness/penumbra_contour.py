@@ -63,10 +63,40 @@ def contour_panel(ax, L, D, G, title, diff=None):
             label='y = x: shading normal points at the light',
             path_effects=[patheffects.withStroke(linewidth=2.6,
                                                  foreground='k')])
-    ax.legend(loc='upper left', fontsize=7)
+    # A long handle: a short one shows only the stroke's caps.
+    ax.legend(loc='upper left', fontsize=7, handlelength=4, borderpad=0.6)
+    if diff is None and z.count():
+        zoom_inset(ax, L, D, z, levels, cmap)
     ax.set(xlabel='light angle from Ng (degrees)', title=title,
            ylabel='shading-normal deviation towards the light (degrees)')
     return im
+
+
+def transition(L, z, level=0.995):
+    """The light angles where G departs from 1 somewhere: (first, last),
+    or None when it never does."""
+    cols = np.flatnonzero(np.ma.any(z < level, axis=0).filled(False))
+    return (L[cols[0]], L[cols[-1]]) if cols.size else None
+
+
+def zoom_inset(ax, L, D, z, levels, cmap):
+    """When G falls from 1 to 0 within a quarter of the light angles (e.g.
+    deshmukh2020, all near 90°), an inset that zooms on those angles, so
+    its contours can be read."""
+    t = transition(L, z)
+    span = L[-1] - L[0]
+    if t is None or t[1] - t[0] > 0.25 * span:
+        return
+    x0 = max(L[0], t[0] - 0.1 * max(t[1] - t[0], 1.0))
+    x1 = min(L[-1], t[1] + 0.05 * max(t[1] - t[0], 1.0))
+    ins = ax.inset_axes([0.38, 0.1, 0.4, 0.45])
+    ins.contourf(L, D, z, levels=levels, cmap=cmap)
+    contour_lines(ins, L, D, z, levels, '%.2g')
+    ins.set_xlim(x0, x1)
+    ins.set_ylim(D[0], D[-1])
+    ins.tick_params(labelsize=7)
+    ins.set_title(f'zoom: {x0:.3g}–{x1:.3g}°', fontsize=7)
+    ax.indicate_inset_zoom(ins, edgecolor='w')
 
 
 def diff_panel(ax, fig, L, D, G, a, b):

@@ -12,6 +12,7 @@ import json
 import math
 import os
 import re
+import urllib.parse
 
 import numpy as np
 
@@ -109,6 +110,17 @@ def axis_text(v, i):
     return fmt(v, digits=4) if math.isfinite(num(v)) else str(v)
 
 
+def axis_labels(axis):
+    """The tick texts of an axis of report.json: its value_labels (light
+    directions as azimuth and elevation), else axis_text of each value."""
+    vals = axis.get('values') if isinstance(axis.get('values'), list) else []
+    texts = axis.get('value_labels')
+    if isinstance(texts, list) and len(texts) == len(vals) and all(
+            isinstance(t, str) for t in texts):
+        return texts
+    return [axis_text(v, i) for i, v in enumerate(vals)]
+
+
 def axis_index(values, v):
     def same(a, b):
         if isinstance(a, list) and isinstance(b, list):
@@ -153,15 +165,29 @@ def inside(out, rel, src, ctx):
     return path
 
 
+class PageImages:
+    """How report.html refers to its images, set once per page (report.py):
+    linked by default (a relative URL from OUT: the page stays small and
+    sits beside images/ and figures/), or embedded as data: URIs
+    (--self-contained: one file to mail, every image inlined)."""
+    embed = False
+    out = '.'
+
+
 def data_uri(path, src, ctx):
-    """The PNG at path as a data: URI (the page embeds every image)."""
+    """The PNG at path as the page refers to it (PageImages): its URL
+    relative to OUT, or a data: URI. Either way the file must exist and be
+    a PNG, so that a bad path fails before any figure is drawn."""
     try:
         with open(path, 'rb') as f:
-            data = f.read()
+            data = f.read() if PageImages.embed else f.read(8)
     except OSError as e:
         raise BadInput(src, f'{ctx}: {path}: {e.strerror or e}')
     if not data.startswith(b'\x89PNG\r\n\x1a\n'):
         raise BadInput(src, f'{ctx}: {path}: not a PNG file')
+    if not PageImages.embed:
+        rel = os.path.relpath(path, PageImages.out).replace(os.sep, '/')
+        return urllib.parse.quote(rel)
     return 'data:image/png;base64,' + base64.b64encode(data).decode('ascii')
 
 
@@ -191,7 +217,7 @@ def shown_variants(variants, limit=MAX_VARIANT_SECTIONS):
 
 class Report:
     """OUT/report.json checked: its arrays, its axes, and every image it
-    names (read here, as data: URIs, so that a bad path fails before any
+    names (checked here, so that a bad path fails before any
     figure is drawn)."""
 
     def __init__(self, out):

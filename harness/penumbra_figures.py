@@ -10,13 +10,14 @@ import math
 import os
 
 import numpy as np
-from matplotlib.ticker import MaxNLocator
+from matplotlib.ticker import LogFormatter, MaxNLocator
 
 from penumbra_data import (
-    GROUND_TRUTH, REF, BadInput, axis_index, axis_text, column, farray, fmt,
+    FRACTION, GROUND_TRUTH, METRICS, REF, BadInput, axis_index, axis_labels, column, farray, fmt,
     get_metric, metric_label, num, obj, objs, stem)
+from penumbra_grid_figure import grid_figure
 from penumbra_lowpoly_figures import lowpoly_figures
-from penumbra_plot import contour_lines, method_colors, plt, save
+from penumbra_plot import contour_lines, method_colors, plt, progress, save
 
 L_LABEL = 'L / (albedo·E/π)'
 
@@ -43,6 +44,15 @@ def profile_xy(p):
     return ((np.arange(v.size) + 0.5) * b)[ok], v[ok]
 
 
+def percent_label(metric):
+    """(scale, axis label) of a metric drawn in the page's unit: fractions
+    of albedo·E/π as percent of it, everything else as it is."""
+    name, unit = METRICS.get(metric, (metric, ''))
+    if unit == FRACTION:
+        return 100.0, f'{name} (% of albedo·E/π)'
+    return 1.0, metric_label(metric)
+
+
 def ranking_figure(rk, colors, figdir):
     """figures/ranking.*: the overall ranking and the per-scene means; []
     when the ranking is empty."""
@@ -52,9 +62,10 @@ def ranking_figure(rk, colors, figdir):
     methods = list(dict.fromkeys(str(e.get('method')) for e in overall + [
         e for s in scenes for e in objs(s.get('methods'))]))
     n = max(len(methods), 1)
+    scale, xlabel = percent_label(rk.get('metric', 'profile.rmse_terminator'))
     fig, (ax, ag) = plt.subplots(1, 2, figsize=(11, 1.2 + 0.35 * max(
         n, len(scenes) * n * 0.6)), layout='constrained')
-    vals = [num(e.get('mean')) for e in overall]
+    vals = [num(e.get('mean')) * scale for e in overall]
     y = np.arange(len(overall))
     ax.barh(y, np.nan_to_num(vals), color=[colors[str(e.get('method'))]
                                            for e in overall])
@@ -66,7 +77,7 @@ def ranking_figure(rk, colors, figdir):
     ax.margins(x=0.15)
     h = 0.8 / n
     for j, m in enumerate(methods):
-        bars = [(i + (j - (n - 1) / 2) * h, num(e.get('mean')))
+        bars = [(i + (j - (n - 1) / 2) * h, num(e.get('mean')) * scale)
                 for i, s in enumerate(scenes) for e in objs(s.get('methods'))
                 if str(e.get('method')) == m and math.isfinite(
                     num(e.get('mean')))]
@@ -74,114 +85,178 @@ def ranking_figure(rk, colors, figdir):
                 color=colors[m], label=m)
     ag.set_yticks(range(len(scenes)), [str(s.get('scene')) for s in scenes])
     ag.set_title('per scene')
-    if methods:
-        ag.legend(title='method', loc='lower right')
+    if methods:  # beside the panel: inside, it covers bars
+        ag.legend(title='method', loc='upper left', bbox_to_anchor=(1.01, 1))
     for a in (ax, ag):
         a.invert_yaxis()
-        a.set_xlabel(metric_label(rk.get('metric',
-                                         'profile.rmse_terminator')))
+        a.set_xlabel(xlabel)
     return save(fig, figdir, 'ranking')
 
 
-def _interval_bars(ax, methods, key, ci_key, colors, title):
-    """Horizontal bars of m[key] with 95 % intervals m[ci_key] as error
-    bars; methods without a finite value are left out."""
-    rows = [(str(m.get('method')), num(m.get(key)), m.get(ci_key))
-            for m in methods if math.isfinite(num(m.get(key)))]
-    y = np.arange(len(rows))
-    vals = [r[1] for r in rows]
-    lo = [r[1] - num(r[2][0]) if isinstance(r[2], list) and len(r[2]) == 2
-          and r[2][0] is not None else 0.0 for r in rows]
-    hi = [num(r[2][1]) - r[1] if isinstance(r[2], list) and len(r[2]) == 2
-          and r[2][1] is not None else 0.0 for r in rows]
-    ax.barh(y, vals, xerr=[lo, hi], capsize=3,
+def _interval_bars(ax, methods, order, colors, title):
+    """Horizontal bars of each method's combined relative error in % of raw
+    bump's, with its 95 % interval as error bars, in the given method order
+    (the same in every panel); methods without a finite value left out."""
+    at = {str(m.get('method')): m for m in methods}
+    rows = [(name, 100 * num(at[name].get('combined_relative_error')),
+             at[name].get('combined_ci')) for name in order if name in at]
+    rows = [r for r in rows if math.isfinite(r[1])]
+    y = [order.index(r[0]) for r in rows]
+
+    def bound(ci, k):
+        ok = isinstance(ci, list) and len(ci) == 2 and ci[k] is not None
+        return 100 * num(ci[k]) if ok else math.nan
+    lo = [max(r[1] - bound(r[2], 0), 0) if math.isfinite(bound(r[2], 0))
+          else 0 for r in rows]
+    hi = [max(bound(r[2], 1) - r[1], 0) if math.isfinite(bound(r[2], 1))
+          else 0 for r in rows]
+    ax.barh(y, [r[1] for r in rows], xerr=[lo, hi], capsize=3,
             color=[colors.get(r[0], 'grey') for r in rows])
-    ax.axvline(1.0, color='black', linewidth=0.8, linestyle='--')
-    ax.set_yticks(y, [r[0] for r in rows])
-    ax.invert_yaxis()
+    ax.axvline(100.0, color='black', linewidth=0.8, linestyle='--')
     ax.set_title(title, fontsize=9)
 
 
 def statistics_figure(st, colors, figdir):
-    """figures/statistics.*: each method's combined relative error (1 =
-    raw bump) with its 95 % bootstrap interval over variants, overall and
-    per scene; [] without statistics."""
+    """figures/statistics.*: each method's combined relative error in % of
+    raw bump's, with its 95 % bootstrap interval over variants, overall and
+    per scene: panels on a grid of at most three columns, methods in the
+    overall order in every panel; [] without statistics."""
     overall = obj(st.get('overall'))
     scenes = [s for s in objs(st.get('per_scene')) if objs(s.get('methods'))]
-    if not objs(overall.get('methods')):
+    order = [str(m.get('method')) for m in objs(overall.get('methods'))]
+    if not order:
         return []
     panels = [('all variants', overall)] + [(str(s.get('scene')), s)
                                             for s in scenes]
-    n = len(objs(overall.get('methods')))
-    fig, axes = plt.subplots(1, len(panels), sharey=False, squeeze=False,
-                             figsize=(3.2 * len(panels) + 1, 1.2 + 0.35 * n),
+    cols = min(3, len(panels))
+    rows = -(-len(panels) // cols)
+    fig, axes = plt.subplots(rows, cols, sharey=True, squeeze=False,
+                             figsize=(3.6 * cols + 1.6,
+                                      rows * (1.4 + 0.3 * len(order))),
                              layout='constrained')
-    for ax, (title, s) in zip(axes[0], panels):
-        _interval_bars(ax, objs(s.get('methods')), 'combined_relative_error',
-                       'combined_ci', colors,
+    for ax in axes.flat[len(panels):]:
+        ax.set_visible(False)
+    for ax, (title, s) in zip(axes.flat, panels):
+        _interval_bars(ax, objs(s.get('methods')), order, colors,
                        f'{title} ({s.get("variants", "?")} variants)')
         # Log scale: a method 10x worse than raw bump would flatten the rest.
         ax.set_xscale('log')
-        ax.set_xlabel('combined relative error, log scale\n(1 = raw bump; '
-                      '95 % CI)')
+        # Plain numbers (60, 100, 300), not 6×10¹: a reader compares them.
+        ax.xaxis.set_major_formatter(LogFormatter(labelOnlyBase=False))
+        ax.xaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False,
+                                                  minor_thresholds=(1, 0.5)))
+        ax.set_xlabel('combined error, % of raw bump\'s\n(log scale; '
+                      '95 % CI; dashed: raw bump)', fontsize=8)
+    axes[0][0].set_yticks(range(len(order)), order)
+    axes[0][0].invert_yaxis()
     return save(fig, figdir, 'statistics')
 
 
-def _profile_style(r, colors, others):
-    """(legend label, line style) of one render in the profile figure."""
-    dashes = [(0, (5, 2)), (0, (2, 1.5)), (0, (6, 2, 1, 2)), (0, (1, 1))]
-    rend, meth, lab = str(r.get('renderer')), str(r.get('method')), column(r)
-    is_gt = lab == GROUND_TRUTH
-    if rend == REF:
-        return lab, dict(color='k', lw=2.8, zorder=5) if is_gt else dict(
-            color=colors[meth], lw=1.4)
-    return f'{rend}: {lab}', dict(
-        color='0.35' if is_gt else colors[meth], lw=1.2,
-        ls=dashes[others.index(rend) % len(dashes)])
+def _profile_style(r, colors):
+    """(legend label, line style) of one render in its renderer's panel."""
+    meth, lab = str(r.get('method')), column(r)
+    if lab == GROUND_TRUTH:
+        return lab, dict(color='k', lw=2.4, zorder=5)
+    return lab, dict(color=colors[meth], lw=1.3)
 
 
-def profile_figure(var, colors, region, figdir):
-    """figures/profiles-<variant>.*: L(theta) of every render of a variant,
-    and its error vs the truth; empty bins are bridged (dots mark the bins
-    when they are sparse)."""
-    renders = objs(var.get('renders'))
-    gt = next((profile_xy(r.get('profile')) for r in renders
-               if r.get('renderer') == REF and
-               r.get('representation') == 'displacement'), None)
-    others = sorted({str(r.get('renderer')) for r in renders} - {REF})
-    fig, (ax, ad) = plt.subplots(2, 1, figsize=(9.5, 7), sharex=True,
-                                 height_ratios=[3, 2], layout='constrained')
-    finite = []
+def _by_renderer(renders):
+    """{renderer: {'truth': its displacement profile or None, 'series':
+    [(render, (x, y))]}}, the evaluator first, then the others sorted."""
+    groups = {}
     for r in renders:
         xy = profile_xy(r.get('profile'))
         if xy is None:
             continue
-        lab, style = _profile_style(r, colors, others)
+        g = groups.setdefault(str(r.get('renderer')),
+                              {'truth': None, 'series': []})
+        if r.get('representation') == 'displacement':
+            g['truth'] = xy
+        g['series'].append((r, xy))
+    order = ([REF] if REF in groups else []) + sorted(set(groups) - {REF})
+    return {k: groups[k] for k in order}
+
+
+def profile_xlim(groups, region):
+    """The angles the data covers: from the first bin with samples to 5°
+    past the last bin where any profile is still above 0.1 % of albedo·E/π
+    (the shadow beyond is all zeros), at least to the terminator region's
+    end."""
+    xs = [xy[0] for g in groups.values() for _, xy in g['series']]
+    lit = [xy[0][np.abs(xy[1]) > 1e-3] for g in groups.values()
+           for _, xy in g['series']]
+    lit = [x for x in lit if x.size]
+    lo = min(x.min() for x in xs)
+    hi = max([x.max() for x in lit] + [region[1] - 5])
+    return max(0.0, lo - 1), min(180.0, hi + 5)
+
+
+def _profile_panels(ax, ad, rend, g, gt, colors, region):
+    """One renderer's column: its profiles over the evaluator's truth, and
+    each minus the renderer's own displacement truth (the external
+    renderer's truth also minus the evaluator's)."""
+    own = g['truth']
+    if rend != REF and gt is not None:
+        ax.plot(*gt, color='0.6', lw=3.5, zorder=1,
+                label=f'{REF} ground truth')
+    for r, xy in g['series']:
+        lab, style = _profile_style(r, colors)
         span = (xy[0][-1] - xy[0][0]) / num(r['profile']['bin_degrees'])
         if xy[0].size < 0.6 * span:  # sparse: mark the bins
             style.update(marker='.', ms=4)
         ax.plot(*xy, label=lab, **style)
-        finite.append(xy[0])
-        if gt is not None and not (column(r) == GROUND_TRUTH and
-                                   str(r.get('renderer')) == REF):
-            ref = np.interp(xy[0], *gt, left=math.nan, right=math.nan)
-            ad.plot(xy[0], xy[1] - ref, label=lab, **style)
+        if column(r) == GROUND_TRUTH:
+            if rend != REF and gt is not None:
+                ad.plot(xy[0], xy[1] - np.interp(xy[0], *gt, left=math.nan,
+                                                 right=math.nan),
+                        color='0.4', lw=1.2, ls=(0, (4, 2)),
+                        label=f'{rend} truth − {REF} truth')
+            continue
+        if own is not None:
+            ad.plot(xy[0], xy[1] - np.interp(xy[0], *own, left=math.nan,
+                                             right=math.nan), **style)
     for a in (ax, ad):
-        a.axvspan(*region, color='0.9', zorder=0, label='terminator region '
-                  f'{region[0]:g}–{region[1]:g}°' if a is ax else None)
+        a.axvspan(*region, color='0.92', zorder=0)
         a.grid(alpha=0.3)
     ad.axhline(0, color='k', lw=0.8)
-    if finite:  # clip to the bins that hold samples
-        finite = np.concatenate(finite)
-        ad.set_xlim(max(0, finite.min() - 1), min(180, finite.max() + 1))
-    ax.set_ylabel(L_LABEL)
-    ad.set_ylabel(f'Δ{L_LABEL}: method − truth')
-    ad.set_xlabel('θ: angle between light and base normal (degrees)')
-    ax.set_title(f'terminator profiles: {var.get("label", var.get("id"))}',
+    ax.set_title(rend)
+    ad.set_title(f'minus {rend}\'s displacement truth' if own is not None
+                 else f'no {rend} displacement render', fontsize=9)
+
+
+def profile_figure(var, colors, region, figdir):
+    """figures/profiles-<variant>.*: L(theta) of every render of a variant,
+    a column per renderer (its methods over the evaluator's truth) and,
+    below, each method minus the same renderer's displacement truth; the
+    angle axis cropped to the data; empty bins bridged (dots mark the bins
+    when they are sparse)."""
+    groups = _by_renderer(objs(var.get('renders')))
+    if not groups:
+        groups = {REF: {'truth': None, 'series': []}}
+    gt = groups.get(REF, {}).get('truth')
+    n = len(groups)
+    fig, axs = plt.subplots(2, n, figsize=(4.6 * n + 2.2, 6.8), sharex=True,
+                            sharey='row', squeeze=False,
+                            height_ratios=[3, 2], layout='constrained')
+    for k, (rend, g) in enumerate(groups.items()):
+        _profile_panels(axs[0][k], axs[1][k], rend, g, gt, colors, region)
+        axs[1][k].set_xlabel('θ: light vs base normal (degrees)')
+    if any(g['series'] for g in groups.values()):
+        axs[0][0].set_xlim(*profile_xlim(groups, region))
+    axs[0][0].set_ylabel(L_LABEL)
+    axs[1][0].set_ylabel(f'Δ{L_LABEL}')
+    handles = {}
+    for a in axs.flat:
+        for h, lab in zip(*a.get_legend_handles_labels()):
+            handles.setdefault(lab, h)
+    handles[f'terminator region {region[0]:g}–{region[1]:g}°'] = \
+        plt.Rectangle((0, 0), 1, 1, color='0.92')
+    # Beside the panels (matplotlib 3.6 has no 'outside' placement): the
+    # tight bounding box of save() takes it in.
+    fig.legend(handles.values(), handles.keys(), loc='upper left',
+               bbox_to_anchor=(1.0, 0.95))
+    fig.suptitle(f'terminator profiles: {var.get("label", var.get("id"))}',
                  wrap=True)
-    ad.set_title(f'difference from the {REF} displacement ground truth'
-                 if gt is not None else 'no evaluator ground truth')
-    ax.legend(loc='upper left', bbox_to_anchor=(1.01, 1.0))
     return save(fig, figdir, f'profiles-{stem(var.get("id"))}')
 
 
@@ -216,10 +291,11 @@ def _draw_contour(ax, grid, xs, ys, xt, yt, cmap, norm):
 
 def draw_grid(ax, grid, xs, ys, labels, kind, lim, title):
     """One panel: contour when kind == 'contour', else annotated heatmap;
-    colours span lim = (vmin, vmax)."""
+    colours span lim = (vmin, vmax); labels: (x label, y label, x tick
+    texts, y tick texts)."""
     cmap, norm = plt.get_cmap('viridis'), plt.Normalize(*lim)  # own norm:
     # one shared by several figures breaks matplotlib 3.6 at close
-    xt, yt = ([axis_text(v, i) for i, v in enumerate(a)] for a in (xs, ys))
+    xt, yt = labels[2], labels[3]  # tick texts
     if kind == 'contour':
         im = _draw_contour(ax, grid, xs, ys, xt, yt, cmap, norm)
     else:
@@ -261,6 +337,10 @@ def _sweep_scene(k, plot, scene, grids, xs, ys, labels, numeric, figdir):
     """The figures of one scene of a sweep: one file per method, then the
     small multiples; returns (small multiples' paths, all paths)."""
     metric, rend = str(plot.get('metric')), str(plot.get('renderer', REF))
+    scale, label = percent_label(metric)
+    # Two lines: one long line is clipped beside a colour bar.
+    label = label.replace(' (', '\n(', 1)
+    grids = {m: g * scale for m, g in grids.items()}
     allv = np.concatenate([g[np.isfinite(g)] for g in grids.values()])
     lo, hi = allv.min(), allv.max()
     pad = 0 if hi > lo else max(abs(lo) * 0.05, 1e-6)  # constant data
@@ -279,14 +359,15 @@ def _sweep_scene(k, plot, scene, grids, xs, ys, labels, numeric, figdir):
     written = []
     for a, (m, g) in zip(axs.flat, grids.items()):
         im = draw_grid(a, g, xs, ys, labels, kind, lim, m)
-        f1, a1 = plt.subplots(figsize=(5.4, 4.4), layout='constrained')
+        f1, a1 = plt.subplots(figsize=(5.8, 4.6), layout='constrained')
         f1.colorbar(draw_grid(a1, g, xs, ys, labels, kind, lim,
-                              f'{m}: {note}'),
-                    ax=a1, label=metric_label(metric))
+                              f'{m}\n{note}'),
+                    ax=a1, label=label)
         written += save(f1, figdir, f'plot-{k}-{stem(scene)}-{stem(metric)}-'
                         f'{stem(m)}')
-    fig.colorbar(im, ax=axs.ravel().tolist(), label=metric_label(metric))
-    fig.suptitle(f'{metric_label(metric)}: {note} (mean over other axes)')
+    fig.colorbar(im, ax=axs.ravel().tolist(), label=label)
+    fig.suptitle(f'{metric_label(metric).replace(FRACTION, "% of albedo·E/π")}'
+                 f': {note} (mean over other axes)', wrap=True)
     paths = save(fig, figdir, f'plot-{k}-{stem(scene)}')
     return paths, written + paths
 
@@ -311,8 +392,10 @@ def sweep_figures(k, plot, doc, src, figdir):
     ox, oy = (np.argsort([num(t) for t in v]) if numeric
               else np.arange(len(v)) for v in (xs, ys))
     xs, ys = [xs[i] for i in ox], [ys[i] for i in oy]
+    xt, yt = ([axis_labels(axes[a])[i] for i in o]
+              for a, o in ((x, ox), (y, oy)))
     labels = [str(axes[i].get('label', axes[i].get('pointer')))
-              for i in (x, y)]
+              for i in (x, y)] + [xt, yt]
     result = {'metric': metric, 'renderer': rend, 'scenes': [],
               'written': []}
     for scene in dict.fromkeys(s for s, _ in cells):
@@ -330,11 +413,13 @@ def report_figures(report):
     """Every figure of a report into OUT/figures, in the order report.py
     prints them: ranking, profiles per variant, sweeps, then the low-poly
     section. Returns {'ranking': PNG or None, 'profiles': [PNG per
-    shown variant (report.shown)], 'sweeps': [sweep_figures()], 'lowpoly': lowpoly_figures() or
+    shown variant (report.shown)], 'grids': [[PNG, PDF] or [] per shown
+    variant], 'sweeps': [sweep_figures()], 'lowpoly': lowpoly_figures() or
     None, 'written': [every path]}."""
     figdir = os.path.join(report.out, 'figures')
     os.makedirs(figdir, exist_ok=True)
     colors = report_colors(report)
+    progress('ranking and statistics figures')
     written = ranking_figure(report.ranking, colors, figdir)
     figs = {'ranking': written[0] if written else None, 'profiles': [],
             'sweeps': [], 'lowpoly': None}
@@ -342,17 +427,26 @@ def report_figures(report):
                               figdir)
     figs['statistics'] = stats[0] if stats else None
     written += stats
-    for v in report.shown:
+    figs['grids'] = []
+    names = [str(r.get('id')) for r in report.renderers]
+    for k, v in enumerate(report.shown):
+        progress(f'profiles and image grid of {v.get("id")} '
+                 f'({k + 1}/{len(report.shown)} variants)')
         paths = profile_figure(v, colors, report.terminator, figdir)
         figs['profiles'].append(paths[0])
-        written += paths
+        grid = grid_figure(v, report.out, report.src, names, figdir)
+        figs['grids'].append(grid)
+        written += paths + grid
     for k, plot in enumerate(report.doc.get('plots', [])):
         if not isinstance(plot, dict):
             raise BadInput(report.src, f'plots[{k}] must be an object')
+        progress(f'sweep {k + 1}/{len(report.doc.get("plots", []))}: '
+                 f'{plot.get("metric")}')
         sweep = sweep_figures(k, plot, report.doc, report.src, figdir)
         figs['sweeps'].append(sweep)
         written += sweep['written']
     if report.lowpoly:
+        progress('low-poly section')
         figs['lowpoly'] = lowpoly_figures(report.lowpoly, figdir)
         written += figs['lowpoly']['written']
     figs['written'] = written

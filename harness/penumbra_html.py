@@ -2,8 +2,8 @@
 
 The functions here turn the checked report (penumbra_data.Report) and the
 figures drawn for it (penumbra_figures.report_figures) into a plain context
-of strings, lists and dicts: tables as rows of cells, images as data: URIs
-(the page is self-contained), captions. All markup is in the templates,
+of strings, lists and dicts: tables as rows of cells, images as URLs
+(linked or data: URIs: penumbra_data.PageImages), captions. All markup is in the templates,
 and every string from report.json reaches the page through Jinja2's
 autoescape, so it is escaped exactly once; nothing in the context is
 marked safe.
@@ -18,7 +18,7 @@ import jinja2
 from penumbra_context import figure, figure_file, grid_cell, table
 from penumbra_data import (
     FRACTION, GROUND_TRUTH, METRICS, column, get_metric, metric_label, num,
-    objs, stem)
+    obj, objs, stem)
 from penumbra_lowpoly_html import lowpoly_context
 
 TEMPLATES = os.path.join(os.path.dirname(os.path.abspath(__file__)),
@@ -64,7 +64,7 @@ def image_grid(var, uris, missing, renderers):
     return {'cols': cols, 'rows': rows}
 
 
-def variant_context(var, report, fig, missing):
+def variant_context(var, report, fig, missing, grid=()):
     """One variant's section: image grid, profile figure, metrics table."""
     vid = str(var.get('id'))
     comps = [c for c in report.comps if c.get('variant') == var.get('id')]
@@ -78,6 +78,7 @@ def variant_context(var, report, fig, missing):
             'label': str(var.get('label', '')),
             'grid': image_grid(var, report.uris, missing,
                                [str(r.get('id')) for r in report.renderers]),
+            'composed': [os.path.relpath(p, report.out) for p in grid],
             'profiles': figure_file(
                 fig, f'profiles {vid}',
                 f'figures/profiles-{stem(vid)}.{{png,svg,pdf}}'),
@@ -106,42 +107,107 @@ def interval_text(ci, scale=1.0, digits=2):
     return f'[{lo:.{digits}f}, {hi:.{digits}f}]'
 
 
-def statistics_context(report):
-    """Sentences and the overall table of report.json's "statistics": every
-    number with its 95 % interval; methods the literature rejects labelled."""
-    st = report.doc.get('statistics')
-    if not isinstance(st, dict) or not isinstance(st.get('overall'), dict):
-        return None
-    overall = st['overall']
+def ci_cell(value, ci, scale=100.0, digits=1):
+    """A right-aligned 'value [lo, hi]' cell, scaled (100: percent)."""
+    v = num(value)
+    if not math.isfinite(v):
+        return {'text': 'n/a', 'cls': 'n na'}
+    return {'text': f'{v * scale:.{digits}f} {interval_text(ci, scale, digits)}',
+            'cls': 'n'}
+
+
+def verdict(m):
+    """Better, worse or tied with raw bump: whether the combined relative
+    error's 95 % interval lies below 1, above 1, or contains it."""
+    if m.get('method') == 'none':
+        return 'baseline'
+    ci = m.get('combined_ci')
+    if not isinstance(ci, list) or len(ci) != 2 or None in ci:
+        return 'n/a'
+    lo, hi = num(ci[0]), num(ci[1])
+    return 'better' if hi < 1 else 'worse' if lo > 1 else 'tie'
+
+
+def statistics_rows(methods):
+    """The headline table's rows: every number in percent with its 95 %
+    interval in the same cell."""
     rows = []
-    for m in objs(overall.get('methods')):
+    for m in methods:
         term, view = m.get('terminator_vs_none') or {}, m.get('view_vs_none') or {}
         label = str(m.get('method'))
         if m.get('rejected'):
             label += ' (rejected)'
         rows.append([
-            m.get('rank'), label,
-            (m.get('combined_relative_error'), 1),
-            interval_text(m.get('combined_ci')),
-            (m.get('terminator_improvement'), 100),
-            interval_text(m.get('terminator_improvement_ci'), 100, 0),
+            m.get('rank'), label, verdict(m),
+            ci_cell(m.get('combined_relative_error'), m.get('combined_ci')),
+            ci_cell(m.get('terminator_improvement'),
+                    m.get('terminator_improvement_ci'), digits=0),
             f'{term.get("better", 0)}/{m.get("variants", 0)}',
-            (view.get('mean_difference'), 1),
-            interval_text(view.get('ci'), 1, 4),
-            (m.get('view_bias'), 1),
-            interval_text(m.get('view_bias_ci'), 1, 4)])
-    head = ['rank', 'method', 'combined relative error', '95 % CI',
-            'terminator RMSE removed (%)', '95 % CI (%)',
-            'better than none', 'grazing-view RMSE minus none', '95 % CI',
-            'grazing-view signed error', '95 % CI']
+            ci_cell(view.get('mean_difference'), view.get('ci'), digits=2),
+            ci_cell(m.get('view_bias'), m.get('view_bias_ci'), digits=2)])
+    return rows
+
+
+STATISTICS_HEAD = [
+    'rank', 'method', 'vs raw bump', 'combined error (% of raw bump’s) [95 % CI]',
+    'terminator RMSE removed (%) [95 % CI]', 'better than raw bump (variants)',
+    'grazing-view RMSE minus raw bump (% of albedo·E/π) [95 % CI]',
+    'grazing-view signed error (% of albedo·E/π) [95 % CI]']
+
+
+def agreement_table(report):
+    """The cross-renderer table: a row per external renderer, a column per
+    render compared with the evaluator's (ground truth, then methods); each
+    cell the mean terminator RMSE over variants in % with its interval."""
+    ag = obj(report.doc.get('agreement'))
+    sums = objs(ag.get('summaries'))
+    if not sums:
+        return None
+    whats = list(dict.fromkeys(str(s.get('what')) for s in sums))
+    names = {str(r.get('id')): f'{r.get("id")} ({r.get("version", "?")})'
+             for r in report.renderers}
+    at = {(str(s.get('renderer')), str(s.get('what'))): s for s in sums}
+    rows = []
+    for rend in dict.fromkeys(str(s.get('renderer')) for s in sums):
+        cells = [names.get(rend, rend)]
+        for w in whats:
+            s = at.get((rend, w))
+            cells.append(ci_cell(s.get('mean_rmse_terminator'), s.get('ci'),
+                                 digits=2) if s else
+                         {'text': 'not rendered', 'cls': 'na'})
+        rows.append(cells)
+    thr = num(ag.get('threshold'))
+    return {'table': table(['renderer'] + whats, rows),
+            'caption': 'Terminator-region profile RMSE of each renderer\'s '
+                       'render against the evaluator\'s render of the same '
+                       'scene and method, % of albedo·E/π, mean over variants '
+                       'with its 95 % interval' + (
+                           f'; agreement within {thr * 100:g} % is expected '
+                           'of a correct renderer' if math.isfinite(thr)
+                           else '') + '.'}
+
+
+def statistics_context(report):
+    """The headline: a lead sentence, the method table and the
+    cross-renderer table (every number in % with its 95 % interval), then
+    the same findings in sentences; methods the literature rejects
+    labelled."""
+    st = report.doc.get('statistics')
+    if not isinstance(st, dict) or not isinstance(st.get('overall'), dict):
+        return None
+    overall = st['overall']
+    methods = objs(overall.get('methods'))
+    rows = statistics_rows(methods)
     rejected = [f'{m.get("method")}: {m.get("rejected")}'
-                for m in objs(overall.get('methods')) if m.get('rejected')]
-    agreement = report.doc.get('agreement')
-    agreement = agreement if isinstance(agreement, dict) else {}
-    return {'sentences': [str(x) for x in overall.get('headline') or []],
+                for m in methods if m.get('rejected')]
+    agreement = obj(report.doc.get('agreement'))
+    sentences = [str(x) for x in overall.get('headline') or []]
+    return {'lead': sentences[0] if sentences else '',
+            'sentences': sentences[1:],
             'agreement': [str(x) for x in agreement.get('headline') or []],
+            'agreement_table': agreement_table(report),
             'ground_truth': ground_truth_context(report),
-            'table': table(head, rows) if rows else None,
+            'table': table(STATISTICS_HEAD, rows) if rows else None,
             'definition': str(st.get('definition', '')),
             'interval': str(st.get('interval', '')),
             'test': str(st.get('test', '')),
@@ -227,12 +293,13 @@ def report_context(report, figs):
         if ranking_fig else None,
         'statistics_figure': figure_file(
             stats_fig, 'combined relative error with 95 % intervals',
-            'figures/statistics.{png,svg,pdf}: combined relative error per '
-            'method with its 95 % bootstrap interval over variants (1 = raw '
-            'bump; the dashed line)') if stats_fig else None,
+            'figures/statistics.{png,svg,pdf}: combined error per method in % '
+            'of raw bump\'s, with its 95 % bootstrap interval over variants '
+            '(dashed: raw bump, 100 %)') if stats_fig else None,
         **renderer_tables(report),
-        'variants': [variant_context(v, report, f, missing)
-                     for v, f in zip(report.shown, figs['profiles'])],
+        'variants': [variant_context(v, report, f, missing, g)
+                     for v, f, g in zip(report.shown, figs['profiles'],
+                                        figs['grids'])],
         'variants_note': variants_note(report),
         'sweeps': sweeps_context(report, figs['sweeps']),
         'has_plots': bool(report.doc.get('plots')),

@@ -134,7 +134,7 @@ def image_grid(lp, var, uris):
 
 
 def _embed(v, uris, out, src):
-    """Read a variant's images into uris (data: URIs), once each."""
+    """Read a variant's images into uris (their page URLs), once each."""
     for r in objs(v.get('renders')):
         for key in ('image', 'difference'):
             rel = r.get(key)

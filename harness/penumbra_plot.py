@@ -5,6 +5,7 @@ that make the output reproducible: the same input gives the same bytes,
 with no dates or versions in the files and a fixed SVG hash salt.
 """
 import os
+import sys
 
 import matplotlib
 matplotlib.use('Agg')
@@ -16,16 +17,24 @@ META = {'png': {'Software': None}, 'svg': {'Date': None, 'Creator': None},
         'pdf': {'CreationDate': None, 'Creator': None, 'Producer': None}}
 
 
-def save(fig, outdir, name):
-    """Write fig as outdir/name.{png,svg,pdf}; returns the three paths."""
+def save(fig, outdir, name, formats=tuple(META)):
+    """Write fig as outdir/name.<format> for each of formats (PNG, SVG and
+    PDF by default); returns the paths, in that order."""
     written = []
-    for ext, meta in META.items():
+    for ext in formats:
+        meta = META[ext]
         path = os.path.join(outdir, f'{name}.{ext}')
         fig.savefig(path, dpi=150 if ext == 'png' else 72, metadata=meta,
                     bbox_inches='tight', pad_inches=0.05)
         written.append(path)
     plt.close(fig)
     return written
+
+
+def progress(text):
+    """One progress line on stderr, which the C++ side forwards to the
+    user while the figures are drawn (study/figures.cpp)."""
+    print(f'progress: {text}', file=sys.stderr, flush=True)
 
 
 def method_colors(names):

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Figures and a self-contained HTML page for a Penumbra study: the entry
+"""Figures and the HTML page of a Penumbra study: the entry
 point (argument handling, exit status, messages); the work is done by
   penumbra_data.py      reading and checking report.json (and the low-poly
                         section's model)
@@ -10,9 +10,11 @@ point (argument handling, exit status, messages); the work is done by
                         templates/ (report.html.j2 and what it includes)
 
 Usage (Debian's Python, with python3-matplotlib and python3-jinja2):
-  /usr/bin/python3 harness/report.py report OUT
+  /usr/bin/python3 harness/report.py report OUT [--self-contained]
       reads OUT/report.json; writes OUT/figures/*.{png,svg,pdf} and
-      OUT/report.html (every image embedded as a data: URI).
+      OUT/report.html, which links its images (relative URLs into
+      OUT/images and OUT/figures: keep the folder together), or with
+      --self-contained embeds every image as a data: URI (one file).
   /usr/bin/python3 harness/report.py contour CONTOUR.json OUTDIR
       writes OUTDIR/contour-<method>.*, contour-diff-<a>-<b>.* for every
       pair of methods in the given order, and the combined contour.*.
@@ -63,16 +65,19 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 sys.dont_write_bytecode = True
 
 from penumbra_contour import contour_figures, load_contour  # noqa: E402
-from penumbra_data import BadInput, Report  # noqa: E402
+from penumbra_data import BadInput, PageImages, Report  # noqa: E402
 from penumbra_figures import report_figures  # noqa: E402
 from penumbra_html import write_report  # noqa: E402
+from penumbra_plot import progress  # noqa: E402
 
 
-def run_report(out):
+def run_report(out, self_contained=False):
     """Check OUT/report.json, draw its figures, write report.html; returns
     every path written, report.html last."""
+    PageImages.embed, PageImages.out = self_contained, out
     report = Report(out)
     figs = report_figures(report)
+    progress('report.html' + (' (self-contained)' if self_contained else ''))
     return figs['written'] + [write_report(report, figs)]
 
 
@@ -82,12 +87,13 @@ def run_contour(path, outdir):
 
 def main(argv):
     try:
-        if len(argv) == 2 and argv[0] == 'report':
-            written = run_report(argv[1])
+        if len(argv) in (2, 3) and argv[0] == 'report' and \
+                argv[2:] in ([], ['--self-contained']):
+            written = run_report(argv[1], len(argv) == 3)
         elif len(argv) == 3 and argv[0] == 'contour':
             written = run_contour(argv[1], argv[2])
         else:
-            print('usage: report.py report OUT | '
+            print('usage: report.py report OUT [--self-contained] | '
                   'report.py contour CONTOUR.json OUTDIR', file=sys.stderr)
             return 2
     except BadInput as e:

@@ -192,6 +192,42 @@ PairChannels pair_channels(const Image& test, const Image& reference) {
 
 }  // namespace
 
+double ssim_unmasked(const Image& test, const Image& reference, double data_range) {
+  if (test.width != reference.width || test.height != reference.height)
+    throw std::invalid_argument("image sizes differ");
+  const int trgb[3] = {require_channel(test, "R"), require_channel(test, "G"),
+                       require_channel(test, "B")};
+  const int rrgb[3] = {require_channel(reference, "R"), require_channel(reference, "G"),
+                       require_channel(reference, "B")};
+  const int w = test.width, h = test.height, radius = 5;
+  if (w < 2 * radius + 1 || h < 2 * radius + 1) return kNaN;
+  std::vector<double> a(std::size_t(w) * h), b(a.size());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      a[std::size_t(y) * w + x] = radiance(test, x, y, trgb);
+      b[std::size_t(y) * w + x] = radiance(reference, x, y, rrgb);
+    }
+  double kernel[2 * 5 + 1], total = 0.0;
+  for (int i = -radius; i <= radius; ++i)
+    total += kernel[i + radius] = std::exp(-0.5 * i * i / (1.5 * 1.5));
+  const double c1 = std::pow(0.01 * data_range, 2), c2 = std::pow(0.03 * data_range, 2);
+  double sum = 0.0;
+  for (int y = radius; y < h - radius; ++y)
+    for (int x = radius; x < w - radius; ++x) {
+      double mx = 0, my = 0, sxx = 0, syy = 0, sxy = 0;
+      for (int dy = -radius; dy <= radius; ++dy)
+        for (int dx = -radius; dx <= radius; ++dx) {
+          const double k = kernel[dx + radius] * kernel[dy + radius] / (total * total);
+          const std::size_t i = std::size_t(y + dy) * w + (x + dx);
+          mx += k * a[i], my += k * b[i], sxx += k * a[i] * a[i], syy += k * b[i] * b[i],
+              sxy += k * a[i] * b[i];
+        }
+      const double vx = sxx - mx * mx, vy = syy - my * my, cxy = sxy - mx * my;
+      sum += ((2 * mx * my + c1) * (2 * cxy + c2)) / ((mx * mx + my * my + c1) * (vx + vy + c2));
+    }
+  return sum / (double(w - 2 * radius) * double(h - 2 * radius));
+}
+
 ImageMetrics compare_images(const Image& test, const Image& reference, double min_coverage) {
   const PairChannels ch = pair_channels(test, reference);
   const int(&trgb)[3] = ch.trgb;

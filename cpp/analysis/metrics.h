@@ -129,6 +129,14 @@ struct ImageMetrics {
 
 ImageMetrics compare_images(const Image& test, const Image& reference, double min_coverage = 0.999);
 
+// The usual SSIM, for images without a coverage mask (`compare --no-mask`):
+// the same window, constants and luminance (R+G+B)/3 as ImageMetrics::ssim,
+// with dynamic range L = `data_range`, but every pixel counts and the mean
+// runs over the pixels whose whole 11x11 window lies inside the image, as
+// scikit-image's structural_similarity(gaussian_weights=True, sigma=1.5,
+// use_sample_covariance=False) does. NaN when the image is under 11x11.
+double ssim_unmasked(const Image& test, const Image& reference, double data_range);
+
 // Shadow changes of a low-poly render against a smooth (unbumped) ground
 // truth, over pixels fully covered in both. Radiances are in units of
 // scale = albedo * E / pi, so the truth's unshadowed value is cos(theta),

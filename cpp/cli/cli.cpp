@@ -124,21 +124,42 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   CompareArgs c;
   CLI::App* compare_cmd = app.add_subcommand(
       "compare", "terminator-profile and image metrics of TEST against REFERENCE");
-  compare_cmd->add_option("reference", c.reference, "reference EXR (e.g. displacement)")
+  compare_cmd
+      ->add_option("reference", c.reference,
+                   "reference image (a Penumbra EXR, e.g. displacement, or another renderer's)")
       ->required();
-  compare_cmd->add_option("test", c.test, "EXR to compare")->required();
+  compare_cmd->add_option("test", c.test, "image to compare (EXR, PNG, TIFF, ...)")->required();
   compare_cmd->add_flag("--json", c.json, "print JSON");
   compare_cmd->add_option("-o,--output", c.difference,
                           "write the difference image (test - reference, R G B; A the smaller "
                           "coverage) as OpenEXR");
   compare_cmd
       ->add_option("--scale", c.scale,
-                   "albedo*E/pi in W m^-2 sr^-1 (default: from the reference's metadata)")
+                   "albedo*E/pi in W m^-2 sr^-1 (default: from the penumbra:scene metadata of the "
+                   "reference, else of the test)")
       ->check(CLI::PositiveNumber);
   compare_cmd
       ->add_option("--max-profile-rmse", c.max_rmse,
                    "exit 3 when the overall profile RMSE exceeds this")
       ->check(CLI::NonNegativeNumber);
+  compare_cmd->add_option(
+      "--mask", c.mask,
+      "coverage of an image without an A channel: an image of the same size "
+      "(its A channel, else its first; 1 object, 0 background); before --threshold");
+  compare_cmd
+      ->add_option("--threshold", c.threshold,
+                   "coverage of an image without an A channel: its lit region, radiance >= "
+                   "FRACTION * albedo*E/pi; alone: 0.05, the profile's dark level (write "
+                   "--threshold=F before the images)")
+      ->expected(0, 1)
+      ->default_str("0.05")
+      ->type_name("FRACTION")
+      ->check(CLI::Range(0.0, 1e6));
+  compare_cmd->add_flag("--no-mask", c.no_mask,
+                        "image metrics over every pixel, with the usual (unmasked) SSIM");
+  compare_cmd->add_flag("--same-scene", c.same_scene,
+                        "exit 2 when the images' penumbra:scene show different geometry, camera "
+                        "or light (default: a warning)");
 
   CalibrationOptions cal;
   cal.scenes_dir = data_file("scenes/calibration");
@@ -175,6 +196,9 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
                    "start at most this many new renders, then stop (resume later)")
       ->check(CLI::NonNegativeNumber);
   run_cmd->add_flag("--no-figures", run_args.no_figures, "skip matplotlib figures and report.html");
+  run_cmd->add_flag("--self-contained", run_args.self_contained,
+                    "report.html embeds every image (one file to mail; default: it links "
+                    "images/ and figures/ beside it)");
   run_cmd->add_flag("--dry-run", run_args.dry_run,
                     "validate and count the renders (and cache hits); write nothing");
   run_cmd
@@ -228,6 +252,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       "report", "redraw the figures and report.html of a study folder from its report.json");
   report_cmd->add_option("folder", report_folder, "study output folder (holds report.json)")
       ->required();
+  bool report_self_contained = false;
+  report_cmd->add_flag("--self-contained", report_self_contained,
+                       "report.html embeds every image (one file to mail; default: it links "
+                       "images/ and figures/ beside it)");
 
   std::vector<std::string> contour_methods;
   std::string contour_output = "results/contour";
@@ -266,7 +294,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   try {
     if (*methods) return command_methods(methods_json, out);
     if (*renderers) return command_renderers(renderers_json, out);
-    if (*report_cmd) return command_report(report_folder, out);
+    if (*report_cmd) return command_report(report_folder, report_self_contained, out, err);
     if (*render_cmd) return command_render(r, out, err);
     if (*export_cmd) return command_export(x, out);
     if (*compare_cmd) return command_compare(c, out, err);

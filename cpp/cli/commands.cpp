@@ -11,7 +11,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -140,25 +142,32 @@ int command_renderers(bool as_json, std::ostream& out) {
   return kExitOk;
 }
 
-int command_report(const std::string& folder, std::ostream& out) {
+int command_report(const std::string& folder, bool self_contained, std::ostream& out,
+                   std::ostream& err) {
   const fs::path report = fs::path(folder) / "report.json";
   if (!fs::is_regular_file(report))
     throw UsageError(fmt::format("{}: no such file (give a study output folder)", report.string()));
   read_json_file(report.string());  // strict: a damaged report is bad input, named here
-  out << fmt::format("report: {}\n", draw_report(folder));
+  const std::string html =
+      draw_report(folder, self_contained, "", 600.0, [&err](const std::string& line) {
+        err << "penumbra report: " << line << "\n" << std::flush;
+      });
+  out << fmt::format("report: {}\n", html);
   return kExitOk;
 }
 
 namespace {
 
-// The output formats: the EXR carries 7 float channels; the preview is a PNG.
-void check_extension(const std::string& path, const char* extension, const char* option) {
+// The output formats, from the extension: only OpenEXR holds float radiance
+// and the analysis channels; the preview is a PNG. `why` says so in the error.
+void check_extension(const std::string& path, const char* extension, const char* option,
+                     const char* why = "") {
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return std::tolower(c); });
   if (ext != extension)
-    throw UsageError(fmt::format("{} {}: expected a file name ending in {} (got \"{}\")", option,
-                                 path, extension, ext));
+    throw UsageError(fmt::format("{} {}: expected a file name ending in {} (got \"{}\"){}", option,
+                                 path, extension, ext, why));
 }
 
 // Refuses, before anything runs, a method or offset the renderer does not ship
@@ -298,7 +307,9 @@ int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
   const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
   apply_overrides(document, overrides, origin);
   const Scene scene = scene_from_json(document, origin);
-  check_extension(a.output, ".exr", "-o");
+  check_extension(a.output, ".exr", "-o",
+                  ": only OpenEXR holds the float R G B A and analysis channels of a render "
+                  "(--preview FILE.png writes an 8-bit picture)");
   if (!a.preview.empty()) check_extension(a.preview, ".png", "--preview");
   check_writable(a.output);
   if (!a.preview.empty()) {
@@ -366,11 +377,18 @@ int command_export(const ExportArgs& a, std::ostream& out) {
   const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
   apply_overrides(document, overrides, origin);
   const Scene scene = scene_from_json(document, origin);
+  const std::optional<RendererKind> renderer = renderer_from_id(a.to);
+  if (renderer) check_offered(*renderer, scene);  // before a folder is made
   std::error_code ec;
   fs::create_directories(a.output, ec);
   if (ec || !fs::is_directory(a.output))
     throw OutputError(fmt::format("{}: cannot create the output folder: {}", a.output,
                                   ec ? ec.message() : "not a folder"));
+  // A folder that takes no files fails here, before the mesh is built.
+  check_writable((fs::path(a.output) / (a.to == to_string(RendererKind::kPovray)
+                                            ? std::string("scene.pov")
+                                            : std::string(kBlenderJobFile)))
+                     .string());
   if (a.to == to_string(RendererKind::kPovray)) {
     const PovrayExport job = export_povray(scene);
     const std::string path = (fs::path(a.output) / "scene.pov").string();
@@ -403,64 +421,166 @@ int command_export(const ExportArgs& a, std::ostream& out) {
 
 namespace {
 
-// albedo * E / pi of the scene stored in a Penumbra EXR.
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
 Image read_image_checked(const std::string& path) {
   if (!fs::is_regular_file(path)) throw UsageError(fmt::format("{}: no such file", path));
   return read_image(path);
 }
 
-// Copies the analysis channels of `geometry` onto `image` (same size).
+// R, G, B and A of `image` on a copy of `geometry` (same size): the analysis
+// channels of one render lent to an image that has none.
 Image with_channels_of(const Image& image, const Image& geometry) {
   Image out = geometry;
   const std::size_t nc = out.channels.size();
   const char* names[4] = {"R", "G", "B", "A"};
   for (int c = 0; c < 4; ++c) {
-    const int from = image.channel_index(names[c]);
-    if (from < 0) throw UsageError(fmt::format("the test image has no {} channel", names[c]));
+    const int from = image.channel_index(names[c]), to = out.channel_index(names[c]);
     for (int y = 0; y < out.height; ++y)
       for (int x = 0; x < out.width; ++x)
-        out.pixels[(std::size_t(y) * out.width + x) * nc + c] = image.at(x, y, from);
+        out.pixels[(std::size_t(y) * out.width + x) * nc + to] = image.at(x, y, from);
   }
   return out;
 }
 
-double radiance_scale_of(const std::string& path) {
-  const std::string text = read_image_attribute(path, "penumbra:scene");
-  if (text.empty())
-    throw UsageError(fmt::format(
-        "{}: no penumbra:scene metadata to take albedo * E / pi from; give --scale", path));
-  const std::string origin = path + " (penumbra:scene metadata)";
-  const Scene scene = scene_from_json(parse_json_text(text, origin), origin);
-  return radiance_scale(scene);
+// albedo * E / pi of the first of `paths` whose penumbra:scene gives one; NaN
+// when none carries the metadata (an image from another renderer).
+double radiance_scale_of(const std::vector<std::string>& paths) {
+  for (const std::string& path : paths) {
+    const std::string text = read_image_attribute(path, "penumbra:scene");
+    if (text.empty()) continue;
+    const std::string origin = path + " (penumbra:scene metadata)";
+    return radiance_scale(scene_from_json(parse_json_text(text, origin), origin));
+  }
+  return kNaN;
 }
 
-void require_rgba(const Image& image, const std::string& path) {
-  for (const char* name : {"R", "G", "B", "A"})
+void require_rgb(const Image& image, const std::string& path) {
+  for (const char* name : {"R", "G", "B"})
     if (image.channel_index(name) < 0)
-      throw UsageError(fmt::format("{}: no {} channel (compare needs R, G, B and A; it has {})",
-                                   path, name, fmt::join(image.channels, ", ")));
+      throw UsageError(fmt::format("{}: no {} channel (compare needs R, G and B; it has {})", path,
+                                   name, fmt::join(image.channels, ", ")));
+}
+
+// `image` with its A channel set to alpha(x, y), appended when it has none.
+template <class Alpha>
+Image with_alpha(const Image& image, Alpha alpha) {
+  Image out = image;
+  int a = image.channel_index("A");
+  if (a < 0) {
+    const std::size_t nc = image.channels.size(), n = std::size_t(image.width) * image.height;
+    out.channels.push_back("A");
+    out.pixels.assign(n * (nc + 1), 0.0f);
+    for (std::size_t p = 0; p < n; ++p)
+      std::copy_n(&image.pixels[p * nc], nc, &out.pixels[p * (nc + 1)]);
+    a = static_cast<int>(nc);
+  }
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x) out.at(x, y, a) = alpha(x, y);
+  return out;
+}
+
+// One side of a comparison; `coverage` says where its A channel came from.
+struct CompareImage {
+  std::string path;
+  Image image;
+  std::string coverage = "A channel";
+};
+
+// The coverage a --mask image gives: its A channel, else its first channel.
+Image mask_coverage(const CompareImage& side, const std::string& mask_path, const Image& mask) {
+  if (mask.width != side.image.width || mask.height != side.image.height)
+    throw UsageError(fmt::format("--mask {} is {}x{} but {} is {}x{}", mask_path, mask.width,
+                                 mask.height, side.path, side.image.width, side.image.height));
+  if (mask.channels.empty()) throw UsageError(fmt::format("--mask {}: no channels", mask_path));
+  const int c = std::max(0, mask.channel_index("A"));
+  return with_alpha(side.image, [&](int x, int y) { return mask.at(x, y, c); });
+}
+
+// Gives an image without an A channel one, from --mask or --threshold, or
+// says what it lacks. --no-mask needs none (the image metrics then count
+// every pixel, the profile is not computed).
+void resolve_coverage(CompareImage& side, const CompareArgs& a, const Image* mask, double scale) {
+  if (side.image.channel_index("A") >= 0) return;
+  if (mask) {
+    side.image = mask_coverage(side, a.mask, *mask);
+    side.coverage = "--mask " + a.mask;
+  } else if (a.threshold) {
+    if (!std::isfinite(scale))
+      throw UsageError(fmt::format(
+          "--threshold is a fraction of albedo*E/pi, which neither image's penumbra:scene "
+          "gives ({} has none): add --scale",
+          side.path));
+    const double level = *a.threshold * scale;
+    const int rgb[3] = {side.image.channel_index("R"), side.image.channel_index("G"),
+                        side.image.channel_index("B")};
+    const Image& im = side.image;
+    side.image = with_alpha(im, [&](int x, int y) {
+      const double v = (im.at(x, y, rgb[0]) + im.at(x, y, rgb[1]) + im.at(x, y, rgb[2])) / 3.0;
+      return v >= level ? 1.0f : 0.0f;
+    });
+    side.coverage = fmt::format("--threshold {}: lit where radiance >= {:.6g} W m^-2 sr^-1",
+                                *a.threshold, level);
+  } else if (a.no_mask) {
+    side.coverage = "none (--no-mask)";
+  } else {
+    throw UsageError(fmt::format(
+        "{}: no A (coverage) channel and no --mask FILE or --threshold given (or --no-mask for "
+        "image metrics over every pixel)",
+        side.path));
+  }
 }
 
 // What must match for two renders to be comparable: the same camera, light,
-// shape and height function (representation and method may differ). Returns
-// the first differing pointer, or "" when they match or either lacks metadata.
-std::string scene_difference(const std::string& reference, const std::string& test) {
+// shape and height function (representation, method and sampling may
+// differ). Returns the differing pointers, none when they match or either
+// image lacks the metadata.
+std::vector<std::string> scene_differences(const std::string& reference, const std::string& test) {
   const std::string a = read_image_attribute(reference, "penumbra:scene");
   const std::string b = read_image_attribute(test, "penumbra:scene");
-  if (a.empty() || b.empty()) return "";
+  if (a.empty() || b.empty()) return {};
   auto comparable = [](const json& scene) {
     json out = json::object();
     for (const char* key : {"camera", "light", "shape", "height"})
-      if (scene.contains(key)) out[key] = scene[key];
-    if (out.contains("shape")) out["shape"].erase("tessellation");
+      if (scene.is_object() && scene.contains(key)) out[key] = scene[key];
+    if (out.contains("shape") && out["shape"].is_object()) out["shape"].erase("tessellation");
+    if (out.contains("camera") && out["camera"].is_object())
+      for (const char* key : {"spp", "seed"}) out["camera"].erase(key);
     return out;
   };
   const json diff = json::diff(comparable(parse_json_text(a, reference + " (penumbra:scene)")),
                                comparable(parse_json_text(b, test + " (penumbra:scene)")));
-  return diff.empty() ? "" : diff[0].at("path").get<std::string>();
+  // Named two levels deep (/camera/right, not /camera/right/0), the shape first.
+  std::vector<std::string> where;
+  for (const char* key : {"/shape", "/camera", "/light", "/height"})
+    for (const json& op : diff) {
+      const std::string path = op.at("path").get<std::string>();
+      if (path.rfind(key, 0) != 0 ||
+          (path.size() > std::strlen(key) && path[std::strlen(key)] != '/'))
+        continue;
+      const std::string named = printable(path.substr(0, path.find('/', std::strlen(key) + 1)), 60);
+      if (std::find(where.begin(), where.end(), named) == where.end()) where.push_back(named);
+    }
+  return where;
 }
 
-// R, G, B: test - reference (W m^-2 sr^-1); A: the smaller coverage.
+// Warns (or, with --same-scene, refuses) when the two images show different
+// scenes: their metrics would compare unrelated images.
+void check_same_scene(const CompareArgs& a, std::ostream& err) {
+  const std::vector<std::string> where = scene_differences(a.reference, a.test);
+  if (where.empty()) return;
+  const std::size_t shown = std::min<std::size_t>(where.size(), 8);
+  const std::string list =
+      fmt::format("{}{}", fmt::join(where.begin(), where.begin() + long(shown), ", "),
+                  where.size() > shown ? fmt::format(" and {} more", where.size() - shown) : "");
+  const std::string message = fmt::format(
+      "{} and {} show different scenes (penumbra:scene differs at {})", a.reference, a.test, list);
+  if (a.same_scene) throw UsageError(message + "; --same-scene");
+  err << "penumbra: warning: " << message << "; the metrics compare unrelated images\n";
+}
+
+// R, G, B: test - reference (W m^-2 sr^-1); A: the smaller coverage (1 for
+// an image without one, --no-mask).
 Image difference_image(const Image& test, const Image& reference) {
   Image out;
   out.width = test.width, out.height = test.height;
@@ -474,9 +594,110 @@ Image difference_image(const Image& test, const Image& reference) {
     for (int x = 0; x < out.width; ++x) {
       float* p = &out.pixels[(std::size_t(y) * out.width + x) * 4];
       for (int c = 0; c < 3; ++c) p[c] = test.at(x, y, t[c]) - reference.at(x, y, r[c]);
-      p[3] = std::min(test.at(x, y, t[3]), reference.at(x, y, r[3]));
+      p[3] = std::min(t[3] < 0 ? 1.0f : test.at(x, y, t[3]),
+                      r[3] < 0 ? 1.0f : reference.at(x, y, r[3]));
     }
   return out;
+}
+
+// -o: OpenEXR, writable, and not one of the images compared.
+void check_difference_output(const CompareArgs& a) {
+  if (a.difference.empty()) return;
+  check_extension(a.difference, ".exr", "-o", ": the difference is signed float radiance");
+  for (const std::string& input : {a.reference, a.test, a.mask}) {
+    std::error_code ec;
+    if (!input.empty() && fs::equivalent(a.difference, input, ec))
+      throw UsageError(fmt::format("-o {}: is {}, an input of the comparison", a.difference,
+                                   input == a.mask ? "the --mask image" : input));
+  }
+  check_writable(a.difference);
+}
+
+}  // namespace
+
+namespace {
+
+// Everything `penumbra compare` reports.
+struct CompareResult {
+  double scale = kNaN;
+  std::string coverage[2];  // reference, test
+  std::string skipped;      // why the profile and viewer metrics are missing ("" if not)
+  ProfileMetrics pm;
+  ImageMetrics im;
+  ViewMetrics vm;
+  ComparisonIntervals ci;
+};
+
+// Why the profile and viewer metrics cannot be computed, "" when they can.
+std::string why_no_profile(const Image& reference, const Image& test, double scale) {
+  if (reference.channel_index("A") < 0 || test.channel_index("A") < 0)
+    return "an image has no coverage (--no-mask without --mask or --threshold)";
+  if (reference.channel_index("analysis.theta") < 0 && test.channel_index("analysis.theta") < 0)
+    return "neither image has the analysis.theta channel of a Penumbra render";
+  if (!std::isfinite(scale))
+    return "no albedo*E/pi: neither image carries penumbra:scene metadata (give --scale)";
+  return "";
+}
+
+ComparisonIntervals nan_intervals() {
+  ComparisonIntervals ci;
+  for (Interval* i : {&ci.rmse_terminator, &ci.image_rmse, &ci.view_rmse_grazing,
+                      &ci.view_bias_grazing, &ci.max_error, &ci.position_error, &ci.lit_bias})
+    *i = {kNaN, kNaN};
+  ci.rmse_terminator_bias = kNaN;
+  return ci;
+}
+
+ProfileMetrics nan_profile_metrics() {
+  ProfileMetrics m;
+  for (double* v : {&m.rmse_terminator, &m.rmse_overall, &m.max_error, &m.max_step,
+                    &m.reference_max_step, &m.position, &m.reference_position, &m.position_error,
+                    &m.width, &m.reference_width, &m.lit_bias})
+    *v = kNaN;
+  return m;
+}
+
+// Image metrics over the covered pixels or, --no-mask, over every pixel with
+// the usual SSIM (analysis/metrics.h, ssim_unmasked).
+ImageMetrics image_metrics(const Image& test, const Image& reference, bool no_mask) {
+  if (!no_mask) return compare_images(test, reference);
+  const auto full = [](const Image& image) {
+    return with_alpha(image, [](int, int) { return 1.0f; });
+  };
+  ImageMetrics m = compare_images(full(test), full(reference));
+  m.mask_iou = kNaN;
+  m.ssim = m.pixels ? ssim_unmasked(test, reference, m.peak) : kNaN;
+  return m;
+}
+
+CompareResult compare_sides(const CompareImage& reference, const CompareImage& test, double scale,
+                            bool no_mask) {
+  CompareResult r;
+  r.scale = scale;
+  r.coverage[0] = reference.coverage, r.coverage[1] = test.coverage;
+  r.im = image_metrics(test.image, reference.image, no_mask);
+  r.skipped = why_no_profile(reference.image, test.image, scale);
+  if (!r.skipped.empty()) {
+    r.pm = nan_profile_metrics();
+    r.vm = {kNaN, kNaN, 0};
+    r.ci = nan_intervals();
+    return r;
+  }
+  // theta comes from whichever image has it (the reference first): both show
+  // the same base points.
+  const bool from_reference = reference.image.channel_index("analysis.theta") >= 0;
+  const Image ref =
+      from_reference ? reference.image : with_channels_of(reference.image, test.image);
+  const Image tst = test.image.channel_index("analysis.theta") >= 0
+                        ? test.image
+                        : with_channels_of(test.image, reference.image);
+  const ProfileOptions options;
+  r.pm = compare_profiles(terminator_profile(tst, scale, options),
+                          terminator_profile(ref, scale, options), options);
+  r.vm = view_metrics(view_error_profile(tst, ref, scale));
+  r.ci = comparison_intervals(tst, ref, scale, options);
+  if (no_mask) r.ci.image_rmse = {kNaN, kNaN};  // its bands count covered pixels only
+  return r;
 }
 
 }  // namespace
@@ -493,7 +714,10 @@ json profile_json_with_intervals(const ProfileMetrics& pm, const ComparisonInter
   json j = with_interval(profile_metrics_json(pm), "rmse_terminator_ci", ci.rmse_terminator);
   j = with_interval(std::move(j), "max_error_terminator_ci", ci.max_error);
   j = with_interval(std::move(j), "position_error_deg_ci", ci.position_error);
-  return with_interval(std::move(j), "lit_bias_ci", ci.lit_bias);
+  j = with_interval(std::move(j), "lit_bias_ci", ci.lit_bias);
+  j["rmse_terminator_bootstrap_bias"] =
+      std::isfinite(ci.rmse_terminator_bias) ? json(ci.rmse_terminator_bias) : json();
+  return j;
 }
 
 std::string interval_note(const ComparisonIntervals& ci) {
@@ -503,12 +727,37 @@ std::string interval_note(const ComparisonIntervals& ci) {
       ci.bands, ci.resamples);
 }
 
-// The text form of `penumbra compare`: every metric of --json, with units
-// and intervals.
-void print_comparison(const CompareArgs& a, double scale, const ProfileMetrics& pm,
-                      const ImageMetrics& im, const ViewMetrics& vm, const ComparisonIntervals& ci,
-                      bool over, std::ostream& out) {
-  out << fmt::format("reference {}\ntest      {}\n", a.reference, a.test);
+const char* ssim_kind(bool no_mask) {
+  return no_mask ? "usual SSIM over every pixel (--no-mask): Gaussian 11x11, sigma 1.5, mean "
+                   "over windows inside the image, L = reference peak"
+                 : "masked SSIM: Gaussian 11x11, sigma 1.5, windows renormalised over pixels "
+                   "fully covered in both, L = reference peak";
+}
+
+json comparison_json(const CompareArgs& a, const CompareResult& r, bool pass) {
+  const bool profiled = r.skipped.empty();
+  json image = with_interval(image_metrics_json(r.im), "rmse_ci", r.ci.image_rmse);
+  image["ssim_kind"] = ssim_kind(a.no_mask);
+  json doc = {
+      {"reference", a.reference},
+      {"test", a.test},
+      {"coverage", {{"reference", r.coverage[0]}, {"test", r.coverage[1]}}},
+      {"radiance_scale", std::isfinite(r.scale) ? json(r.scale) : json()},
+      {"radiance_scale_unit", "W m^-2 sr^-1 (albedo * E / pi)"},
+      {"profile", profiled ? profile_json_with_intervals(r.pm, r.ci) : json()},
+      {"image", image},
+      {"view", profiled ? with_interval(with_interval(view_metrics_json(r.vm), "rmse_grazing_ci",
+                                                      r.ci.view_rmse_grazing),
+                                        "bias_grazing_ci", r.ci.view_bias_grazing)
+                        : json()},
+      {"intervals", profiled ? json(interval_note(r.ci)) : json()},
+      {"pass", pass}};
+  if (!profiled) doc["profile_skipped"] = r.skipped;
+  return doc;
+}
+
+void print_profile(const ProfileMetrics& pm, const ComparisonIntervals& ci, double scale,
+                   std::ostream& out) {
   out << fmt::format(
       "profile (1-degree theta bins, fraction of albedo*E/pi = {:.6g} W m^-2 "
       "sr^-1; {} common bins):\n",
@@ -530,15 +779,26 @@ void print_comparison(const CompareArgs& a, double scale, const ProfileMetrics& 
                      pm.reference_width);
   out << fmt::format("  lit-region bias (<60 deg)     {:+.6f} [{:+.6f}, {:+.6f}]\n", pm.lit_bias,
                      ci.lit_bias.low, ci.lit_bias.high);
-  out << fmt::format("image (pixels fully covered in both: {}):\n", im.pixels);
+}
+
+void print_image(const ImageMetrics& im, const ComparisonIntervals& ci, bool no_mask,
+                 std::ostream& out) {
+  out << fmt::format("image ({}: {}):\n",
+                     no_mask ? "every pixel, --no-mask" : "pixels fully covered in both",
+                     im.pixels);
   out << fmt::format("  mask IoU (alpha>=0.5)         {:.6f}\n", im.mask_iou);
   out << fmt::format(
       "  RMSE                          {:.6g} [{:.6g}, {:.6g}] W m^-2 sr^-1 (95 % CI)\n", im.rmse,
       ci.image_rmse.low, ci.image_rmse.high);
   out << fmt::format("  max error                     {:.6g} W m^-2 sr^-1\n", im.max_error);
   out << fmt::format("  mean error (test-reference)   {:+.6g} W m^-2 sr^-1\n", im.mean_error);
-  out << fmt::format("  SSIM (Gaussian 11x11)         {:.6f}\n", im.ssim);
+  out << fmt::format("  reference mean                {:.6g} W m^-2 sr^-1\n", im.reference_mean);
+  out << fmt::format("  reference peak (SSIM's L)     {:.6g} W m^-2 sr^-1\n", im.peak);
+  out << fmt::format("  SSIM                          {:.6f} ({})\n", im.ssim, ssim_kind(no_mask));
   out << fmt::format("  NaN/Inf values                {}\n", im.nonfinite);
+}
+
+void print_view(const ViewMetrics& vm, const ComparisonIntervals& ci, std::ostream& out) {
   out << fmt::format(
       "viewer (lit pixels, theta < {} deg, binned by view angle; {} pixels at [{}, {}) deg):\n",
       kLitEnd, vm.pixels, kGrazingBegin, kGrazingEnd);
@@ -547,69 +807,69 @@ void print_comparison(const CompareArgs& a, double scale, const ProfileMetrics& 
   out << fmt::format(
       "  bias grazing views            {:+.6f} [{:+.6f}, {:+.6f}] (negative: test darker)\n",
       vm.bias_grazing, ci.view_bias_grazing.low, ci.view_bias_grazing.high);
-  out << interval_note(ci) << "\n";
+}
+
+// The text form of `penumbra compare`: every metric of --json, with units
+// and intervals.
+void print_comparison(const CompareArgs& a, const CompareResult& r, bool over, bool pass,
+                      std::ostream& out) {
+  out << fmt::format("reference {} (coverage: {})\ntest      {} (coverage: {})\n", a.reference,
+                     r.coverage[0], a.test, r.coverage[1]);
+  if (r.skipped.empty())
+    print_profile(r.pm, r.ci, r.scale, out);
+  else
+    out << fmt::format("profile and viewer metrics: not computed: {}\n", r.skipped);
+  print_image(r.im, r.ci, a.no_mask, out);
+  if (r.skipped.empty()) {
+    print_view(r.vm, r.ci, out);
+    out << interval_note(r.ci) << "\n";
+  }
   if (over)
-    out << fmt::format("FAIL: profile RMSE {:.6f} above --max-profile-rmse {}\n", pm.rmse_overall,
+    out << fmt::format("FAIL: profile RMSE {:.6f} above --max-profile-rmse {}\n", r.pm.rmse_overall,
                        a.max_rmse);
+  out << (pass ? "pass\n" : "FAIL\n");
+}
+
+// Reads both images (and --mask), checks that they fit, gives each a coverage.
+std::pair<CompareImage, CompareImage> load_sides(const CompareArgs& a, double& scale) {
+  CompareImage reference{a.reference, read_image_checked(a.reference)};
+  CompareImage test{a.test, read_image_checked(a.test)};
+  require_rgb(reference.image, a.reference);
+  require_rgb(test.image, a.test);
+  if (reference.image.width != test.image.width || reference.image.height != test.image.height)
+    throw UsageError(fmt::format("{} is {}x{} but {} is {}x{}", a.reference, reference.image.width,
+                                 reference.image.height, a.test, test.image.width,
+                                 test.image.height));
+  scale = a.scale > 0.0 ? a.scale : radiance_scale_of({a.reference, a.test});
+  std::optional<Image> mask;
+  if (!a.mask.empty()) mask = read_image_checked(a.mask);
+  resolve_coverage(reference, a, mask ? &*mask : nullptr, scale);
+  resolve_coverage(test, a, mask ? &*mask : nullptr, scale);
+  return {std::move(reference), std::move(test)};
 }
 
 }  // namespace
 
 int command_compare(const CompareArgs& a, std::ostream& out, std::ostream& err) {
-  if (!a.difference.empty()) {
-    check_extension(a.difference, ".exr", "-o");
-    check_writable(a.difference);
-  }
-  const Image reference = read_image_checked(a.reference);
-  const Image test = read_image_checked(a.test);
-  require_rgba(reference, a.reference);
-  require_rgba(test, a.test);
-  if (const std::string where = scene_difference(a.reference, a.test); !where.empty())
-    err << fmt::format(
-        "penumbra: warning: {} and {} show different scenes (penumbra:scene differs at {}); the "
-        "metrics compare unrelated images\n",
-        a.reference, a.test, where);
-  const double scale = a.scale > 0.0 ? a.scale : radiance_scale_of(a.reference);
-  if (reference.width != test.width || reference.height != test.height)
-    throw UsageError(fmt::format("{} is {}x{} but {} is {}x{}", a.reference, reference.width,
-                                 reference.height, a.test, test.width, test.height));
-  if (reference.channel_index("analysis.theta") < 0)
-    throw UsageError(
-        fmt::format("{}: no analysis.theta channel (render it with penumbra)", a.reference));
-  const ProfileOptions options;
-  const Profile pr = terminator_profile(reference, scale, options);
-  // theta comes from the reference: both images show the same base points.
-  Image test_with_theta = test;
-  if (test.channel_index("analysis.theta") < 0) test_with_theta = with_channels_of(test, reference);
-  const Profile pt = terminator_profile(test_with_theta, scale, options);
-  const ProfileMetrics pm = compare_profiles(pt, pr, options);
-  const ImageMetrics im = compare_images(test, reference);
-  const ViewMetrics vm = view_metrics(view_error_profile(test, reference, scale));
-  const ComparisonIntervals ci = comparison_intervals(test_with_theta, reference, scale, options);
-  const bool nonfinite = im.nonfinite > 0;
-  const bool over = a.max_rmse >= 0.0 && !(pm.rmse_overall <= a.max_rmse);
+  check_difference_output(a);
+  double scale = kNaN;
+  const auto [reference, test] = load_sides(a, scale);
+  check_same_scene(a, err);
+  const CompareResult r = compare_sides(reference, test, scale, a.no_mask);
+  if (a.max_rmse >= 0.0 && !r.skipped.empty())
+    throw UsageError(fmt::format("--max-profile-rmse: no profile to check: {}", r.skipped));
+  const bool nonfinite = r.im.nonfinite > 0;
+  const bool over = a.max_rmse >= 0.0 && !(r.pm.rmse_overall <= a.max_rmse);
+  const bool pass = !nonfinite && !over;
   if (!a.difference.empty())
-    write_exr(difference_image(test, reference), a.difference,
+    write_exr(difference_image(test.image, reference.image), a.difference,
               {{"penumbra:difference", a.test + " - " + a.reference},
                {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
-  if (a.json) {
-    out << json{{"reference", a.reference},
-                {"test", a.test},
-                {"radiance_scale", scale},
-                {"radiance_scale_unit", "W m^-2 sr^-1 (albedo * E / pi)"},
-                {"profile", profile_json_with_intervals(pm, ci)},
-                {"image", with_interval(image_metrics_json(im), "rmse_ci", ci.image_rmse)},
-                {"view", with_interval(with_interval(view_metrics_json(vm), "rmse_grazing_ci",
-                                                     ci.view_rmse_grazing),
-                                       "bias_grazing_ci", ci.view_bias_grazing)},
-                {"intervals", interval_note(ci)},
-                {"pass", !nonfinite && !over}}
-               .dump(2)
-        << "\n";
-  } else {
-    print_comparison(a, scale, pm, im, vm, ci, over, out);
-  }
-  return nonfinite || over ? kExitThreshold : kExitOk;
+  if (a.json)
+    out << comparison_json(a, r, pass).dump(2) << "\n";
+  else
+    print_comparison(a, r, over, pass, out);
+  return pass ? kExitOk : kExitThreshold;
 }
 
 int command_calibrate(const CalibrationOptions& options, bool quiet, std::ostream& out,
@@ -708,6 +968,7 @@ SlurmOptions slurm_options(const RunArgs& a, const std::string& output_dir) {
                      "--renders-per-task",
                      std::to_string(s.renders_per_task)};
   if (a.no_figures) s.continue_argv.push_back("--no-figures");
+  if (a.self_contained) s.continue_argv.push_back("--self-contained");
   if (!s.partition.empty())
     s.continue_argv.insert(s.continue_argv.end(), {"--partition", s.partition});
   for (const std::string& arg : s.sbatch_args) s.continue_argv.push_back("--sbatch-arg=" + arg);
@@ -780,6 +1041,7 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   o.timeout_s = a.timeout;
   o.max_new_renders = a.max_renders;
   o.figures = !a.no_figures;
+  o.self_contained_html = a.self_contained;
   o.interrupted = &g_interrupted;
   o.dry_run = a.dry_run;
   o.max_memory_bytes = a.max_memory_gib * kGiB;

@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <array>
+#include <optional>
 #include <ostream>
 #include <stdexcept>
 #include <string>
@@ -62,6 +63,12 @@ struct CompareArgs {
   bool json = false;
   double scale = 0.0;
   double max_rmse = -1.0;
+  // The coverage of an image without an A channel (another renderer's PNG):
+  // a mask image, or the lit region, radiance >= threshold * albedo*E/pi.
+  std::string mask;
+  std::optional<double> threshold;
+  bool no_mask = false;     // image metrics over every pixel, the usual SSIM
+  bool same_scene = false;  // different penumbra:scene geometry: exit 2, not a warning
 };
 
 struct ExportArgs {
@@ -77,6 +84,7 @@ struct RunArgs {
   double timeout = 600.0;
   long max_renders = -1;
   bool no_figures = false, quiet = false, dry_run = false;
+  bool self_contained = false;  // report.html embeds its images
   double max_memory_gib = kDefaultMaxMemoryBytes / kGiB;
   std::string executor = "local";  // local or slurm
   SlurmOptions slurm;              // --partition, --array-limit, ... (chain: --slurm-chain)
@@ -99,8 +107,10 @@ int command_run(const RunArgs& a, std::ostream& out, std::ostream& err);
 int command_run_batch(const RunBatchArgs& a, std::ostream& out, std::ostream& err);
 // What a study folder's Slurm submissions have done so far.
 int command_status(const std::string& folder, std::ostream& out);
-// Redraws the figures and report.html of a study folder from its report.json.
-int command_report(const std::string& folder, std::ostream& out);
+// Redraws the figures and report.html of a study folder from its report.json (linked images, or
+// embedded with self_contained).
+int command_report(const std::string& folder, bool self_contained, std::ostream& out,
+                   std::ostream& err);
 int command_contour(const std::vector<std::string>& ids, double step, const std::string& output,
                     std::ostream& out);
 int command_bench(int size, int spp, std::ostream& out);

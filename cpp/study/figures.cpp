@@ -1,7 +1,11 @@
 #include "study/figures.h"
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <optional>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -25,8 +29,43 @@ std::string python_executable(const std::string& preferred) {
 
 }  // namespace
 
+namespace {
+
+// Lines of the script's log that begin with this are progress
+// (harness/penumbra_plot.py progress()); the rest is kept for errors.
+constexpr std::string_view kProgress = "progress: ";
+
+// Forwards the progress lines appended to the log since the last call.
+class ProgressTail {
+ public:
+  ProgressTail(std::string path, ProgressLog log) : path_(std::move(path)), log_(std::move(log)) {}
+  // Every quarter second at most: the caller polls every 25 ms.
+  void poll(bool force = false) {
+    if (!log_) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (!force && now - last_ < std::chrono::milliseconds(250)) return;
+    last_ = now;
+    std::ifstream in(path_, std::ios::binary);
+    if (!in || !in.seekg(static_cast<std::streamoff>(read_))) return;
+    std::string line;
+    while (std::getline(in, line)) {
+      if (in.eof()) break;  // an unfinished line: read it whole next time
+      read_ += line.size() + 1;
+      if (line.rfind(kProgress, 0) == 0) log_(line.substr(kProgress.size()));
+    }
+  }
+
+ private:
+  std::string path_;
+  ProgressLog log_;
+  std::size_t read_ = 0;
+  std::chrono::steady_clock::time_point last_{};
+};
+
+}  // namespace
+
 void run_plot_script(const std::vector<std::string>& arguments, const std::string& log_path,
-                     const std::string& python, double timeout_s) {
+                     const std::string& python, double timeout_s, const ProgressLog& progress) {
   std::error_code ignored;
   fs::remove(log_path, ignored);
   const std::string name = python_executable(python);
@@ -42,7 +81,18 @@ void run_plot_script(const std::vector<std::string>& arguments, const std::strin
   std::vector<std::string> argv{*exe, script};
   argv.insert(argv.end(), arguments.begin(), arguments.end());
   fs::path dir = fs::path(log_path).parent_path();
-  const ProcessResult p = run_process(argv, dir.empty() ? "." : dir.string(), log_path, timeout_s);
+  // A coprocess, polled, so that its progress lines reach the user while
+  // it runs (its stdin is unused: the script never reads it).
+  Coprocess child(argv, dir.empty() ? "." : dir.string(), log_path);
+  ProgressTail tail(log_path, progress);
+  const std::optional<ProcessResult> end = child.wait_until(
+      [&] {
+        tail.poll();
+        return false;
+      },
+      timeout_s);
+  tail.poll(true);
+  const ProcessResult p = end.value_or(ProcessResult{});
   if (!p.ok())
     throw RendererError(
         fmt::format("harness/report.py failed ({}); log {}:\n{}",
@@ -50,10 +100,12 @@ void run_plot_script(const std::vector<std::string>& arguments, const std::strin
                     log_path, tail_lines(log_path, 12)));
 }
 
-std::string draw_report(const std::string& folder, const std::string& python, double timeout_s) {
+std::string draw_report(const std::string& folder, bool self_contained, const std::string& python,
+                        double timeout_s, const ProgressLog& progress) {
   const fs::path out(folder);
-  run_plot_script({"report", fs::absolute(out).string()}, (out / "report.log").string(), python,
-                  timeout_s);
+  std::vector<std::string> arguments{"report", fs::absolute(out).string()};
+  if (self_contained) arguments.push_back("--self-contained");
+  run_plot_script(arguments, (out / "report.log").string(), python, timeout_s, progress);
   return (out / "report.html").string();
 }
 

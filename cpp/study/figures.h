@@ -3,10 +3,15 @@
 // rendering (`penumbra report DIR`).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
 namespace penumbra {
+
+// Receives the script's progress lines while it runs ("profiles and image
+// grid of v003 (4/24)"), without their "progress: " prefix.
+using ProgressLog = std::function<void(const std::string&)>;
 
 // Runs harness/report.py (found beside the binary, util/data_files.h) with
 // `arguments`, its output in `log_path`. Python: `python`, else
@@ -14,11 +19,14 @@ namespace penumbra {
 // python3-matplotlib and python3-jinja2), else python3. RendererError when it
 // is missing, fails or times out.
 void run_plot_script(const std::vector<std::string>& arguments, const std::string& log_path,
-                     const std::string& python = "", double timeout_s = 600.0);
+                     const std::string& python = "", double timeout_s = 600.0,
+                     const ProgressLog& progress = nullptr);
 
 // Draws the figures and report.html of the study folder `folder` (which holds
-// report.json); returns the path of report.html.
-std::string draw_report(const std::string& folder, const std::string& python = "",
-                        double timeout_s = 600.0);
+// report.json); returns the path of report.html, which links its images
+// (relative URLs into images/ and figures/) or, self_contained, embeds them.
+std::string draw_report(const std::string& folder, bool self_contained = false,
+                        const std::string& python = "", double timeout_s = 600.0,
+                        const ProgressLog& progress = nullptr);
 
 }  // namespace penumbra

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "scene/scene_json.h"
+#include "study/light_angles.h"
 #include "util/strict_json.h"
 
 namespace penumbra {
@@ -31,6 +32,15 @@ std::string value_text(const json& v) {
   return v.dump();
 }
 
+bool light_direction(const std::string& pointer, const json& v) {
+  return pointer == "/light/direction" && v.is_array() && v.size() == 3 &&
+         std::all_of(v.begin(), v.end(), [](const json& x) { return x.is_number(); });
+}
+
+Vec3 vec3(const json& v) {
+  return {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+}
+
 // Combination `c` of the axes (mixed radix, the first axis fastest) as
 // overrides after `set`; records the values and extends the label of `v`.
 std::vector<Override> axis_combination(const std::vector<Override>& set,
@@ -43,6 +53,8 @@ std::vector<Override> axis_combination(const std::vector<Override>& set,
     overrides.push_back({a.pointer, value});
     v->axis_values.push_back(value);
     v->label += fmt::format(", {}={}", a.label, value_text(value));
+    if (light_direction(a.pointer, value))
+      v->label += fmt::format(" ({})", direction_text(vec3(value)));
   }
   return overrides;
 }
@@ -177,6 +189,10 @@ Plan plan_study(const Study& study, double max_memory_bytes) {
     check_resources(job.resources, max_memory_bytes, job.origin);
   }
   return plan;
+}
+
+std::string axis_value_text(const std::string& pointer, const json& value) {
+  return light_direction(pointer, value) ? direction_text(vec3(value)) : value_text(value);
 }
 
 }  // namespace penumbra

@@ -64,4 +64,9 @@ struct Plan {
 // and its resources: InputError before anything is written.
 Plan plan_study(const Study& study, double max_memory_bytes);
 
+// An axis value as figures and tables show it: a light direction
+// (/light/direction, three numbers) as "azimuth A°, elevation E°"
+// (study/light_angles.h), a number as %g, anything else as compact JSON.
+std::string axis_value_text(const std::string& pointer, const nlohmann::json& value);
+
 }  // namespace penumbra

@@ -218,29 +218,29 @@ std::string darker_at_grazing_views(const RankingStatistics& s) {
   std::string list;
   for (const MethodStatistics& m : s.methods)
     if (m.view_darker > 0)
-      list += fmt::format("{}{} in {} of {} variants (mean signed error there {:+.4f})",
+      list += fmt::format("{}{} in {} of {} variants (mean signed error there {:+.2f} %)",
                           list.empty() ? "" : "; ", named(m.method, m.rejected), m.view_darker,
-                          m.variants, m.view_darker_mean);
+                          m.variants, 100.0 * m.view_darker_mean);
   if (list.empty()) return "";
   const MethodStatistics* none = nullptr;
   for (const MethodStatistics& m : s.methods)
     if (m.method == "none") none = &m;
   return fmt::format(
       "Darker than the displacement ground truth at grazing views (view angle 60-75 deg, lit "
-      "head-on), where raw bump is {:+.4f} on average: {}.",
-      none ? none->view_bias : std::numeric_limits<double>::quiet_NaN(), list);
+      "head-on; signed errors in % of albedo*E/pi), where raw bump is {:+.2f} % on average: {}.",
+      100.0 * (none ? none->view_bias : std::numeric_limits<double>::quiet_NaN()), list);
 }
 
 // "M adds error at grazing views: ...", for a method significantly worse
 // than raw bump on E_view.
 std::string worse_view(const MethodStatistics& m) {
   return fmt::format(
-      "{} adds error where the viewer looks at grazing angles: its grazing-view RMSE is {:+.4f} "
-      "[{:+.4f}, {:+.4f}] of albedo*E/pi above raw bump's (worse in {} of {} variants, {}); its "
-      "mean signed error there is {:+.4f} [{:+.4f}, {:+.4f}] ({} than the ground truth){}.",
-      named(m.method, m.rejected), m.view.mean_difference, m.view.interval.low,
-      m.view.interval.high, m.view.b_better, m.view.n, p_text(m.view.p), m.view_bias,
-      m.view_bias_interval.low, m.view_bias_interval.high,
+      "{} adds error where the viewer looks at grazing angles: its grazing-view RMSE is {:+.2f} % "
+      "[{:+.2f}, {:+.2f}] of albedo*E/pi above raw bump's (worse in {} of {} variants, {}); its "
+      "mean signed error there is {:+.2f} % [{:+.2f}, {:+.2f}] ({} than the ground truth){}.",
+      named(m.method, m.rejected), 100.0 * m.view.mean_difference, 100.0 * m.view.interval.low,
+      100.0 * m.view.interval.high, m.view.b_better, m.view.n, p_text(m.view.p),
+      100.0 * m.view_bias, 100.0 * m.view_bias_interval.low, 100.0 * m.view_bias_interval.high,
       m.view_bias < 0.0 ? "darker" : "brighter", m.rejected.empty() ? "" : " (" + m.rejected + ")");
 }
 
@@ -255,22 +255,23 @@ std::vector<std::string> headline_sentences(const RankingStatistics& s) {
     if (s.methods[i].rank == best.rank)
       tied_with += (tied_with.empty() ? "" : ", ") + named(s, s.methods[i].method);
   out.push_back(fmt::format(
-      "Closest to the displacement ground truth over {} variants: {} (combined relative error "
-      "{:.2f} {} of raw bump's 1, 95 % CI){}.",
-      s.variants, named(best.method, best.rejected), best.combined,
-      fmt::format("[{:.2f}, {:.2f}]", best.combined_interval.low, best.combined_interval.high),
+      "Closest to the displacement ground truth over {} variants: {} (combined error {} {} of "
+      "raw bump's, 95 % CI){}.",
+      s.variants, named(best.method, best.rejected), percent(best.combined),
+      percent_interval(best.combined_interval),
       tied_with.empty() ? "" : "; tied with " + tied_with + " (paired, Holm-adjusted)"));
   for (const MethodStatistics& m : s.methods)
     if (m.method != "none" && m.rank <= best.rank + 1) out.push_back(versus_none(m, m.variants));
   for (const PairStatistics& p : s.pairs)
     if (p.tied && p.a != "none" && p.b != "none" && p.combined.n > 0 &&
         (p.a == best.method || p.b == best.method))
-      out.push_back(fmt::format(
-          "{} and {} are tied (mean paired difference {:+.3f} {}, "
-          "Holm-adjusted {}).",
-          named(s, p.a), named(s, p.b), p.combined.mean_difference,
-          fmt::format("[{:+.3f}, {:+.3f}]", p.combined.interval.low, p.combined.interval.high),
-          p_text(p.p_holm)));
+      out.push_back(
+          fmt::format("{} and {} are tied (mean paired difference of the combined error {:+.1f} "
+                      "percentage points of raw bump's {}, Holm-adjusted {}).",
+                      named(s, p.a), named(s, p.b), 100.0 * p.combined.mean_difference,
+                      fmt::format("[{:+.1f}, {:+.1f}]", 100.0 * p.combined.interval.low,
+                                  100.0 * p.combined.interval.high),
+                      p_text(p.p_holm)));
   for (const MethodStatistics& m : s.methods)
     if (m.view.interval.low > 0.0 && m.view.p < kSignificance) out.push_back(worse_view(m));
   if (std::string darker = darker_at_grazing_views(s); !darker.empty())

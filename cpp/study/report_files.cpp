@@ -1,17 +1,24 @@
 #include "study/report_files.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
+#include <set>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "analysis/metrics_json.h"
 #include "core/tessellation.h"
+#include "core/vec.h"
 #include "image/image_io.h"
 #include "scene/scene_json.h"
 #include "study/cache.h"
+#include "study/light_angles.h"
 #include "study/ranking.h"
 
 namespace penumbra {
@@ -20,121 +27,338 @@ using nlohmann::json;
 
 namespace {
 
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
 // ---- CSV ----------------------------------------------------------------------
+// metrics.csv and lowpoly.csv are documented column by column in
+// harness/csv-columns.json (a test compares that file with what is written
+// here). Names carry their unit as a suffix so that a loaded table cannot be
+// misread: _rel a fraction of albedo*E/pi, _w_m2_sr radiance, _deg degrees,
+// _px pixels, _count a count, _fraction a share of pixels; bare names are
+// identifiers, paths or unitless indices (SSIM, IoU).
 
 std::string csv_field(const std::string& s) {
-  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
   std::string out = "\"";
   for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
   return out + "\"";
 }
 
-// An undefined quantity (NaN) is an empty field.
+// An undefined quantity (NaN) is an empty field; + 0.0 writes -0 as 0.
 std::string number(double v) {
-  return std::isfinite(v) ? fmt::format("{}", v) : std::string();
+  return std::isfinite(v) ? fmt::format("{}", v + 0.0) : std::string();
 }
-std::string count(std::size_t n) {
+std::string count(std::uint64_t n) {
   return fmt::format("{}", n);
 }
 
-struct Column {
-  const char* name;
-  std::function<std::string(const ComparisonRow&)> value;
+// What one CSV row is made of: a comparison, its two renders and its variant.
+struct CsvRow {
+  const std::string& study;
+  const Variant& variant;
+  const ComparisonRow& c;
+  const Job& test;
+  const Job& reference;
+  const StudyMethod* method;  // as the study names it; null if the label is unknown
 };
 
-const std::vector<Column>& bump_columns() {
-  static const std::vector<Column> columns{
-      {"profile_rmse_terminator", [](auto& r) { return number(r.profile.rmse_terminator); }},
-      {"profile_rmse_overall", [](auto& r) { return number(r.profile.rmse_overall); }},
-      {"profile_max_error_terminator", [](auto& r) { return number(r.profile.max_error); }},
-      {"profile_max_step", [](auto& r) { return number(r.profile.max_step); }},
-      {"reference_max_step", [](auto& r) { return number(r.profile.reference_max_step); }},
-      {"position_deg", [](auto& r) { return number(r.profile.position); }},
-      {"reference_position_deg", [](auto& r) { return number(r.profile.reference_position); }},
-      {"position_error_deg", [](auto& r) { return number(r.profile.position_error); }},
-      {"width_deg", [](auto& r) { return number(r.profile.width); }},
-      {"reference_width_deg", [](auto& r) { return number(r.profile.reference_width); }},
-      {"lit_bias", [](auto& r) { return number(r.profile.lit_bias); }},
-      {"common_bins", [](auto& r) { return count(r.profile.common_bins); }},
-      {"image_mask_iou", [](auto& r) { return number(r.image.mask_iou); }},
-      {"image_rmse", [](auto& r) { return number(r.image.rmse); }},
-      {"image_ssim", [](auto& r) { return number(r.image.ssim); }},
-      {"image_max_error", [](auto& r) { return number(r.image.max_error); }},
-      {"image_mean_error", [](auto& r) { return number(r.image.mean_error); }},
-      {"image_pixels", [](auto& r) { return count(r.image.pixels); }},
-      {"image_nonfinite", [](auto& r) { return count(r.image.nonfinite); }},
-      {"profile_rmse_terminator_ci_low",
-       [](auto& r) { return number(r.intervals.rmse_terminator.low); }},
-      {"profile_rmse_terminator_ci_high",
-       [](auto& r) { return number(r.intervals.rmse_terminator.high); }},
-      {"image_rmse_ci_low", [](auto& r) { return number(r.intervals.image_rmse.low); }},
-      {"image_rmse_ci_high", [](auto& r) { return number(r.intervals.image_rmse.high); }},
-      {"profile_max_error_terminator_ci_low",
-       [](auto& r) { return number(r.intervals.max_error.low); }},
-      {"profile_max_error_terminator_ci_high",
-       [](auto& r) { return number(r.intervals.max_error.high); }},
-      {"position_error_deg_ci_low", [](auto& r) { return number(r.intervals.position_error.low); }},
-      {"position_error_deg_ci_high",
-       [](auto& r) { return number(r.intervals.position_error.high); }},
-      {"lit_bias_ci_low", [](auto& r) { return number(r.intervals.lit_bias.low); }},
-      {"lit_bias_ci_high", [](auto& r) { return number(r.intervals.lit_bias.high); }},
-      {"view_rmse_grazing", [](auto& r) { return number(r.view.rmse_grazing); }},
-      {"view_rmse_grazing_ci_low",
-       [](auto& r) { return number(r.intervals.view_rmse_grazing.low); }},
-      {"view_rmse_grazing_ci_high",
-       [](auto& r) { return number(r.intervals.view_rmse_grazing.high); }},
-      {"view_bias_grazing", [](auto& r) { return number(r.view.bias_grazing); }},
-      {"view_bias_grazing_ci_low",
-       [](auto& r) { return number(r.intervals.view_bias_grazing.low); }},
-      {"view_bias_grazing_ci_high",
-       [](auto& r) { return number(r.intervals.view_bias_grazing.high); }},
-      {"view_pixels", [](auto& r) { return count(r.view.pixels); }},
-  };
-  return columns;
+struct Column {
+  std::string name;
+  std::function<std::string(const CsvRow&)> value;  // unquoted
+};
+using Columns = std::vector<Column>;
+
+using Metric = double (*)(const ComparisonRow&);
+using Count = std::uint64_t (*)(const ComparisonRow&);
+
+Column metric_column(std::string name, Metric f) {
+  return {std::move(name), [f](const CsvRow& r) { return number(f(r.c)); }};
+}
+Column count_column(std::string name, Count f) {
+  return {std::move(name), [f](const CsvRow& r) { return count(f(r.c)); }};
 }
 
-const std::vector<Column>& lowpoly_columns() {
-  static const std::vector<Column> columns{
-      {"darkened_fraction", [](auto& r) { return number(r.shadow->darkened_fraction); }},
-      {"max_darkening", [](auto& r) { return number(r.shadow->max_darkening); }},
-      {"lost_shadow_fraction", [](auto& r) { return number(r.shadow->lost_shadow_fraction); }},
-      {"shadow_shift_px", [](auto& r) { return number(r.shadow->shadow_shift_px); }},
-      {"shadowed_pixels", [](auto& r) { return count(r.shadow->shadowed_pixels); }},
-      {"test_shadowed_pixels", [](auto& r) { return count(r.shadow->test_shadowed_pixels); }},
-      {"profile_rmse_terminator", [](auto& r) { return number(r.profile.rmse_terminator); }},
-      {"profile_rmse_overall", [](auto& r) { return number(r.profile.rmse_overall); }},
-      {"profile_max_step", [](auto& r) { return number(r.profile.max_step); }},
-      {"position_error_deg", [](auto& r) { return number(r.profile.position_error); }},
-      {"lit_bias", [](auto& r) { return number(r.profile.lit_bias); }},
-      {"image_rmse", [](auto& r) { return number(r.image.rmse); }},
-      {"image_ssim", [](auto& r) { return number(r.image.ssim); }},
-      {"image_mask_iou", [](auto& r) { return number(r.image.mask_iou); }},
-      {"image_nonfinite", [](auto& r) { return count(r.image.nonfinite); }},
-      {"profile_rmse_terminator_ci_low",
-       [](auto& r) { return number(r.intervals.rmse_terminator.low); }},
-      {"profile_rmse_terminator_ci_high",
-       [](auto& r) { return number(r.intervals.rmse_terminator.high); }},
-  };
-  return columns;
+// A metric with its 95 % interval beside it: NAME, NAME_ci_low, NAME_ci_high.
+void add_with_ci(Columns& out, const std::string& name, Metric f,
+                 Interval ComparisonIntervals::*ci) {
+  out.push_back(metric_column(name, f));
+  out.push_back(
+      {name + "_ci_low", [ci](const CsvRow& r) { return number((r.c.intervals.*ci).low); }});
+  out.push_back(
+      {name + "_ci_high", [ci](const CsvRow& r) { return number((r.c.intervals.*ci).high); }});
 }
 
-// Header and rows: study, variant, scene, one column per axis, renderer,
-// method (or offset), reference, then `columns`.
-std::string comparison_csv(const ReportInputs& in, const Section& section,
-                           const std::vector<Column>& columns) {
-  const bool bump = section.kind == SectionKind::kBump;
-  std::string csv = "study,variant,scene";
-  for (const StudyAxis& a : section.axes) csv += "," + csv_field(a.pointer);
-  csv += bump ? ",renderer,method,reference" : ",renderer,offset,reference";
-  for (const Column& c : columns) csv += std::string(",") + c.name;
+Columns bump_columns() {
+  using C = ComparisonRow;
+  using I = ComparisonIntervals;
+  Columns out;
+  add_with_ci(
+      out, "profile_rmse_terminator_rel", [](const C& r) { return r.profile.rmse_terminator; },
+      &I::rmse_terminator);
+  out.push_back(
+      metric_column("profile_rmse_overall_rel", [](const C& r) { return r.profile.rmse_overall; }));
+  add_with_ci(
+      out, "profile_max_error_terminator_rel", [](const C& r) { return r.profile.max_error; },
+      &I::max_error);
+  out.push_back(
+      metric_column("profile_max_step_rel", [](const C& r) { return r.profile.max_step; }));
+  out.push_back(metric_column("reference_max_step_rel",
+                              [](const C& r) { return r.profile.reference_max_step; }));
+  out.push_back(metric_column("position_deg", [](const C& r) { return r.profile.position; }));
+  out.push_back(metric_column("reference_position_deg",
+                              [](const C& r) { return r.profile.reference_position; }));
+  add_with_ci(
+      out, "position_error_deg", [](const C& r) { return r.profile.position_error; },
+      &I::position_error);
+  out.push_back(metric_column("transition_width_deg", [](const C& r) { return r.profile.width; }));
+  out.push_back(metric_column("reference_transition_width_deg",
+                              [](const C& r) { return r.profile.reference_width; }));
+  add_with_ci(
+      out, "lit_bias_rel", [](const C& r) { return r.profile.lit_bias; }, &I::lit_bias);
+  out.push_back(count_column("common_bin_count",
+                             [](const C& r) -> std::uint64_t { return r.profile.common_bins; }));
+  out.push_back(metric_column("image_mask_iou", [](const C& r) { return r.image.mask_iou; }));
+  add_with_ci(
+      out, "image_rmse_w_m2_sr", [](const C& r) { return r.image.rmse; }, &I::image_rmse);
+  out.push_back(metric_column("image_ssim", [](const C& r) { return r.image.ssim; }));
+  out.push_back(
+      metric_column("image_max_error_w_m2_sr", [](const C& r) { return r.image.max_error; }));
+  out.push_back(
+      metric_column("image_mean_error_w_m2_sr", [](const C& r) { return r.image.mean_error; }));
+  out.push_back(count_column("image_pixel_count",
+                             [](const C& r) -> std::uint64_t { return r.image.pixels; }));
+  out.push_back(count_column("image_nonfinite_count",
+                             [](const C& r) -> std::uint64_t { return r.image.nonfinite; }));
+  add_with_ci(
+      out, "view_rmse_grazing_rel", [](const C& r) { return r.view.rmse_grazing; },
+      &I::view_rmse_grazing);
+  add_with_ci(
+      out, "view_bias_grazing_rel", [](const C& r) { return r.view.bias_grazing; },
+      &I::view_bias_grazing);
+  out.push_back(
+      count_column("view_pixel_count", [](const C& r) -> std::uint64_t { return r.view.pixels; }));
+  return out;
+}
+
+Columns lowpoly_columns() {
+  using C = ComparisonRow;
+  Columns out;
+  out.push_back(
+      metric_column("darkened_fraction", [](const C& r) { return r.shadow->darkened_fraction; }));
+  out.push_back(
+      metric_column("max_darkening_rel", [](const C& r) { return r.shadow->max_darkening; }));
+  out.push_back(metric_column("lost_shadow_fraction",
+                              [](const C& r) { return r.shadow->lost_shadow_fraction; }));
+  out.push_back(
+      metric_column("shadow_shift_px", [](const C& r) { return r.shadow->shadow_shift_px; }));
+  out.push_back(count_column("lit_pixel_count",
+                             [](const C& r) -> std::uint64_t { return r.shadow->lit_pixels; }));
+  out.push_back(count_column("darkened_pixel_count", [](const C& r) -> std::uint64_t {
+    return r.shadow->darkened_pixels;
+  }));
+  out.push_back(count_column("shadowed_pixel_count", [](const C& r) -> std::uint64_t {
+    return r.shadow->shadowed_pixels;
+  }));
+  out.push_back(count_column("test_shadowed_pixel_count", [](const C& r) -> std::uint64_t {
+    return r.shadow->test_shadowed_pixels;
+  }));
+  add_with_ci(
+      out, "profile_rmse_terminator_rel", [](const C& r) { return r.profile.rmse_terminator; },
+      &ComparisonIntervals::rmse_terminator);
+  out.push_back(
+      metric_column("profile_rmse_overall_rel", [](const C& r) { return r.profile.rmse_overall; }));
+  out.push_back(
+      metric_column("profile_max_step_rel", [](const C& r) { return r.profile.max_step; }));
+  out.push_back(
+      metric_column("position_error_deg", [](const C& r) { return r.profile.position_error; }));
+  out.push_back(metric_column("lit_bias_rel", [](const C& r) { return r.profile.lit_bias; }));
+  out.push_back(metric_column("image_rmse_w_m2_sr", [](const C& r) { return r.image.rmse; }));
+  out.push_back(metric_column("image_ssim", [](const C& r) { return r.image.ssim; }));
+  out.push_back(metric_column("image_mask_iou", [](const C& r) { return r.image.mask_iou; }));
+  out.push_back(count_column("image_nonfinite_count",
+                             [](const C& r) -> std::uint64_t { return r.image.nonfinite; }));
+  return out;
+}
+
+// The direction towards the light: a distant light's, or a point light's
+// position seen from the shape's centre.
+Vec3 towards_light(const Scene& s) {
+  return s.light.type == LightType::kDistant ? s.light.direction
+                                             : s.light.position - s.shape.center;
+}
+
+// Angles of the direction towards the light (study/light_angles.h).
+double light_elevation_deg(const Scene& s) {
+  return elevation_deg(towards_light(s));
+}
+double light_azimuth_deg(const Scene& s) {
+  return azimuth_deg(towards_light(s));
+}
+
+// "s=0.3", parameters in key order joined by ';' (the label's ',' would
+// need quoting); "" without parameters.
+std::string method_params(const StudyMethod* m) {
+  std::string out;
+  if (m == nullptr || !m->parameters.is_object()) return out;
+  for (const auto& [k, v] : m->parameters.items())
+    out += (out.empty() ? "" : ";") + k + "=" + v.dump();
+  return out;
+}
+
+// Identification: what was rendered, how, and against which truth.
+Columns key_columns(SectionKind kind) {
+  const std::string m = kind == SectionKind::kBump ? "method" : "offset";
+  const auto str = [](const char* s) { return std::string(s); };
+  Columns out{
+      {"renderer", [str](const CsvRow& r) { return str(to_string(r.test.renderer)); }},
+      {"representation", [str](const CsvRow& r) { return str(to_string(r.test.representation)); }},
+      {m, [](const CsvRow& r) { return r.method ? r.method->id : r.c.method; }},
+      {m + "_params", [](const CsvRow& r) { return method_params(r.method); }},
+      {m + "_label", [](const CsvRow& r) { return r.c.method; }},
+      {"reference_renderer",
+       [str](const CsvRow& r) { return str(to_string(r.c.reference_renderer)); }},
+      {"reference_representation",
+       [](const CsvRow& r) { return r.c.reference.substr(r.c.reference.find(':') + 1); }},
+      {"truth",
+       [str](const CsvRow& r) {
+         return str(r.c.reference_renderer == r.c.renderer ? "own" : "evaluator");
+       }},
+      {"width_px", [](const CsvRow& r) { return count(r.test.scene.camera.width); }},
+      {"height_px", [](const CsvRow& r) { return count(r.test.scene.camera.height); }},
+      {"spp", [](const CsvRow& r) { return count(r.test.scene.camera.spp); }},
+      {"reference_spp", [](const CsvRow& r) { return count(r.reference.scene.camera.spp); }},
+      {"seed", [](const CsvRow& r) { return count(r.test.scene.camera.seed); }},
+      {"light_elevation_deg",
+       [](const CsvRow& r) { return number(light_elevation_deg(r.test.scene)); }},
+      {"light_azimuth_deg",
+       [](const CsvRow& r) { return number(light_azimuth_deg(r.test.scene)); }},
+      {"exr", [](const CsvRow& r) { return RenderCache::relative_exr(r.test.key); }},
+      {"reference_exr",
+       [](const CsvRow& r) { return RenderCache::relative_exr(r.reference.key); }}};
+  if (kind == SectionKind::kLowPoly)
+    out.push_back({"triangle_count", [](const CsvRow& r) {
+                     const Scene& s = r.test.scene;
+                     return s.tessellation
+                                ? count(tessellated_triangle_count(s.shape, *s.tessellation))
+                                : std::string();
+                   }});
+  return out;
+}
+
+// "/height/amplitude" -> "height_amplitude": ASCII letters (lower-cased) and
+// digits kept, every other run of characters one '_'.
+std::string snake_name(const std::string& pointer) {
+  std::string out;
+  for (char ch : pointer) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 128 && std::isalnum(c))
+      out += static_cast<char>(std::tolower(c));
+    else if (!out.empty() && out.back() != '_')
+      out += '_';
+  }
+  while (!out.empty() && out.back() == '_') out.pop_back();
+  return out.empty() ? "axis" : out;
+}
+
+// How an axis's values become columns, decided over all its values so that
+// every row has the same columns and each column one type: numbers one
+// numeric column; strings one text column; arrays of 2 or 3 numbers one
+// numeric column per component (_x, _y, _z); anything else compact JSON
+// text. null is an empty cell.
+enum class AxisKind { kNumber, kString, kVector, kJson };
+struct AxisLayout {
+  AxisKind kind = AxisKind::kJson;
+  std::size_t size = 1;
+};
+
+AxisLayout axis_layout(const StudyAxis& a) {
+  const auto all = [&a](const std::function<bool(const json&)>& pred) {
+    return std::all_of(a.values.begin(), a.values.end(),
+                       [&pred](const json& v) { return v.is_null() || pred(v); });
+  };
+  if (all([](const json& v) { return v.is_number(); })) return {AxisKind::kNumber, 1};
+  if (all([](const json& v) { return v.is_string(); })) return {AxisKind::kString, 1};
+  const auto first =
+      std::find_if(a.values.begin(), a.values.end(), [](const json& v) { return v.is_array(); });
+  const std::size_t n = first == a.values.end() ? 0 : first->size();
+  const bool vectors = all([n](const json& v) {
+    return v.is_array() && v.size() == n &&
+           std::all_of(v.begin(), v.end(), [](const json& x) { return x.is_number(); });
+  });
+  return vectors && (n == 2 || n == 3) ? AxisLayout{AxisKind::kVector, n} : AxisLayout{};
+}
+
+std::string axis_cell(const json& v, AxisKind kind, std::size_t component) {
+  if (v.is_null()) return "";
+  switch (kind) {
+    case AxisKind::kString:
+      return v.get<std::string>();
+    case AxisKind::kVector:
+      return v[component].dump();
+    default:
+      return v.dump();
+  }
+}
+
+// One column per axis (per component of a vector axis), named after its
+// pointer; a name another column already has gets "_axis" appended.
+Columns axis_columns(const std::vector<StudyAxis>& axes, const Columns& others) {
+  std::set<std::string> taken;
+  for (const Column& c : others) taken.insert(c.name);
+  Columns out;
+  for (std::size_t i = 0; i < axes.size(); ++i) {
+    const AxisLayout layout = axis_layout(axes[i]);
+    std::vector<std::string> suffixes{""};
+    if (layout.kind == AxisKind::kVector)
+      suffixes = layout.size == 2 ? std::vector<std::string>{"_x", "_y"}
+                                  : std::vector<std::string>{"_x", "_y", "_z"};
+    std::string base = snake_name(axes[i].pointer);
+    while (std::any_of(suffixes.begin(), suffixes.end(),
+                       [&](const std::string& s) { return taken.count(base + s) > 0; }))
+      base += "_axis";
+    for (std::size_t k = 0; k < suffixes.size(); ++k) {
+      taken.insert(base + suffixes[k]);
+      out.push_back({base + suffixes[k], [i, k, kind = layout.kind](const CsvRow& r) {
+                       return axis_cell(r.variant.axis_values[i], kind, k);
+                     }});
+    }
+  }
+  return out;
+}
+
+const StudyMethod* find_method(const Section& section, const std::string& label) {
+  for (const StudyMethod& m : section.methods)
+    if (m.label == label) return &m;
+  return nullptr;
+}
+
+// One header line, then one row per comparison of the section: study,
+// variant, scene, the axes, the identification columns, then `metrics`.
+std::string comparison_csv(const ReportInputs& in, const Section& section, const Columns& metrics) {
+  const Columns head{{"study", [](const CsvRow& r) { return r.study; }},
+                     {"variant", [](const CsvRow& r) { return r.variant.id; }},
+                     {"scene", [](const CsvRow& r) { return r.variant.scene; }}};
+  Columns tail = key_columns(section.kind);
+  tail.insert(tail.end(), metrics.begin(), metrics.end());
+  Columns columns = head;
+  columns.insert(columns.end(), tail.begin(), tail.end());
+  const Columns axes = axis_columns(section.axes, columns);
+  columns.insert(columns.begin() + static_cast<std::ptrdiff_t>(head.size()), axes.begin(),
+                 axes.end());
+  std::string csv;
+  for (const Column& c : columns) csv += (csv.empty() ? "" : ",") + csv_field(c.name);
   csv += "\n";
   for (const ComparisonRow& row : in.comparisons.rows) {
     const Variant& var = in.plan.variants[row.variant];
     if (var.section != section.kind) continue;
-    csv += fmt::format("{},{},{}", csv_field(in.study.name), var.id, csv_field(var.scene));
-    for (const json& value : var.axis_values) csv += "," + csv_field(value.dump());
-    csv += fmt::format(",{},{},{}", to_string(row.renderer), csv_field(row.method), row.reference);
-    for (const Column& c : columns) csv += "," + c.value(row);
+    const CsvRow r{in.study.name,
+                   var,
+                   row,
+                   in.plan.jobs[row.job],
+                   in.plan.jobs[row.reference_job],
+                   find_method(section, row.method)};
+    for (std::size_t k = 0; k < columns.size(); ++k)
+      csv += (k ? "," : "") + csv_field(columns[k].value(r));
     csv += "\n";
   }
   return csv;
@@ -142,10 +366,21 @@ std::string comparison_csv(const ReportInputs& in, const Section& section,
 
 // ---- report.json ----------------------------------------------------------------
 
+// Each value as the figures and the page show it: a light direction as
+// azimuth and elevation (study/light_angles.h), anything else as it is.
+json axis_value_labels(const StudyAxis& a) {
+  json out = json::array();
+  for (const json& v : a.values) out.push_back(axis_value_text(a.pointer, v));
+  return out;
+}
+
 json axes_json(const std::vector<StudyAxis>& axes) {
   json out = json::array();
   for (const StudyAxis& a : axes)
-    out.push_back({{"pointer", a.pointer}, {"label", a.label}, {"values", a.values}});
+    out.push_back({{"pointer", a.pointer},
+                   {"label", a.label},
+                   {"values", a.values},
+                   {"value_labels", axis_value_labels(a)}});
   return out;
 }
 

@@ -1,7 +1,9 @@
 // The files a study leaves for people and programs: report.json (every
-// render, comparison and ranking; the figures are drawn from it alone),
-// metrics.csv (bump comparisons) and lowpoly.csv (low-poly comparisons), each
-// CSV from one column list.
+// render, comparison and ranking; the figures are drawn from it alone;
+// described by harness/report.schema.json), metrics.csv (bump comparisons)
+// and lowpoly.csv (low-poly comparisons), each CSV from one column list
+// documented in harness/csv-columns.json. tests/study/test_report_files.py
+// holds the files to both, so a new key or column needs its documentation.
 #pragma once
 
 #include <map>

@@ -287,7 +287,10 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
           fmt::format("figures: drawing the figures and report.html (harness/report.py, "
                       "log {}) ...",
                       (out / "report.log").string()));
-    stats.report_html = draw_report(out.string(), options.python, options.timeout_s);
+    stats.report_html = draw_report(out.string(), options.self_contained_html, options.python,
+                                    options.timeout_s, [&](const std::string& line) {
+                                      if (options.log) options.log("figures: " + line);
+                                    });
   }
   stats.seconds = seconds_since(start);
   return stats;

@@ -32,6 +32,9 @@ struct StudyOptions {
   std::function<void(const std::string&)> log;     // progress lines
   std::function<void(std::size_t done, std::size_t total, double eta_s)> progress;
   bool figures = true;  // run harness/report.py (figures and report.html)
+  // report.html embeds its images as data: URIs (one file to mail) instead
+  // of linking images/ and figures/ beside it.
+  bool self_contained_html = false;
   // Plan and validate only: count renders and cache hits, write nothing.
   bool dry_run = false;
   // Per render; a render estimated above it is refused (bad input) before

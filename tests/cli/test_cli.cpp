@@ -6,10 +6,12 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "cli/cli.h"
@@ -39,6 +41,16 @@ class Cli : public TempDirTest {
     std::vector<std::string> expected = names;
     std::sort(expected.begin(), expected.end());
     EXPECT_EQ(found, expected);
+  }
+  // sphere-grating.exr and cylinder-grating.exr, 16x16 at 1 spp: two
+  // different scenes to compare.
+  void render_sphere_and_cylinder() {
+    for (const char* scene : {"sphere-grating", "cylinder-grating"})
+      ASSERT_EQ(
+          run({"render", kScenes + "/" + scene + ".json", "-o", path(std::string(scene) + ".exr"),
+               "--width", "16", "--height", "16", "--spp", "1"})
+              .code,
+          kExitOk);
   }
 };
 
@@ -135,12 +147,7 @@ TEST_F(Cli, CompareTextShowsSsimLikeTheJson) {
 }
 
 TEST_F(Cli, CompareWritesTheDifferenceAndWarnsAboutDifferentScenes) {
-  for (const char* scene : {"sphere-grating", "cylinder-grating"})
-    ASSERT_EQ(
-        run({"render", kScenes + "/" + scene + ".json", "-o", path(std::string(scene) + ".exr"),
-             "--width", "16", "--height", "16", "--spp", "1"})
-            .code,
-        kExitOk);
+  render_sphere_and_cylinder();
   const Result r = run({"compare", path("sphere-grating.exr"), path("cylinder-grating.exr"), "-o",
                         path("diff.exr")});
   EXPECT_EQ(r.code, kExitOk) << r.err;
@@ -158,14 +165,311 @@ TEST_F(Cli, CompareWritesTheDifferenceAndWarnsAboutDifferentScenes) {
   EXPECT_EQ(same.err.find("warning"), std::string::npos) << same.err;
 }
 
-TEST_F(Cli, CompareNamesTheImageThatLacksAChannel) {
+TEST_F(Cli, CompareNamesTheImageThatLacksCoverage) {
   ASSERT_EQ(run({"render", kScenes + "/sphere-grating.json", "-o", path("a.exr"), "--width", "8",
                  "--height", "8", "--preview", path("p.png")})
                 .code,
             kExitOk);
-  const Result r = run({"compare", path("a.exr"), path("p.png")});
+  const Result r = run({"compare", path("a.exr"), path("p.png"), "-o", path("d.exr")});
   EXPECT_EQ(r.code, kExitBadInput);
-  EXPECT_NE(r.err.find(path("p.png") + ": no A channel"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(path("p.png") +
+                       ": no A (coverage) channel and no --mask FILE or --threshold given"),
+            std::string::npos)
+      << r.err;
+  expect_only({"a.exr", "p.png"});
+}
+
+// Every key of compare --json, as the label its text form prints it under:
+// a metric added to the JSON without a text line fails here.
+const std::map<std::string, std::string>& compare_text_labels() {
+  static const std::map<std::string, std::string> labels{
+      {"reference", "reference "},
+      {"test", "test      "},
+      {"coverage", "(coverage: "},
+      {"radiance_scale", "albedo*E/pi = "},
+      {"radiance_scale_unit", "W m^-2 sr^-1"},
+      {"intervals", "intervals: 95 %"},
+      {"pass", "pass"},
+      {"profile/unit", "fraction of albedo*E/pi"},
+      {"profile/rmse_terminator", "RMSE terminator [60,100) deg"},
+      {"profile/rmse_terminator_ci", "RMSE terminator [60,100) deg"},
+      {"profile/rmse_terminator_bootstrap_bias", "bootstrap bias of that RMSE"},
+      {"profile/rmse_overall", "RMSE overall"},
+      {"profile/max_error_terminator", "max error terminator"},
+      {"profile/max_error_terminator_ci", "max error terminator"},
+      {"profile/max_step", "largest bin step"},
+      {"profile/reference_max_step", "largest bin step"},
+      {"profile/position_deg", "terminator position"},
+      {"profile/reference_position_deg", "terminator position"},
+      {"profile/position_error_deg", "terminator position"},
+      {"profile/position_error_deg_ci", "terminator position"},
+      {"profile/width_deg", "transition width"},
+      {"profile/reference_width_deg", "transition width"},
+      {"profile/lit_bias", "lit-region bias"},
+      {"profile/lit_bias_ci", "lit-region bias"},
+      {"profile/common_bins", "common bins"},
+      {"image/unit", "W m^-2 sr^-1"},
+      {"image/mask_iou", "mask IoU"},
+      {"image/rmse", "  RMSE  "},
+      {"image/rmse_ci", "  RMSE  "},
+      {"image/max_error", "  max error  "},
+      {"image/mean_error", "mean error (test-reference)"},
+      {"image/reference_mean", "reference mean"},
+      {"image/peak", "reference peak"},
+      {"image/ssim", "SSIM  "},
+      {"image/ssim_kind", "masked SSIM: Gaussian 11x11"},
+      {"image/pixels", "pixels fully covered in both: "},
+      {"image/nonfinite", "NaN/Inf values"},
+      {"view/unit", "fraction of albedo*E/pi"},
+      {"view/grazing_deg", "pixels at [60, 75) deg"},
+      {"view/rmse_grazing", "RMSE grazing views"},
+      {"view/rmse_grazing_ci", "RMSE grazing views"},
+      {"view/bias_grazing", "bias grazing views"},
+      {"view/bias_grazing_ci", "bias grazing views"},
+      {"view/pixels", "binned by view angle; "}};
+  return labels;
+}
+
+TEST_F(Cli, CompareTextHasEveryMetricOfTheJson) {
+  ASSERT_EQ(run({"render", kScenes + "/sphere-grating.json", "-o", path("a.exr"), "--width", "48",
+                 "--height", "48", "--spp", "1"})
+                .code,
+            kExitOk);
+  ASSERT_EQ(run({"render", kScenes + "/sphere-grating.json", "-o", path("b.exr"), "--width", "48",
+                 "--height", "48", "--spp", "1", "--method", "chiang2019"})
+                .code,
+            kExitOk);
+  const Result text = run({"compare", path("a.exr"), path("b.exr")});
+  const Result j = run({"compare", path("a.exr"), path("b.exr"), "--json"});
+  ASSERT_EQ(text.code, kExitOk) << text.err;
+  ASSERT_EQ(j.code, kExitOk) << j.err;
+  const nlohmann::json doc = nlohmann::json::parse(j.out);
+  const auto& labels = compare_text_labels();
+  for (const auto& [key, value] : doc.items()) {
+    const bool section = key == "profile" || key == "image" || key == "view";
+    if (!section) {
+      ASSERT_TRUE(labels.count(key)) << "no text label for " << key;
+      EXPECT_NE(text.out.find(labels.at(key)), std::string::npos) << key;
+      continue;
+    }
+    for (const auto& [metric, unused] : value.items()) {
+      const std::string name = key + "/" + metric;
+      ASSERT_TRUE(labels.count(name)) << "no text label for " << name;
+      EXPECT_NE(text.out.find(labels.at(name)), std::string::npos) << name << "\n" << text.out;
+    }
+  }
+  // The values too, at the text's precision.
+  EXPECT_NE(text.out.find(fmt::format("{:.6f}", doc["image"]["ssim"].get<double>())),
+            std::string::npos);
+  EXPECT_NE(text.out.find(fmt::format("{:.6g}", doc["image"]["reference_mean"].get<double>())),
+            std::string::npos);
+}
+
+TEST_F(Cli, CompareDifferentScenesNamesWhatDiffersAndSameSceneRefuses) {
+  render_sphere_and_cylinder();
+  const Result warn = run({"compare", path("sphere-grating.exr"), path("cylinder-grating.exr")});
+  EXPECT_EQ(warn.code, kExitOk) << warn.err;
+  EXPECT_NE(warn.err.find("penumbra: warning:"), std::string::npos) << warn.err;
+  EXPECT_NE(warn.err.find("/shape/type"), std::string::npos) << warn.err;
+  const Result strict = run({"compare", path("sphere-grating.exr"), path("cylinder-grating.exr"),
+                             "--same-scene", "-o", path("diff.exr")});
+  EXPECT_EQ(strict.code, kExitBadInput);
+  EXPECT_NE(strict.err.find("show different scenes (penumbra:scene differs at /shape/type"),
+            std::string::npos)
+      << strict.err;
+  expect_only({"sphere-grating.exr", "cylinder-grating.exr"});
+  // Sampling is no part of the scene: more samples, the same scene.
+  ASSERT_EQ(run({"render", kScenes + "/sphere-grating.json", "-o", path("spp2.exr"), "--width",
+                 "16", "--height", "16", "--spp", "2", "--method", "chiang2019"})
+                .code,
+            kExitOk);
+  const Result same =
+      run({"compare", path("sphere-grating.exr"), path("spp2.exr"), "--same-scene"});
+  EXPECT_EQ(same.code, kExitOk) << same.err;
+  EXPECT_EQ(same.err, "");
+}
+
+TEST_F(Cli, CompareDifferenceOutputIsCheckedBeforeAnythingIsRead) {
+  ASSERT_EQ(run({"render", kScenes + "/sphere-grating.json", "-o", path("a.exr"), "--width", "8",
+                 "--height", "8", "--spp", "1"})
+                .code,
+            kExitOk);
+  const Result png = run({"compare", path("a.exr"), path("a.exr"), "-o", path("diff.png")});
+  EXPECT_EQ(png.code, kExitBadInput);
+  EXPECT_NE(png.err.find("-o " + path("diff.png") + ": expected a file name ending in .exr"),
+            std::string::npos)
+      << png.err;
+  const Result folder =
+      run({"compare", path("a.exr"), path("a.exr"), "-o", path("missing/diff.exr")});
+  EXPECT_EQ(folder.code, kExitBadInput);
+  EXPECT_NE(folder.err.find("does not exist"), std::string::npos) << folder.err;
+  const Result proc = run({"compare", path("a.exr"), path("a.exr"), "-o", "/proc/diff.exr"});
+  EXPECT_EQ(proc.code, kExitBadInput);
+  EXPECT_NE(proc.err.find("/proc/diff.exr: "), std::string::npos) << proc.err;
+  // Writing the difference over an input would destroy the reference.
+  const auto before = fs::last_write_time(path("a.exr"));
+  const Result self = run({"compare", path("a.exr"), path("a.exr"), "-o", path("a.exr")});
+  EXPECT_EQ(self.code, kExitBadInput);
+  EXPECT_NE(self.err.find("an input of the comparison"), std::string::npos) << self.err;
+  EXPECT_EQ(fs::last_write_time(path("a.exr")), before);
+  // A missing input: nothing written, although -o itself was fine.
+  const Result missing = run({"compare", path("a.exr"), path("nope.exr"), "-o", path("diff.exr")});
+  EXPECT_EQ(missing.code, kExitBadInput);
+  EXPECT_NE(missing.err.find(path("nope.exr") + ": no such file"), std::string::npos)
+      << missing.err;
+  expect_only({"a.exr"});
+}
+
+// Another renderer's image: R, G, B only, no coverage, no analysis channels.
+class CompareExternal : public Cli {
+ protected:
+  void SetUp() override {
+    Cli::SetUp();
+    ASSERT_EQ(run({"render", kScenes + "/sphere-grating.json", "-o", path("a.exr"), "--width", "48",
+                   "--height", "48", "--spp", "1"})
+                  .code,
+              kExitOk);
+    const Image a = read_image(path("a.exr"));
+    Image rgb, mask;
+    rgb.width = mask.width = a.width;
+    rgb.height = mask.height = a.height;
+    rgb.channels = {"R", "G", "B"};
+    mask.channels = {"Y"};
+    for (int y = 0; y < a.height; ++y)
+      for (int x = 0; x < a.width; ++x) {
+        for (const char* c : {"R", "G", "B"}) rgb.pixels.push_back(a.at(x, y, a.channel_index(c)));
+        mask.pixels.push_back(a.at(x, y, a.channel_index("A")));
+      }
+    write_exr(rgb, path("rgb.exr"));
+    write_exr(mask, path("mask.exr"));
+  }
+  nlohmann::json compare_json(std::vector<std::string> args, int code = kExitOk) {
+    args.insert(args.begin(), "compare");
+    args.push_back("--json");
+    const Result r = run(args);
+    EXPECT_EQ(r.code, code) << r.err;
+    return r.code == kExitOk ? nlohmann::json::parse(r.out) : nlohmann::json();
+  }
+};
+
+TEST_F(CompareExternal, AMaskImageGivesTheCoverage) {
+  // The render's own coverage as --mask: the comparison with itself.
+  const nlohmann::json doc =
+      compare_json({path("a.exr"), path("rgb.exr"), "--mask", path("mask.exr")});
+  EXPECT_EQ(doc["coverage"]["test"], "--mask " + path("mask.exr"));
+  EXPECT_EQ(doc["coverage"]["reference"], "A channel");
+  EXPECT_EQ(doc["image"]["mask_iou"], 1.0);
+  EXPECT_EQ(doc["image"]["rmse"], 0.0);
+  EXPECT_EQ(doc["image"]["ssim"], 1.0);
+  EXPECT_EQ(doc["profile"]["rmse_overall"], 0.0);  // theta lent by the reference
+  // The other way round: theta comes from the test.
+  const nlohmann::json back =
+      compare_json({path("rgb.exr"), path("a.exr"), "--mask", path("mask.exr")});
+  EXPECT_EQ(back["profile"]["rmse_overall"], 0.0);
+  expect_only({"a.exr", "rgb.exr", "mask.exr"});
+}
+
+TEST_F(CompareExternal, AThresholdGivesTheLitRegion) {
+  const nlohmann::json bare = compare_json({path("a.exr"), path("rgb.exr"), "--threshold"});
+  EXPECT_NE(bare["coverage"]["test"].get<std::string>().find("--threshold 0.05: lit where"),
+            std::string::npos)
+      << bare["coverage"];
+  // Shadowed pixels count as background: the lit region is smaller than the object.
+  EXPECT_LT(bare["image"]["mask_iou"].get<double>(), 1.0);
+  EXPECT_GT(bare["image"]["mask_iou"].get<double>(), 0.2);
+  const nlohmann::json given = compare_json({"--threshold=0.5", path("a.exr"), path("rgb.exr")});
+  EXPECT_LT(given["image"]["mask_iou"], bare["image"]["mask_iou"]);
+}
+
+TEST_F(CompareExternal, TwoExternalImagesGetImageMetricsOnly) {
+  const nlohmann::json doc = compare_json({path("rgb.exr"), path("rgb.exr"), "--no-mask"});
+  EXPECT_TRUE(doc["profile"].is_null());
+  EXPECT_TRUE(doc["view"].is_null());
+  EXPECT_NE(doc["profile_skipped"].get<std::string>().find("no coverage"), std::string::npos);
+  EXPECT_EQ(doc["image"]["pixels"], 48 * 48);
+  EXPECT_EQ(doc["image"]["ssim"], 1.0);
+  EXPECT_TRUE(doc["image"]["mask_iou"].is_null());
+  const Result text = run({"compare", path("rgb.exr"), path("rgb.exr"), "--no-mask"});
+  EXPECT_EQ(text.code, kExitOk);
+  EXPECT_NE(text.out.find("profile and viewer metrics: not computed"), std::string::npos)
+      << text.out;
+  // A bound on the profile cannot be checked without one.
+  const Result bound =
+      run({"compare", path("rgb.exr"), path("rgb.exr"), "--no-mask", "--max-profile-rmse", "0.1"});
+  EXPECT_EQ(bound.code, kExitBadInput);
+  EXPECT_NE(bound.err.find("--max-profile-rmse: no profile to check"), std::string::npos)
+      << bound.err;
+  // A threshold is a fraction of albedo*E/pi, which neither image gives.
+  const Result scale = run({"compare", path("rgb.exr"), path("rgb.exr"), "--threshold=0.1"});
+  EXPECT_EQ(scale.code, kExitBadInput);
+  EXPECT_NE(scale.err.find("--threshold is a fraction of albedo*E/pi"), std::string::npos)
+      << scale.err;
+  const Result wrong = run({"compare", path("rgb.exr"), path("rgb.exr"), "--mask", path("b.exr")});
+  EXPECT_EQ(wrong.code, kExitBadInput);
+  EXPECT_NE(wrong.err.find(path("b.exr") + ": no such file"), std::string::npos) << wrong.err;
+}
+
+TEST_F(CompareExternal, NoMaskSsimDiffersFromTheMaskedOne) {
+  ASSERT_EQ(run({"render", kScenes + "/sphere-grating.json", "-o", path("b.exr"), "--width", "48",
+                 "--height", "48", "--spp", "1", "--method", "chiang2019"})
+                .code,
+            kExitOk);
+  const nlohmann::json masked = compare_json({path("a.exr"), path("b.exr")});
+  const nlohmann::json full = compare_json({path("a.exr"), path("b.exr"), "--no-mask"});
+  EXPECT_EQ(full["image"]["pixels"], 48 * 48);
+  EXPECT_LT(masked["image"]["pixels"], 48 * 48);
+  EXPECT_NE(masked["image"]["ssim"], full["image"]["ssim"]);
+  EXPECT_EQ(masked["profile"], full["profile"]);  // the profile keeps the coverage
+}
+
+TEST_F(Cli, RenderRefusesANonExrOutputBeforeRendering) {
+  const Result r = run({"render", kScenes + "/sphere-grating.json", "-o", path("x.png")});
+  EXPECT_EQ(r.code, kExitBadInput);
+  EXPECT_NE(r.err.find("-o " + path("x.png") +
+                       ": expected a file name ending in .exr (got \".png\"): only OpenEXR holds"),
+            std::string::npos)
+      << r.err;
+  const Result preview = run({"render", kScenes + "/sphere-grating.json", "-o", path("x.exr"),
+                              "--preview", path("x.tif")});
+  EXPECT_EQ(preview.code, kExitBadInput);
+  EXPECT_NE(
+      preview.err.find("--preview " + path("x.tif") + ": expected a file name ending in .png"),
+      std::string::npos)
+      << preview.err;
+  expect_only({});
+}
+
+TEST_F(Cli, RenderRefusesAFolderThatTakesNoFilesBeforeRendering) {
+  std::ofstream(path("file")) << "x";
+  const Result under_file =
+      run({"render", kScenes + "/sphere-grating.json", "-o", path("file/out.exr")});
+  EXPECT_EQ(under_file.code, kExitBadInput);
+  EXPECT_NE(under_file.err.find("does not exist"), std::string::npos) << under_file.err;
+  const Result proc = run({"render", kScenes + "/sphere-grating.json", "-o", "/proc/out.exr"});
+  EXPECT_EQ(proc.code, kExitBadInput);
+  EXPECT_NE(proc.err.find("/proc/out.exr: "), std::string::npos) << proc.err;
+  EXPECT_EQ(proc.out, "");  // no "wrote" line: nothing rendered
+  expect_only({"file"});
+}
+
+TEST_F(Cli, ExportRefusesBadOutputsBeforeExporting) {
+  std::ofstream(path("file")) << "x";
+  const Result under_file =
+      run({"export", "--to", "povray", kScenes + "/sphere-grating.json", "-o", path("file/pov")});
+  EXPECT_EQ(under_file.code, kExitBadInput);
+  EXPECT_NE(under_file.err.find("cannot create the output folder"), std::string::npos)
+      << under_file.err;
+  const Result proc =
+      run({"export", "--to", "blender", kScenes + "/sphere-grating.json", "-o", "/proc"});
+  EXPECT_EQ(proc.code, kExitBadInput);
+  EXPECT_NE(proc.err.find("/proc/job.json: "), std::string::npos) << proc.err;
+  // A method the renderer lacks: refused before the folder is made.
+  const Result method = run({"export", "--to", "povray", kScenes + "/sphere-grating.json", "-o",
+                             path("pov"), "--method", "chiang2019"});
+  EXPECT_EQ(method.code, kExitBadInput);
+  EXPECT_NE(method.err.find("povray does not offer the method \"chiang2019\""), std::string::npos)
+      << method.err;
+  expect_only({"file"});
 }
 
 TEST_F(Cli, BadSceneExitsTwoWithOneLineAndNoOutput) {

@@ -19,6 +19,7 @@
 #include "analysis/metrics.h"
 #include "image/image_io.h"
 #include "scene/scene_json.h"
+#include "study/figures.h"
 #include "study/report_files.h"
 #include "study/study.h"
 #include "util/process.h"
@@ -298,7 +299,10 @@ TEST_F(Study, AReportOfManyVariantsShowsASampleAndSaysSo) {
 }
 
 // The smoke study end to end, every renderer, then its report.html in
-// headless Chromium: no console errors, every image decoded.
+// headless Chromium at 1024 px: no console errors, every linked image
+// decoded, nothing wider than the page, the headline's method table, the
+// cross-renderer table and the renderer table present. Then the same page
+// self-contained: every image a data: URI, nothing linked.
 TEST_F(Study, SmokeStudyReportLoadsInChromium) {
   const ::penumbra::Study study = load_study(kSource + "/scenes/studies/smoke.json");
   StudyOptions o;
@@ -309,14 +313,27 @@ TEST_F(Study, SmokeStudyReportLoadsInChromium) {
   ASSERT_TRUE(fs::exists(stats.report_html));
   for (const char* ext : {"png", "svg", "pdf"})
     EXPECT_TRUE(fs::exists(path(std::string("smoke/figures/ranking.") + ext))) << ext;
+  for (const char* ext : {"png", "pdf"})
+    EXPECT_TRUE(fs::exists(path(std::string("smoke/figures/grid-v000.") + ext))) << ext;
 
-  // A copy with a probe appended: after load it writes how many images
-  // decoded into the DOM, which --dump-dom prints. The report itself has no script.
+  // A copy with a probe appended, beside the page so that its relative
+  // links resolve: after load it writes into the DOM how many images
+  // decoded, which elements reach past the window's right edge and which
+  // tables are missing; --dump-dom prints it. The report itself has no script.
   std::string html = read_text(stats.report_html);
+  EXPECT_EQ(html.find("data:image"), std::string::npos) << "the default page links its images";
+  EXPECT_NE(html.find("src=\"images/"), std::string::npos);
   const std::string probe =
       "<script>window.addEventListener('load',function(){var i=document.images,ok=0;"
       "for(var k=0;k<i.length;k++){if(i[k].complete&&i[k].naturalWidth>0)ok++;}"
-      "document.body.setAttribute('data-probe',ok+'/'+i.length);});</script>";
+      "var w=document.documentElement.clientWidth,wide=[];"
+      "document.querySelectorAll('body *').forEach(function(e){"
+      "if(e.getBoundingClientRect().right>w+1)wide.push(e.tagName+(e.id?'#'+e.id:''));});"
+      "var miss=['methods-table','agreement-table','renderers-table'].filter(function(t){"
+      "return !document.querySelector('#'+t+' table tr td');});"
+      "var b=document.body;b.setAttribute('data-probe',ok+'/'+i.length);"
+      "b.setAttribute('data-wide',wide.length+':'+wide.slice(0,5).join(' '));"
+      "b.setAttribute('data-missing','['+miss.join(' ')+']');});</script>";
   const auto body = html.rfind("</body>");
   ASSERT_NE(body, std::string::npos);
   html.insert(body, probe);
@@ -327,7 +344,8 @@ TEST_F(Study, SmokeStudyReportLoadsInChromium) {
       {*chromium, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
        "--disable-background-networking", "--disable-component-update", "--disable-sync",
        "--user-data-dir=" + path("chromium-profile"), "--enable-logging=stderr", "--v=0",
-       "--virtual-time-budget=10000", "--dump-dom", "file://" + path("smoke/probe.html")},
+       "--window-size=1024,900", "--hide-scrollbars", "--virtual-time-budget=10000", "--dump-dom",
+       "file://" + path("smoke/probe.html")},
       dir_.string(), path("chromium.log"), 120);
   const std::string log = read_text(path("chromium.log"));
   ASSERT_TRUE(p.ok()) << log;
@@ -336,8 +354,26 @@ TEST_F(Study, SmokeStudyReportLoadsInChromium) {
   EXPECT_EQ(log.find("ERR_FILE_NOT_FOUND"), std::string::npos) << log;
   std::smatch m;
   ASSERT_TRUE(std::regex_search(log, m, std::regex("data-probe=\"(\\d+)/(\\d+)\""))) << log;
-  EXPECT_GT(std::stoi(m[2]), 20);
+  const int page_images = std::stoi(m[2]);
+  EXPECT_GT(page_images, 20);
   EXPECT_EQ(m[1], m[2]) << "images that did not decode";
+  ASSERT_TRUE(std::regex_search(log, m, std::regex("data-wide=\"([^\"]*)\""))) << log;
+  EXPECT_EQ(m[1].str().substr(0, 2), "0:") << "elements wider than the page: " << m[1];
+  ASSERT_TRUE(std::regex_search(log, m, std::regex("data-missing=\"([^\"]*)\""))) << log;
+  EXPECT_EQ(m[1], "[]") << "tables missing from the page";
+
+  // Self-contained: the same page with every image inlined.
+  const std::string linked_bytes = html.substr(0, body);
+  draw_report(path("smoke"), /*self_contained=*/true);
+  const std::string embedded = read_text(stats.report_html);
+  EXPECT_EQ(embedded.find("src=\"images/"), std::string::npos);
+  EXPECT_EQ(embedded.find("src=\"figures/"), std::string::npos);
+  std::size_t images = 0;
+  for (std::size_t at = 0;
+       (at = embedded.find("<img src=\"data:image/png;base64,", at)) != std::string::npos; ++at)
+    ++images;
+  EXPECT_EQ(images, static_cast<std::size_t>(page_images)) << "every image inlined";
+  EXPECT_GT(embedded.size(), 10 * linked_bytes.size());
 }
 
 }  // namespace
