@@ -17,7 +17,8 @@ from penumbra_data import (
     get_metric, metric_label, num, obj, objs, stem)
 from penumbra_grid_figure import grid_figure
 from penumbra_lowpoly_figures import lowpoly_figures
-from penumbra_plot import contour_lines, method_colors, plt, progress, save
+from penumbra_plot import (
+    contour_lines, method_colors, plt, progress, save, worker_pool)
 
 L_LABEL = 'L / (albedo·E/π)'
 
@@ -398,15 +399,31 @@ def sweep_figures(k, plot, doc, src, figdir):
               for i in (x, y)] + [xt, yt]
     result = {'metric': metric, 'renderer': rend, 'scenes': [],
               'written': []}
+    tasks = []
     for scene in dict.fromkeys(s for s, _ in cells):
         with np.errstate(invalid='ignore', divide='ignore'):
             grids = {m: (a[0] / a[1])[np.ix_(oy, ox)]
                      for (s, m), a in cells.items() if s == scene}
-        paths, written = _sweep_scene(k, plot, scene, grids, xs, ys, labels,
-                                      numeric, figdir)
-        result['scenes'].append((scene, paths[0]))
-        result['written'] += written
+        tasks.append((k, plot, scene, grids, xs, ys, labels, numeric, figdir))
+    with worker_pool(len(tasks)) as pool:  # a scene's figures per process
+        for task, (paths, written) in zip(tasks,
+                                          pool.imap(_sweep_scene_task, tasks)):
+            result['scenes'].append((task[2], paths[0]))
+            result['written'] += written
     return result
+
+
+def _sweep_scene_task(task):
+    return _sweep_scene(*task)
+
+
+def _variant_figures(task):
+    """A variant's profile figure and composed image grid (run in a worker
+    process: each figure depends on its inputs alone, so the bytes are the
+    same whichever process draws it)."""
+    v, colors, terminator, out, src, names, figdir = task
+    return (profile_figure(v, colors, terminator, figdir),
+            grid_figure(v, out, src, names, figdir))
 
 
 def report_figures(report):
@@ -429,14 +446,15 @@ def report_figures(report):
     written += stats
     figs['grids'] = []
     names = [str(r.get('id')) for r in report.renderers]
-    for k, v in enumerate(report.shown):
-        progress(f'profiles and image grid of {v.get("id")} '
-                 f'({k + 1}/{len(report.shown)} variants)')
-        paths = profile_figure(v, colors, report.terminator, figdir)
-        figs['profiles'].append(paths[0])
-        grid = grid_figure(v, report.out, report.src, names, figdir)
-        figs['grids'].append(grid)
-        written += paths + grid
+    tasks = [(v, colors, report.terminator, report.out, report.src, names,
+              figdir) for v in report.shown]
+    with worker_pool(len(tasks)) as pool:
+        for k, (paths, grid) in enumerate(pool.imap(_variant_figures, tasks)):
+            progress(f'profiles and image grid of {report.shown[k].get("id")}'
+                     f' ({k + 1}/{len(report.shown)} variants)')
+            figs['profiles'].append(paths[0])
+            figs['grids'].append(grid)
+            written += paths + grid
     for k, plot in enumerate(report.doc.get('plots', [])):
         if not isinstance(plot, dict):
             raise BadInput(report.src, f'plots[{k}] must be an object')

@@ -38,10 +38,14 @@ def grid_figure(var, out, src, renderers, figdir):
     cols, rows = _cells(var, renderers)
     if not rows:
         return []
+    # Fixed margins rather than a constrained layout, which costs seconds
+    # over this many axes; save() trims the figure to what was drawn.
     fig, axs = plt.subplots(len(rows), len(cols), squeeze=False,
                             figsize=(1.7 * len(cols) + 0.9,
-                                     1.7 * len(rows) + 0.6),
-                            layout='constrained')
+                                     1.75 * len(rows) + 0.9),
+                            gridspec_kw=dict(wspace=0.04, hspace=0.04,
+                                             left=0.07, right=0.99,
+                                             bottom=0.01, top=0.92))
     for i, (head, paths) in enumerate(rows):
         for j, rel in enumerate(paths):
             ax = axs[i][j]

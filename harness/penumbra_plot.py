@@ -4,6 +4,7 @@ Importing this module selects the Agg backend (no display) and the rcParams
 that make the output reproducible: the same input gives the same bytes,
 with no dates or versions in the files and a fixed SVG hash salt.
 """
+import multiprocessing
 import os
 import sys
 
@@ -35,6 +36,30 @@ def progress(text):
     """One progress line on stderr, which the C++ side forwards to the
     user while the figures are drawn (study/figures.cpp)."""
     print(f'progress: {text}', file=sys.stderr, flush=True)
+
+
+class _Serial:
+    """A pool of none: imap in this process (one task, or one core)."""
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    @staticmethod
+    def imap(func, tasks):
+        return map(func, tasks)
+
+
+def worker_pool(tasks):
+    """Processes for independent figures, one per core this process may use
+    (at most one per task); results come back in task order, so the output
+    and its order do not depend on the number of cores. Forked: the workers
+    inherit the Agg set-up above."""
+    cores = len(os.sched_getaffinity(0))
+    if min(cores, tasks) < 2:
+        return _Serial()
+    return multiprocessing.get_context('fork').Pool(min(cores, tasks))
 
 
 def method_colors(names):
