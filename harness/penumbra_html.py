@@ -64,13 +64,25 @@ def image_grid(var, uris, missing, renderers):
     return {'cols': cols, 'rows': rows}
 
 
+def metric_cell(comp, metric, scale):
+    """A metric of a comparison, with its 95 % interval in the same cell
+    where report.json has one (METRIC_ci), scaled as the column says."""
+    section, _, name = metric.partition('.')
+    ci = obj(comp.get(section)).get(name + '_ci')
+    if isinstance(ci, list) and len(ci) == 2:
+        return ci_cell(get_metric(comp, metric), ci, scale,
+                       digits=2 if scale == 100 else 3)
+    return (get_metric(comp, metric), scale)
+
+
 def variant_context(var, report, fig, missing, grid=()):
     """One variant's section: image grid, profile figure, metrics table."""
     vid = str(var.get('id'))
     comps = [c for c in report.comps if c.get('variant') == var.get('id')]
+    # "evaluator: displacement": a space lets the narrow column wrap there.
     rows = [[str(c.get('renderer')), str(c.get('method')),
-             str(c.get('reference'))] +
-            [(get_metric(c, m), s) for m, s, _ in VARIANT_METRICS]
+             str(c.get('reference')).replace(':', ': ', 1)] +
+            [metric_cell(c, m, s) for m, s, _ in VARIANT_METRICS]
             for c in comps]
     head = ['renderer', 'method', 'reference'] + [
         h for *_, h in VARIANT_METRICS]
@@ -108,10 +120,16 @@ def interval_text(ci, scale=1.0, digits=2):
 
 
 def ci_cell(value, ci, scale=100.0, digits=1):
-    """A right-aligned 'value [lo, hi]' cell, scaled (100: percent)."""
+    """A right-aligned 'value [lo, hi]' cell, scaled (100: percent), with
+    at least `digits` decimals and more when the numbers are small, so that
+    the largest shows two significant digits (0.0012, not 0.00)."""
     v = num(value)
     if not math.isfinite(v):
         return {'text': 'n/a', 'cls': 'n na'}
+    ends = [num(t) for t in ci] if isinstance(ci, list) else []
+    big = max(abs(t * scale) for t in [v] + ends if math.isfinite(t))
+    if big > 0:
+        digits = min(max(digits, 1 - math.floor(math.log10(big))), 5)
     return {'text': f'{v * scale:.{digits}f} {interval_text(ci, scale, digits)}',
             'cls': 'n'}
 
