@@ -190,8 +190,11 @@ def comparisons_context(lp):
         cs = [c for c in lp.comps if lp.place(c)[0] == group]
         if not cs:
             continue
-        rows = [[str(c.get('renderer')), str(c.get('offset')),
-                 str(c.get('reference')),
+        # "evaluator: analytic", "epsilon (distance=0.01)": spaces let the
+        # narrow columns wrap there.
+        rows = [[str(c.get('renderer')),
+                 str(c.get('offset')).replace('(', ' (', 1),
+                 str(c.get('reference')).replace(':', ': ', 1),
                  lp.level_text(lp.place(c)[1]) if lp.place(c)[1] is not None
                  else 'n/a',
                  tris.get((str(c.get('variant')), str(c.get('renderer')),
