@@ -26,13 +26,29 @@ bool usable(const Profile& a, std::size_t k, std::uint64_t min_count) {
   return k < a.count.size() && a.count[k] >= min_count;
 }
 
+// SSIM as Wang et al. (2004) define it: an 11x11 Gaussian window (sigma 1.5)
+// and K1 = 0.01, K2 = 0.03 of the dynamic range; shared by the masked and the
+// unmasked variants, which differ only in the pixels a window takes.
+struct SsimWindow {
+  static constexpr int kRadius = 5;
+  double kernel[2 * kRadius + 1];  // unnormalised 1-D weights
+  double c1, c2;
+  explicit SsimWindow(double range) : c1(std::pow(0.01 * range, 2)), c2(std::pow(0.03 * range, 2)) {
+    for (int i = -kRadius; i <= kRadius; ++i)
+      kernel[i + kRadius] = std::exp(-0.5 * i * i / (1.5 * 1.5));
+  }
+  // The index from a window's weighted means, variances and covariance.
+  double index(double mx, double my, double vx, double vy, double cxy) const {
+    return ((2 * mx * my + c1) * (2 * cxy + c2)) / ((mx * mx + my * my + c1) * (vx + vy + c2));
+  }
+};
+
 // OpenImageIO's ImageBufAlgo has no SSIM, hence this one.
 double ssim_in_mask(const Image& test, const Image& reference, const int trgb[3], const int rrgb[3],
                     int ta, int ra, double min_coverage, double peak) {
-  const int w = test.width, h = test.height, radius = 5;
-  double kernel[2 * 5 + 1];
-  for (int i = -radius; i <= radius; ++i) kernel[i + radius] = std::exp(-0.5 * i * i / (1.5 * 1.5));
-  const double c1 = std::pow(0.01 * peak, 2), c2 = std::pow(0.03 * peak, 2);
+  const int w = test.width, h = test.height, radius = SsimWindow::kRadius;
+  const SsimWindow window(peak);
+  const double* kernel = window.kernel;
   auto inside = [&](int x, int y) {
     return test.at(x, y, ta) >= min_coverage && reference.at(x, y, ra) >= min_coverage;
   };
@@ -52,8 +68,7 @@ double ssim_in_mask(const Image& test, const Image& reference, const int trgb[3]
         }
       mx /= sw, my /= sw;
       const double vx = std::max(0.0, sxx / sw - mx * mx), vy = std::max(0.0, syy / sw - my * my);
-      const double cxy = sxy / sw - mx * my;
-      sum += ((2 * mx * my + c1) * (2 * cxy + c2)) / ((mx * mx + my * my + c1) * (vx + vy + c2));
+      sum += window.index(mx, my, vx, vy, sxy / sw - mx * my);
       ++n;
     }
   return n ? sum / double(n) : kNaN;
@@ -199,7 +214,7 @@ double ssim_unmasked(const Image& test, const Image& reference, double data_rang
                        require_channel(test, "B")};
   const int rrgb[3] = {require_channel(reference, "R"), require_channel(reference, "G"),
                        require_channel(reference, "B")};
-  const int w = test.width, h = test.height, radius = 5;
+  const int w = test.width, h = test.height, radius = SsimWindow::kRadius;
   if (w < 2 * radius + 1 || h < 2 * radius + 1) return kNaN;
   std::vector<double> a(std::size_t(w) * h), b(a.size());
   for (int y = 0; y < h; ++y)
@@ -207,10 +222,10 @@ double ssim_unmasked(const Image& test, const Image& reference, double data_rang
       a[std::size_t(y) * w + x] = radiance(test, x, y, trgb);
       b[std::size_t(y) * w + x] = radiance(reference, x, y, rrgb);
     }
-  double kernel[2 * 5 + 1], total = 0.0;
-  for (int i = -radius; i <= radius; ++i)
-    total += kernel[i + radius] = std::exp(-0.5 * i * i / (1.5 * 1.5));
-  const double c1 = std::pow(0.01 * data_range, 2), c2 = std::pow(0.03 * data_range, 2);
+  const SsimWindow window(data_range);
+  const double* kernel = window.kernel;
+  double total = 0.0;
+  for (double k : window.kernel) total += k;
   double sum = 0.0;
   for (int y = radius; y < h - radius; ++y)
     for (int x = radius; x < w - radius; ++x) {
@@ -222,8 +237,7 @@ double ssim_unmasked(const Image& test, const Image& reference, double data_rang
           mx += k * a[i], my += k * b[i], sxx += k * a[i] * a[i], syy += k * b[i] * b[i],
               sxy += k * a[i] * b[i];
         }
-      const double vx = sxx - mx * mx, vy = syy - my * my, cxy = sxy - mx * my;
-      sum += ((2 * mx * my + c1) * (2 * cxy + c2)) / ((mx * mx + my * my + c1) * (vx + vy + c2));
+      sum += window.index(mx, my, sxx - mx * mx, syy - my * my, sxy - mx * my);
     }
   return sum / (double(w - 2 * radius) * double(h - 2 * radius));
 }
