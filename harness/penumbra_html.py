@@ -251,6 +251,17 @@ def ground_truth_context(report):
             'table': table(head, rows)}
 
 
+def missing_what(m):
+    """What a missing row leaves out: a method, a scene, or variants."""
+    if 'variants' in m:
+        v = [str(x) for x in m['variants']]
+        shown = ', '.join(v[:6]) + (f', … ({len(v)} variants)' if len(v) > 6 else '')
+        return f'every method in {shown}'
+    if 'method' in m:
+        return str(m['method'])
+    return f'scene {m.get("scene", "")}' if 'scene' in m else ''
+
+
 def renderer_tables(report):
     """The renderers, what they cannot provide, and what failed."""
     miss, fails = objs(report.doc.get('missing')), objs(
@@ -261,7 +272,7 @@ def renderer_tables(report):
              ', '.join(map(str, r.get('methods') or [])),
              str(r.get('note', ''))] for r in report.renderers]),
         'missing': table(['renderer', 'method', 'why'], [
-            [str(m.get(k, '')) for k in ('renderer', 'method', 'why')]
+            [str(m.get('renderer', '')), missing_what(m), str(m.get('why', ''))]
             for m in miss]) if miss else None,
         'failures': table(['render', 'error'], [
             [str(f.get('render', '')), str(f.get('error', ''))]

@@ -1,8 +1,29 @@
 #include "analysis/contour.h"
 
 #include <cmath>
+#include <limits>
+
+#include "core/shading.h"
 
 namespace penumbra {
+
+namespace {
+
+// The factor a method applies at one grid point: its own for a plain
+// factor; for the others the radiance over raw bump's on a white Lambertian
+// base (NaN where raw bump receives no light).
+double effective_factor(const MethodSettings& m, const Vec3& ng, const Vec3& ns, const Vec3& wi) {
+  if (method_info(m.method).kind == MethodKind::kFactor)
+    return terminator_factor(m, {ng, ns, wi, ng});
+  TerminatorSettings t;
+  t.method = m;
+  Material white;
+  white.albedo = 1.0;
+  const Shaded s = shade(t, white, {ng, ng, ns, wi, ng}, nullptr);
+  return s.factor_defined ? s.factor : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
 
 ContourGrid make_contour_grid(const std::vector<MethodSettings>& methods, double step_deg,
                               double max_light_deg, double max_deviation_deg) {
@@ -20,7 +41,7 @@ ContourGrid make_contour_grid(const std::vector<MethodSettings>& methods, double
       for (double t : grid.light_deg) {
         const double tr = radians(t);
         const Vec3 wi{std::sin(tr), 0, std::cos(tr)};
-        row.push_back(terminator_factor(m, {ng, ns, wi, ng}));
+        row.push_back(effective_factor(m, ng, ns, wi));
       }
       rows.push_back(std::move(row));
     }

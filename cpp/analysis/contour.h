@@ -1,7 +1,11 @@
 // Chiang et al. 2019, Fig. 5: a method's factor G over (light angle from Ng,
 // shading-normal deviation towards the light), both in degrees. Geometry:
 // Ng = z, wi = (sin t, 0, cos t), Ns = (sin d, 0, cos d), wo = Ng (viewer
-// along the base normal, which matters only to estevez2019-reciprocal).
+// along the base normal, which matters to estevez2019-reciprocal and the
+// view-dependent adjustments). Methods that are not a plain factor get an
+// effective factor: their radiance over raw bump's on a white Lambertian
+// base, NaN where raw bump receives no light (light behind Ns); it may
+// exceed 1 (schuessler2017 lights what raw bump leaves dark).
 #pragma once
 
 #include <string>

@@ -1,10 +1,13 @@
-// ns per evaluation of every terminator factor, over a fixed pool of random
-// configurations (so branch prediction sees realistic variety).
+// ns per evaluation of every terminator factor, and of every method through
+// shade() (what a camera sample pays: adjustment, factor and lobes, or the
+// microfacet model), over a fixed pool of random configurations (so branch
+// prediction sees realistic variety).
 #include <benchmark/benchmark.h>
 
 #include <vector>
 
 #include "core/random.h"
+#include "core/shading.h"
 #include "core/terminator.h"
 
 namespace {
@@ -39,10 +42,32 @@ void bm_factor(benchmark::State& state, penumbra::TerminatorMethod method) {
   }
 }
 
+// A Lambertian base with a GGX lobe, so that the glossy-only adjustments
+// pay for their work too.
+void bm_shade(benchmark::State& state, penumbra::TerminatorMethod method) {
+  const auto& vectors = pool();
+  penumbra::TerminatorSettings settings;
+  settings.method = {method, 0.5};
+  settings.lobes = penumbra::Lobes::kAll;
+  penumbra::Material material;
+  material.specular_weight = 0.4;
+  penumbra::Pcg32 rng(7);
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const ShadingVectors& v = vectors[i];
+    benchmark::DoNotOptimize(
+        penumbra::shade(settings, material, {v.ng, v.ng, v.ns, v.wi, v.wo}, &rng).value);
+    i = (i + 1) & 4095;
+  }
+}
+
 const int registered = [] {
-  for (const auto& info : penumbra::all_methods())
-    benchmark::RegisterBenchmark(("factor/" + std::string(info.id)).c_str(), bm_factor,
-                                 info.method);
+  for (const auto& info : penumbra::all_methods()) {
+    if (info.kind == penumbra::MethodKind::kFactor)
+      benchmark::RegisterBenchmark(("factor/" + std::string(info.id)).c_str(), bm_factor,
+                                   info.method);
+    benchmark::RegisterBenchmark(("shade/" + std::string(info.id)).c_str(), bm_shade, info.method);
+  }
   return 0;
 }();
 

@@ -138,6 +138,7 @@ int command_renderers(bool as_json, std::ostream& out) {
     out << fmt::format("  shadow-ray offsets: {}\n", join(j["offsets"]));
     if (*info.methods_why_not) out << fmt::format("  why not more: {}\n", info.methods_why_not);
     if (*info.props_why_not) out << fmt::format("  props: {}\n", info.props_why_not);
+    if (*info.specular_why_not) out << fmt::format("  glossy: {}\n", info.specular_why_not);
   }
   return kExitOk;
 }
@@ -207,6 +208,53 @@ json parameters_json(std::span<const MethodParameter> list) {
   return parameters;
 }
 
+const char* family_name(MethodKind kind) {
+  switch (kind) {
+    case MethodKind::kFactor:
+      return "factor";
+    case MethodKind::kFactorAndAdjustment:
+      return "factor+adjustment";
+    case MethodKind::kAdjustment:
+      return "adjustment";
+    case MethodKind::kMicrofacet:
+      return "microfacet";
+  }
+  return "?";
+}
+
+const char* factor_lobes_name(FactorLobes lobes) {
+  switch (lobes) {
+    case FactorLobes::kScene:
+      return "scene";
+    case FactorLobes::kDiffuse:
+      return "diffuse";
+    case FactorLobes::kAll:
+      return "all";
+  }
+  return "?";
+}
+
+// One line saying how the method acts, for the text listing.
+std::string method_family_text(const MethodInfo& m) {
+  const std::string adjustment(normal_adjustment_info(m.adjustment).id);
+  const std::string lobes =
+      m.lobes == FactorLobes::kScene
+          ? "the lobes of /terminator/lobes"
+          : (m.lobes == FactorLobes::kDiffuse ? "the diffuse lobe" : "every lobe");
+  const std::string reference = m.reference_is_ni ? ", reference Ni" : "";
+  switch (m.kind) {
+    case MethodKind::kFactor:
+      return fmt::format("factor on {}", lobes);
+    case MethodKind::kFactorAndAdjustment:
+      return fmt::format("factor on {}{} + normal adjustment {}", lobes, reference, adjustment);
+    case MethodKind::kAdjustment:
+      return fmt::format("normal adjustment {}{}", adjustment, reference);
+    case MethodKind::kMicrofacet:
+      return "microfacet model: replaces the BSDF (both lobes)";
+  }
+  return "";
+}
+
 }  // namespace
 
 int command_methods(bool as_json, std::ostream& out) {
@@ -219,9 +267,19 @@ int command_methods(bool as_json, std::ostream& out) {
                       {"source", m.source},
                       {"summary", m.summary},
                       {"parameters", parameters},
+                      {"family", family_name(m.kind)},
+                      {"normal_adjustment", normal_adjustment_info(m.adjustment).id},
+                      {"factor_lobes", factor_lobes_name(m.lobes)},
+                      {"reference_normal", m.reference_is_ni ? "Ni" : "scene"},
                       {"identity_without_deviation", m.identity_without_deviation},
                       {"note", m.identity_note}});
     }
+    for (const NormalAdjustmentInfo& a : all_normal_adjustments())
+      list.push_back({{"id", a.id},
+                      {"kind", "normal_adjustment"},
+                      {"source", a.source},
+                      {"summary", a.summary},
+                      {"touches_diffuse", a.touches_diffuse}});
     for (const OffsetMethodInfo& m : all_offset_methods()) {
       const json parameters = parameters_json(m.parameters);
       list.push_back({{"id", m.id},
@@ -239,10 +297,19 @@ int command_methods(bool as_json, std::ostream& out) {
     for (const MethodParameter& p : m.parameters) parameters = parameter_domain(p);
     out << fmt::format("{:<24} {:<40} {}\n", m.id, parameters, m.source);
     out << fmt::format("{:<24} {}\n", "", m.summary);
+    out << fmt::format("{:<24} ({})\n", "", method_family_text(m));
     if (!m.identity_without_deviation) out << fmt::format("{:<24} note: {}\n", "", m.identity_note);
   }
-  out << "\nAll factors lie in [0,1] and multiply the light's contribution to the lobes chosen by "
-         "/terminator/lobes.\n";
+  out << "\nFactors lie in [0,1] and multiply the light's contribution (BSDF times <Ns,wi>) of "
+         "their lobes; adjustments change Ns; microfacet models replace the BSDF.\n";
+  out << fmt::format(
+      "\nNormal adjustments (/terminator/normal_adjustment, at most one besides the method's "
+      "own):\n{:<24} {}\n",
+      "id", "source");
+  for (const NormalAdjustmentInfo& a : all_normal_adjustments()) {
+    out << fmt::format("{:<24} {}\n", a.id, a.source);
+    out << fmt::format("{:<24} {}\n", "", a.summary);
+  }
   out << fmt::format(
       "\nShadow-ray origin methods (/offset/method; low-poly meshes only):\n{:<24} "
       "{:<40} {}\n",
@@ -1113,17 +1180,31 @@ int command_contour(const std::vector<std::string>& ids, double step, const std:
   json methods_json = json::array();
   std::string csv = "method,light_deg,deviation_deg,G\n";
   for (std::size_t k = 0; k < methods.size(); ++k) {
-    methods_json.push_back({{"id", ids[k]}, {"G", grid.g[k]}});
+    // JSON has no NaN: an undefined effective factor is null (empty in CSV).
+    json rows = json::array();
+    for (const auto& row : grid.g[k]) {
+      json r = json::array();
+      for (double g : row) r.push_back(std::isfinite(g) ? json(g) : json(nullptr));
+      rows.push_back(std::move(r));
+    }
+    methods_json.push_back(
+        {{"id", ids[k]},
+         {"effective", method_info(methods[k].method).kind != MethodKind::kFactor},
+         {"G", std::move(rows)}});
     for (std::size_t i = 0; i < grid.deviation_deg.size(); ++i)
-      for (std::size_t j = 0; j < grid.light_deg.size(); ++j)
+      for (std::size_t j = 0; j < grid.light_deg.size(); ++j) {
+        const double g = grid.g[k][i][j];
         csv += fmt::format("{},{},{},{}\n", ids[k], grid.light_deg[j], grid.deviation_deg[i],
-                           grid.g[k][i][j]);
+                           std::isfinite(g) ? fmt::format("{}", g) : std::string());
+      }
   }
   const json doc = {{"format", "penumbra-contour"},
                     {"version", 1},
                     {"geometry",
                      "Ng = z, wi = (sin light, 0, cos light), Ns = (sin deviation, 0, "
-                     "cos deviation), wo = Ng; angles in degrees; G dimensionless"},
+                     "cos deviation), wo = Ng; angles in degrees; G dimensionless; methods with "
+                     "effective = true: radiance / raw bump's radiance on a white Lambertian "
+                     "base, null where raw bump receives no light"},
                     {"light_deg", grid.light_deg},
                     {"deviation_deg", grid.deviation_deg},
                     {"methods", methods_json}};

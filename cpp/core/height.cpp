@@ -46,6 +46,37 @@ double max_abs_height(const HeightFunction& f) {
   return bound;
 }
 
+double height_field_visibility(const HeightFunction& f, double amplitude, const Vec3& p,
+                               const Vec3& n) {
+  if (f.terms.empty() || amplitude == 0.0) return 1.0;
+  double shortest_k = 0.0;
+  for (const SineTerm& term : f.terms) {
+    const double k = length(term.k);
+    if (k > 0.0 && (shortest_k == 0.0 || k < shortest_k)) shortest_k = k;
+  }
+  if (shortest_k == 0.0) return 1.0;
+  const double reach = 2.0 / shortest_k;
+  const Frame frame = Frame::from_z(n);
+  const HeightSample here = evaluate_height(f, p);
+  double open = 0.0;
+  for (int a = 0; a < kVisibilityAzimuths; ++a) {
+    const double phi = 2.0 * kPi * (a + 0.5) / kVisibilityAzimuths;
+    const Vec3 d = frame.s * std::cos(phi) + frame.t * std::sin(phi);
+    // The steepest rise seen from the displaced point, as a tangent; the
+    // slope at the point itself is its limit for t -> 0, which the first
+    // step would miss on a flank.
+    double tan_horizon = std::max(0.0, amplitude * dot(here.gradient, d));
+    for (int j = 1; j <= kVisibilitySteps; ++j) {
+      const double t = reach * j / kVisibilitySteps;
+      const double rise = amplitude * (evaluate_height(f, p + d * t).h - here.h);
+      tan_horizon = std::max(tan_horizon, rise / t);
+    }
+    // Cosine-weighted share above a horizon at elevation alpha: cos^2 alpha.
+    open += 1.0 / (1.0 + tan_horizon * tan_horizon);
+  }
+  return open / kVisibilityAzimuths;
+}
+
 double max_gradient_norm(const HeightFunction& f) {
   double bound = 0.0;
   for (const SineTerm& term : f.terms)

@@ -49,6 +49,19 @@ double max_gradient_norm(const HeightFunction& f);
 // Upper bound of the Hessian's spectral norm, per scene unit squared.
 double max_hessian_norm(const HeightFunction& f);
 
+// Ambient visibility of the displaced height field A h around the base point
+// p with base normal n, in [0, 1] (1: nothing occludes): the cosine-weighted
+// fraction of the hemisphere above the base plane left open by the
+// displaced surface, from the horizon angle in kVisibilityAzimuths
+// directions, each searched in kVisibilitySteps steps out to two periods of
+// the longest wavelength. It assumes a flat base (the tangent plane at p),
+// as an ambient-occlusion map baked from the detail does: the macro
+// surface's own curvature is not an occluder.
+inline constexpr int kVisibilityAzimuths = 8;
+inline constexpr int kVisibilitySteps = 24;
+double height_field_visibility(const HeightFunction& f, double amplitude, const Vec3& p,
+                               const Vec3& n);
+
 // The families a scene can name.
 HeightFunction make_grating(const Vec3& direction, double frequency, double phase);
 HeightFunction make_weave(std::span<const Vec3> directions, double frequency,

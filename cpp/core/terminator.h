@@ -1,17 +1,22 @@
 // Bump-terminator shadowing factors: one enum, one table, one switch.
 //
-// Every method is a pure function of the unit vectors at a shading point and
-// returns a factor in [0,1] that multiplies the light's contribution (BSDF
-// value times the cosine against Ns) of the lobes it is applied to. Formulas
-// and sources: shared/reference/terminator-methods.md, section 1.
-// Adding a method touches this header's enum and table and the switch in
-// terminator.cpp, nothing else.
+// A method is what users type in /terminator/method and in a study's
+// "methods". Most are factors: pure functions of the unit vectors at a
+// shading point with a value in [0,1] that multiplies the light's
+// contribution (BSDF value times the cosine against Ns) of the lobes it is
+// applied to. Some bring a normal adjustment (normal_adjust.h) as their
+// renderer ships it, and the microfacet models (Schuessler et al. 2017)
+// replace the BSDF; shading.cpp composes them. Formulas and sources:
+// shared/reference/terminator-methods.md, sections 1-2, and README.md's
+// method table. Adding a method touches this header's enum and table and the
+// switches in terminator.cpp and shading.cpp, nothing else.
 #pragma once
 
 #include <optional>
 #include <span>
 #include <string_view>
 
+#include "core/normal_adjust.h"
 #include "core/vec.h"
 
 namespace penumbra {
@@ -24,7 +29,30 @@ enum class TerminatorMethod {
   kEstevez2019Reciprocal,
   kDeshmukh2020,
   kShadingOffset,
+  kCycles34,
+  kCycles45,
+  kCycles50,
+  kMitsuba3,
+  kMitsuba3Flip,
+  kIray2017,
+  kUnityHdrp,
+  kFalcor,
+  kSchuessler2017,
+  kSchuessler2017Shadowing,
+  kSchuessler2017Walk,
+  kMicroshadowChan2018,
+  kMicroshadowBrinck2016,
 };
+
+// How a method acts: a factor on the lobes' contribution, a factor plus the
+// normal adjustment its renderer applies, an adjustment alone, or a
+// microfacet model that replaces the BSDF.
+enum class MethodKind { kFactor, kFactorAndAdjustment, kAdjustment, kMicrofacet };
+
+// The lobes a factor scales: the scene's /terminator/lobes, or fixed by the
+// renderer the method reproduces (Cycles: diffuse closures; Mitsuba 3: the
+// whole nested BSDF).
+enum class FactorLobes { kScene, kDiffuse, kAll };
 
 // A scalar parameter of a method, documented where it is declared.
 struct MethodParameter {
@@ -42,6 +70,13 @@ struct MethodInfo {
   std::string_view source;
   std::string_view summary;
   std::span<const MethodParameter> parameters;
+  MethodKind kind;
+  // The adjustment the method brings (kNone for plain factors and models).
+  NormalAdjustment adjustment;
+  FactorLobes lobes;
+  // The renderer's own reference normal is the smooth Ni (Cycles, Mitsuba
+  // 3); false: the scene's /terminator/reference_normal decides.
+  bool reference_is_ni;
   // False for methods that change shading even where Ns == Ng (the
   // reference formulas do so by design); tests and docs rely on this flag.
   bool identity_without_deviation;
@@ -49,6 +84,9 @@ struct MethodInfo {
   // Why the literature rejects the method ("" if it does not): reports keep
   // it in their tables but label it.
   std::string_view rejected = {};
+  // The factor needs the height field's ambient visibility (micro-shadowing);
+  // the evaluator computes it only for these methods.
+  bool needs_visibility = false;
 };
 
 std::span<const MethodInfo> all_methods();
@@ -70,8 +108,13 @@ struct ShadingVectors {
 };
 
 // The factor multiplied into the affected lobes' contribution, in [0,1].
-// Finite for every finite unit input, degenerate ones included.
-double terminator_factor(const MethodSettings& settings, const ShadingVectors& v);
+// Finite for every finite unit input, degenerate ones included. 1 for the
+// adjustment-only methods; the microfacet models have no factor (1 here;
+// shading.cpp evaluates them).
+// `visibility`: the height field's ambient visibility at the point, in [0,1]
+// (core/height.h); only the micro-shadowing methods read it.
+double terminator_factor(const MethodSettings& settings, const ShadingVectors& v,
+                         double visibility = 1.0);
 
 // The individual formulas, exposed for tests, contour plots and benchmarks.
 // Each takes unit vectors and returns a value in [0,1].
@@ -83,6 +126,18 @@ double estevez2019_alpha2(const Vec3& ng, const Vec3& ns);
 double estevez2019_g1(const Vec3& ng, const Vec3& w, double alpha2);
 double estevez2019(const Vec3& ng, const Vec3& ns, const Vec3& wi);
 double deshmukh2020(const Vec3& ng, const Vec3& ns, const Vec3& wi);
+// Cycles' bump_shadowing_term against the smooth normal ni: Blender 3.4's
+// Chiang form and the Conty form of 4.5+ (with its hemisphere test).
+double cycles34_chiang(const Vec3& ni, const Vec3& ns, const Vec3& wi);
+double cycles45_conty(const Vec3& ni, const Vec3& ns, const Vec3& wi);
+// Micro-shadowing from an ambient visibility (1 - occlusion) and
+// cos_theta = <Ns,wi>: Chan 2018 as Filament computes it,
+// saturate(cos / sqrt(1 - visibility))^2, and Brinck & Maximov 2016 as
+// Unity's SRP Core does, saturate(cos + 2 visibility^2 - 1).
+double microshadow_chan2018(double cos_theta, double visibility);
+double microshadow_brinck2016(double cos_theta, double visibility);
+// Mitsuba 3's eval_shadow_terminator against the unperturbed frame ni.
+double mitsuba3_conty(const Vec3& ni, const Vec3& ns, const Vec3& wi);
 // Cycles' UI mapping of the shading-offset slider s to a frequency.
 double shading_offset_frequency(double s);
 double shading_offset(double s, const Vec3& ns, const Vec3& wi);

@@ -64,7 +64,8 @@ void check_blender_scene(const Scene& scene) {
   const TerminatorMethod method = scene.terminator.method.method;
   if (!offers(RendererKind::kBlender, scene.representation, method))
     throw ExportError(fmt::format(
-        "Blender Cycles 3.4 offers `none`, `chiang2019` (bump only) and `shading-offset`; "
+        "Blender Cycles 3.4 offers `none`, `chiang2019` and `cycles34` (bump only; both the "
+        "Bump node) and `shading-offset`; "
         "`{}` is not available for the {} representation",
         method_info(method).id, to_string(scene.representation)));
   if (method == TerminatorMethod::kChiang2019 && scene.terminator.lobes != Lobes::kDiffuse)
@@ -107,7 +108,8 @@ BlenderShading blender_shading(const Scene& scene, bool has_height) {
       return BlenderShading::kSmooth;
     case Representation::kBump:
       return !has_height ? BlenderShading::kSmooth
-             : scene.terminator.method.method == TerminatorMethod::kChiang2019
+             : (scene.terminator.method.method == TerminatorMethod::kChiang2019 ||
+                scene.terminator.method.method == TerminatorMethod::kCycles34)
                  ? BlenderShading::kBumpNode
                  : BlenderShading::kBumpDisplacement;
     case Representation::kDisplacement:

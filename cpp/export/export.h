@@ -50,7 +50,7 @@ PovrayExport export_povray(const Scene& scene);
 enum class BlenderShading {
   kSmooth,            // base mesh, no height
   kBumpDisplacement,  // raw bump through the material's Displacement socket
-  kBumpNode,          // Bump node into the BSDF normal: Cycles' chiang2019
+  kBumpNode,          // Bump node into the BSDF normal: cycles34 (chiang2019 with Ni)
   kMesh,              // the mesh is already displaced (ground truth)
 };
 
@@ -61,7 +61,7 @@ struct BlenderExport {
 };
 
 // Methods Blender provides for each representation: smooth and displacement
-// take `none` or `shading-offset`; bump takes `none`, `chiang2019` (Bump
+// take `none` or `shading-offset`; bump takes `none`, `chiang2019` or `cycles34` (Bump
 // node) and `shading-offset` (object setting, on raw bump). A tessellated
 // shape is sent as its low-poly mesh, smooth or flat faces. The object's
 // Geometry Offset is the scene's cycles-geometry-offset cutoff, else 0 (not

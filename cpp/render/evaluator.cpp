@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/random.h"
+#include "core/shading.h"
 #include "render/displaced_mesh.h"
 #include "render/lowpoly_mesh.h"
 
@@ -205,7 +206,8 @@ class Props {
 };
 
 struct PixelSums {
-  double radiance = 0.0, hits = 0.0, theta = 0.0, deviation = 0.0, g = 0.0, view = 0.0;
+  double radiance = 0.0, hits = 0.0, theta = 0.0, deviation = 0.0, g = 0.0, g_count = 0.0,
+         view = 0.0;
 };
 
 template <typename Tracer>
@@ -224,6 +226,8 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   const double amplitude = scene.height.amplitude;
   const HeightFunction& height_function = scene.height.function;
   const TerminatorSettings& terminator = scene.terminator;
+  const bool needs_visibility =
+      !is_ground_truth && method_info(terminator.method.method).needs_visibility;
   const Props props(scene);
 
   std::atomic<int> rows_done{0};
@@ -279,33 +283,34 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
               facing.backfacing = true;
             }
             const Vec3& ns = facing.ns;
+            const LightSample light = sample_light(scene.light, hit.shading_point);
             // On the displaced surface the true normal is Ns itself; on the
             // analytic base Ng and Ni coincide with the base normal.
-            const Vec3 ng_ref = is_ground_truth && !hit.on_prop ? ns
-                                : terminator.reference_normal == ReferenceNormal::kGeometric
-                                    ? facing.ng
-                                    : ni;
-            const LightSample light = sample_light(scene.light, hit.shading_point);
-            const double factor = terminator_factor(terminator.method, {ng_ref, ns, light.wi, wo});
+            ShadingPoint point = is_ground_truth && !hit.on_prop
+                                     ? ShadingPoint{ns, ns, ns, light.wi, wo}
+                                     : ShadingPoint{facing.ng, ni, ns, light.wi, wo};
+            // Seen from inside (an open cylinder), the height field is inverted.
+            if (needs_visibility && displaced_shading && g.displaceable && amplitude != 0.0)
+              point.visibility = height_field_visibility(
+                  height_function, facing.backfacing ? -amplitude : amplitude, g.p, n);
+            const Shaded shaded = shade(terminator, scene.material, point, &rng);
             sums.hits += 1.0;
             // Within 1.2e-6 degrees: below what the float channels resolve.
             sums.theta += degrees(acos_approx(dot(n, light.wi)));
             sums.deviation += degrees(acos_approx(dot(ns, n)));
-            sums.g += factor;
+            if (shaded.factor_defined) {
+              sums.g += shaded.factor;
+              sums.g_count += 1.0;
+            }
             sums.view += degrees(acos_approx(dot(n, wo)));
-            const double cos_theta_s = dot(ns, light.wi);
-            if (!(cos_theta_s > 0.0) || light.irradiance == 0.0) continue;
-            const LobeValues lobes = evaluate_lobes(scene.material, ns, light.wi, wo);
-            const double f = lobes.diffuse * factor +
-                             lobes.specular * (terminator.lobes == Lobes::kAll ? factor : 1.0);
-            if (!(f > 0.0)) continue;
+            if (!(shaded.value > 0.0) || light.irradiance == 0.0) continue;
             ++local_shadow_rays;
             const ShadowRay shadow = hit.on_prop ? ShadowRay{hit.shading_point}
                                                  : tracer.shadow_ray(hit, facing, light.wi);
             if (tracer.occluded(shadow, light.wi, light.distance) ||
                 props.occluded(shadow.origin, light.wi, light.distance))
               continue;
-            sums.radiance += f * cos_theta_s * light.irradiance;
+            sums.radiance += shaded.value * light.irradiance;
           }
         }
         float* out = &image->pixels[pixel * channel_count];
@@ -315,7 +320,9 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
         if (sums.hits > 0.0) {
           out[4] = static_cast<float>(sums.theta / sums.hits);
           out[5] = static_cast<float>(sums.deviation / sums.hits);
-          out[6] = static_cast<float>(sums.g / sums.hits);
+          // 0 where no sample had a factor: a method that is not a plain
+          // factor, wherever raw bump receives no light (README, channels).
+          out[6] = sums.g_count > 0.0 ? static_cast<float>(sums.g / sums.g_count) : 0.0f;
           out[7] = static_cast<float>(sums.view / sums.hits);
         }
       }

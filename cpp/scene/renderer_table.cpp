@@ -22,6 +22,8 @@ const std::vector<RendererInfo>& renderer_table() {
        {},
        "",
        /*props=*/true,
+       "",
+       /*specular=*/true,
        ""},
       {RendererKind::kPovray,
        "povray",
@@ -40,7 +42,10 @@ const std::vector<RendererInfo>& renderer_table() {
        "POV-Ray 3.7 has no shadow-ray offset: mesh2 with normal_vectors shows the artifact "
        "(shadow line artifact, FS#242)",
        false,
-       "props (extra spheres) are evaluator-only"},
+       "props (extra spheres) are evaluator-only",
+       false,
+       "the GGX lobe is evaluator-only: the POV-Ray export is Lambertian (its specular and "
+       "phong highlights are other models)"},
       {RendererKind::kBlender,
        "blender",
        "Blender 3.4 Cycles",
@@ -49,16 +54,23 @@ const std::vector<RendererInfo>& renderer_table() {
        "PENUMBRA_BLENDER",
        "Blender ",
        "Blender 3.4 Cycles: bump via ray-differential finite differences, ground truth via a "
-       "displaced mesh",
+       "displaced mesh; its chiang2019 is the Bump node, which is cycles34 (Chiang's term "
+       "against Ni after ensure_valid_reflection turns the bumped normal towards Ng at grazing "
+       "views); both ids render the same Blender scene",
        false,
-       {TerminatorMethod::kNone, TerminatorMethod::kChiang2019, TerminatorMethod::kShadingOffset},
+       {TerminatorMethod::kNone, TerminatorMethod::kChiang2019, TerminatorMethod::kCycles34,
+        TerminatorMethod::kShadingOffset},
        {TerminatorMethod::kNone, TerminatorMethod::kShadingOffset},
-       "Blender Cycles 3.4 offers only none, chiang2019 (Bump node) and shading-offset",
+       "Blender Cycles 3.4 offers only none, chiang2019 and cycles34 (both the Bump node: Cycles "
+       "3.4's own term) and shading-offset",
        false,
        {OffsetMethod::kNone, OffsetMethod::kCyclesGeometryOffset},
        "Blender Cycles 3.4 offers only its geometry offset",
        false,
-       "props (extra spheres) are evaluator-only"},
+       "props (extra spheres) are evaluator-only",
+       false,
+       "the GGX lobe is evaluator-only: the Blender export is Lambertian (Cycles' Glossy BSDF "
+       "uses Fresnel and multiple-scattering options the evaluator does not model)"},
   };
   return table;
 }

@@ -42,8 +42,10 @@ struct RendererInfo {
   bool all_offsets;
   std::vector<OffsetMethod> offsets;
   const char* offsets_why_not;
-  bool props;                 // extra spheres in the scene (/props)
-  const char* props_why_not;  // "" when props are offered
+  bool props;                    // extra spheres in the scene (/props)
+  const char* props_why_not;     // "" when props are offered
+  bool specular;                 // the GGX lobe (/material/specular_weight > 0)
+  const char* specular_why_not;  // "" when it is offered
 };
 
 // Every renderer, in the order reports list them.

@@ -12,6 +12,7 @@
 #include "core/bsdf.h"
 #include "core/enum_names.h"
 #include "core/height.h"
+#include "core/shading.h"
 #include "core/shadow_origin.h"
 #include "core/shape.h"
 #include "core/terminator.h"
@@ -86,21 +87,6 @@ inline constexpr EnumName<Representation> kRepresentationNames[] = {
     {"smooth", Representation::kSmooth},
     {"bump", Representation::kBump},
     {"displacement", Representation::kDisplacement}};
-
-enum class ReferenceNormal { kGeometric, kInterpolated };
-inline constexpr EnumName<ReferenceNormal> kReferenceNormalNames[] = {
-    {"Ng", ReferenceNormal::kGeometric}, {"Ni", ReferenceNormal::kInterpolated}};
-enum class Lobes { kDiffuse, kAll };
-inline constexpr EnumName<Lobes> kLobesNames[] = {{"diffuse", Lobes::kDiffuse},
-                                                  {"all", Lobes::kAll}};
-
-struct TerminatorSettings {
-  MethodSettings method;
-  // Ng or Ni as the factor's reference normal; identical on analytic shapes,
-  // different on tessellated meshes.
-  ReferenceNormal reference_normal = ReferenceNormal::kGeometric;
-  Lobes lobes = Lobes::kDiffuse;
-};
 
 enum class HeightFamily { kNone, kGrating, kWeave, kNoise };
 inline constexpr EnumName<HeightFamily> kHeightFamilyNames[] = {{"none", HeightFamily::kNone},

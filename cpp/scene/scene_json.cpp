@@ -364,6 +364,23 @@ TerminatorSettings read_terminator(Reader r) {
     }
     p.finish();
   }
+  if (r.has("normal_adjustment")) {
+    const std::string id = r.string("normal_adjustment");
+    const auto adjustment = normal_adjustment_from_id(id);
+    if (!adjustment) {
+      std::string ids;
+      for (const NormalAdjustmentInfo& a : all_normal_adjustments())
+        ids += (ids.empty() ? "" : ", ") + std::string(a.id);
+      r.fail("normal_adjustment",
+             fmt::format("unknown normal adjustment \"{}\" (valid: {})", id, ids));
+    }
+    if (*adjustment != NormalAdjustment::kNone && info.adjustment != NormalAdjustment::kNone)
+      r.fail("normal_adjustment",
+             fmt::format("method \"{}\" already applies the normal adjustment \"{}\"; a scene "
+                         "combines at most one adjustment with one factor",
+                         info.id, normal_adjustment_info(info.adjustment).id));
+    t.normal_adjustment = *adjustment;
+  }
   t.reference_normal = r.choice<ReferenceNormal>("reference_normal", kReferenceNormalNames,
                                                  ReferenceNormal::kGeometric);
   t.lobes = r.choice<Lobes>("lobes", kLobesNames, Lobes::kDiffuse);

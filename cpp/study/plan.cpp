@@ -48,9 +48,14 @@ std::vector<Override> axis_combination(const std::vector<Override>& set,
                                        Variant* v) {
   std::vector<Override> overrides = set;
   for (const StudyAxis& a : axes) {
-    const json& value = a.values[c % a.values.size()];
+    const std::size_t k = c % a.values.size();
+    const json& value = a.values[k];
     c /= a.values.size();
-    overrides.push_back({a.pointer, value});
+    if (a.sets.empty()) {
+      overrides.push_back({a.pointer, value});
+    } else {
+      for (const auto& [pointer, set_value] : a.sets[k]) overrides.push_back({pointer, set_value});
+    }
     v->axis_values.push_back(value);
     v->label += fmt::format(", {}={}", a.label, value_text(value));
     if (light_direction(a.pointer, value))
@@ -98,6 +103,18 @@ std::string cannot_render(RendererKind r, const json& scene) {
   return "";
 }
 
+// Why renderer r cannot render this variant's scene, which it could
+// render with other axis values ("" when it can).
+std::string cannot_render_variant(RendererKind r, const json& scene) {
+  const RendererInfo& info = renderer_info(r);
+  // The scene reader checks the value; here only whether the lobe is on.
+  const json::json_pointer weight("/material/specular/weight");
+  if (!info.specular && scene.contains(weight) && scene[weight].is_number() &&
+      scene[weight].get<double>() > 0.0)
+    return info.specular_why_not;
+  return "";
+}
+
 // ---- expansion ------------------------------------------------------------------
 
 struct VariantContext {
@@ -135,9 +152,13 @@ void add_renderer_jobs(const VariantContext& c, RendererKind r, Variant& v, std:
   json scene = c.base;
   apply_overrides(scene, c.overrides, c.origin);
   if (const std::string why = cannot_render(r, scene); !why.empty()) {
-    const SkippedRenderer skipped{c.section.kind, r, v.scene, why};
+    const SkippedRenderer skipped{c.section.kind, r, v.scene, why, ""};
     if (std::find(plan.skipped.begin(), plan.skipped.end(), skipped) == plan.skipped.end())
       plan.skipped.push_back(skipped);
+    return;
+  }
+  if (const std::string why = cannot_render_variant(r, scene); !why.empty()) {
+    plan.skipped.push_back({c.section.kind, r, v.scene, why, v.id});
     return;
   }
   add_job(c, r, nullptr, v, index, plan);

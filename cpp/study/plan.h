@@ -46,6 +46,8 @@ struct SkippedRenderer {
   SectionKind section = SectionKind::kBump;
   RendererKind renderer = RendererKind::kEvaluator;
   std::string scene, why;
+  // The variant it cannot render; "" when it cannot render the scene at all.
+  std::string variant;
   bool operator==(const SkippedRenderer&) const = default;
 };
 

@@ -376,11 +376,22 @@ json axis_value_labels(const StudyAxis& a) {
 
 json axes_json(const std::vector<StudyAxis>& axes) {
   json out = json::array();
-  for (const StudyAxis& a : axes)
-    out.push_back({{"pointer", a.pointer},
-                   {"label", a.label},
-                   {"values", a.values},
-                   {"value_labels", axis_value_labels(a)}});
+  for (const StudyAxis& a : axes) {
+    json axis = {{"pointer", a.pointer},
+                 {"label", a.label},
+                 {"values", a.values},
+                 {"value_labels", axis_value_labels(a)}};
+    if (!a.sets.empty()) {
+      json sets = json::array();
+      for (const auto& pairs : a.sets) {
+        json set = json::object();
+        for (const auto& [pointer, value] : pairs) set[pointer] = value;
+        sets.push_back(std::move(set));
+      }
+      axis["sets"] = std::move(sets);
+    }
+    out.push_back(std::move(axis));
+  }
   return out;
 }
 
@@ -482,11 +493,26 @@ json lowpoly_rank_json(const std::vector<RankEntry>& entries) {
   return list;
 }
 
+// Whole scenes a renderer leaves out, one row each; variants it leaves out
+// (a glossy material), one row per renderer and reason with their ids.
 json skipped_json(const Plan& plan, SectionKind kind) {
   json out = json::array();
   for (const SkippedRenderer& s : plan.skipped)
-    if (s.section == kind)
+    if (s.section == kind && s.variant.empty())
       out.push_back({{"renderer", to_string(s.renderer)}, {"scene", s.scene}, {"why", s.why}});
+  for (const SkippedRenderer& s : plan.skipped) {
+    if (s.section != kind || s.variant.empty()) continue;
+    auto row = std::find_if(out.begin(), out.end(), [&](const json& r) {
+      return r.contains("variants") && r["renderer"] == to_string(s.renderer) && r["why"] == s.why;
+    });
+    if (row == out.end())
+      out.push_back(
+          {{"renderer", to_string(s.renderer)}, {"variants", json::array()}, {"why", s.why}});
+    row = std::find_if(out.begin(), out.end(), [&](const json& r) {
+      return r.contains("variants") && r["renderer"] == to_string(s.renderer) && r["why"] == s.why;
+    });
+    (*row)["variants"].push_back(s.variant);
+  }
   return out;
 }
 

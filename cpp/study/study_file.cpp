@@ -94,6 +94,46 @@ json read_set(const json& doc, const std::string& f, const std::string& at) {
   return doc["set"];
 }
 
+// A compound axis: {"name", "label", "values": [{"label", "set": {pointer: value}}]}.
+StudyAxis read_compound_axis(const json& a, const std::string& f, const std::string& p) {
+  reject_unknown(a, {"name", "label", "values"}, f, p);
+  StudyAxis axis;
+  const json& name = require(a, "name", f, p);
+  if (!name.is_string() || name.get<std::string>().empty() ||
+      name.get<std::string>().find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_") !=
+          std::string::npos)
+    throw InputError(f, p + "/name", "expected a snake_case name such as \"shading\"");
+  axis.pointer = axis.label = name.get<std::string>();
+  if (a.contains("label")) {
+    if (!a["label"].is_string()) throw InputError(f, p + "/label", "expected a string");
+    axis.label = a["label"].get<std::string>();
+  }
+  const json& values = require(a, "values", f, p);
+  if (!values.is_array() || values.empty())
+    throw InputError(f, p + "/values",
+                     "expected a non-empty array of {\"label\", \"set\"} objects");
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    const std::string q = fmt::format("{}/values/{}", p, k);
+    if (!values[k].is_object()) throw InputError(f, q, "expected {\"label\": ..., \"set\": {...}}");
+    reject_unknown(values[k], {"label", "set"}, f, q);
+    const json& label = require(values[k], "label", f, q);
+    const json& set = require(values[k], "set", f, q);
+    if (!label.is_string()) throw InputError(f, q + "/label", "expected a string");
+    if (!set.is_object() || set.empty())
+      throw InputError(f, q + "/set", "expected an object of JSON pointers and values");
+    std::vector<std::pair<std::string, json>> pairs;
+    for (const auto& [pointer, value] : set.items()) {
+      if (pointer.rfind("/", 0) != 0)
+        throw InputError(f, q + "/set",
+                         fmt::format("expected JSON pointers as keys, got \"{}\"", pointer));
+      pairs.emplace_back(pointer, value);
+    }
+    axis.values.push_back(label);
+    axis.sets.push_back(std::move(pairs));
+  }
+  return axis;
+}
+
 std::vector<StudyAxis> read_axes(const json& doc, const std::string& f, const std::string& at) {
   std::vector<StudyAxis> out;
   if (!doc.contains("axes")) return out;
@@ -102,6 +142,10 @@ std::vector<StudyAxis> read_axes(const json& doc, const std::string& f, const st
   for (std::size_t i = 0; i < axes.size(); ++i) {
     const std::string p = fmt::format("{}/axes/{}", at, i);
     if (!axes[i].is_object()) throw InputError(f, p, "expected an object");
+    if (axes[i].contains("name")) {
+      out.push_back(read_compound_axis(axes[i], f, p));
+      continue;
+    }
     reject_unknown(axes[i], {"pointer", "label", "values"}, f, p);
     StudyAxis axis;
     const json& pointer = require(axes[i], "pointer", f, p);

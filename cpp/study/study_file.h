@@ -16,11 +16,18 @@ namespace penumbra {
 
 inline constexpr int kStudyFormatVersion = 1;
 
-// One sweep axis: a scene value by JSON pointer and the values it takes.
+// One sweep axis: a scene value by JSON pointer and the values it takes; or
+// a compound axis, whose values each set several pointers together (a
+// glossy material with the lobes a factor scales, say).
 struct StudyAxis {
+  // The JSON pointer; for a compound axis its name (no leading '/'), which
+  // plots, CSV columns and report.json use in its place.
   std::string pointer;
   std::string label;  // for plots and tables; default: the pointer
+  // The values; for a compound axis each value's label.
   std::vector<nlohmann::json> values;
+  // Compound axes only: per value, the (pointer, value) pairs it sets.
+  std::vector<std::vector<std::pair<std::string, nlohmann::json>>> sets;
 };
 
 // A method as the study names it: an id and optional parameter values.

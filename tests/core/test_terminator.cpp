@@ -272,7 +272,7 @@ TEST(Figure5, RelationsBetweenChiangAndEstevez) {
 }
 
 TEST(Methods, TableIsCompleteAndIdsRoundTrip) {
-  EXPECT_EQ(all_methods().size(), 7u);
+  EXPECT_EQ(all_methods().size(), 20u);
   for (const MethodInfo& info : all_methods()) {
     EXPECT_EQ(method_from_id(info.id), info.method);
     EXPECT_EQ(&method_info(info.method), &info);
@@ -289,6 +289,30 @@ TEST(ShadingOffset, MatchesCyclesFrequencyMapping) {
   const double theta = radians(30), f = shading_offset_frequency(0.5);
   EXPECT_NEAR(shading_offset(0.5, {0, 0, 1}, in_plane(theta)),
               std::cos(f * theta) / std::cos(theta), 1e-12);
+}
+
+}  // namespace
+}  // namespace penumbra
+
+namespace penumbra {
+namespace {
+
+// Filament's computeMicroShadowing (credited to Chan 2018) and Unity SRP
+// Core's ComputeMicroShadowing (credited to Brinck & Maximov 2016),
+// transcribed here: aperture = inversesqrt(1 - ao), saturate(NoL *
+// aperture)^2; saturate(NoL + 2 ao^2 - 1).
+TEST(MicroShadowing, MatchesTheShaderSources) {
+  for (double ao : {0.0, 0.3, 0.75, 0.99})
+    for (double nol : {0.0, 0.05, 0.25, 0.6, 1.0}) {
+      const double aperture = 1.0 / std::sqrt(1.0 - ao);
+      const double filament = std::pow(std::clamp(nol * aperture, 0.0, 1.0), 2.0);
+      EXPECT_NEAR(microshadow_chan2018(nol, ao), filament, 1e-15) << ao << " " << nol;
+      const double unity = std::clamp(nol + 2.0 * ao * ao - 1.0, 0.0, 1.0);
+      EXPECT_NEAR(microshadow_brinck2016(nol, ao), unity, 1e-15) << ao << " " << nol;
+    }
+  // Unoccluded: no micro-shadowing wherever the light reaches the surface.
+  EXPECT_EQ(microshadow_chan2018(0.01, 1.0), 1.0);
+  EXPECT_EQ(microshadow_brinck2016(0.01, 1.0), 1.0);
 }
 
 }  // namespace

@@ -104,6 +104,46 @@ TEST_F(Study, InterruptedAndResumedEqualsCleanWithNoRenderDoneTwice) {
             std::string::npos);
 }
 
+// A compound axis sets several pointers per value; a renderer that cannot
+// render one value's scene (POV-Ray: the GGX lobe) renders the others, and
+// the report lists the variants it left out, with the reason.
+TEST_F(Study, CompoundAxisSetsSeveralPointersAndSkipsWhatARendererCannotRender) {
+  json j = tiny();
+  j["axes"] = {
+      {{"name", "shading"},
+       {"label", "material and lobes"},
+       {"values",
+        {{{"label", "Lambert"}, {"set", {{"/terminator/lobes", "diffuse"}}}},
+         {{"label", "GGX, all lobes"},
+          {"set", {{"/material/specular", {{"weight", 0.4}}}, {"/terminator/lobes", "all"}}}}}}}};
+  j["methods"] = {"none", "cycles45", "schuessler2017-walk"};
+  const ::penumbra::Study study = load_study(write("compound.json", j));
+  StudyOptions o;
+  o.output_dir = path("out");
+  o.jobs = 2;
+  o.figures = false;
+  ASSERT_TRUE(run_study(study, o).complete());
+  const json report = json::parse(read_text(path("out/report.json")));
+  const json& axis = report.at("axes").at(0);
+  EXPECT_EQ(axis.at("pointer"), "shading");
+  EXPECT_EQ(axis.at("values"), json({"Lambert", "GGX, all lobes"}));
+  EXPECT_EQ(axis.at("sets").at(1).at("/terminator/lobes"), "all");
+  // POV-Ray renders the Lambert variant only, and says why not the other.
+  std::size_t povray = 0;
+  for (const json& c : report.at("comparisons")) povray += c.at("renderer") == "povray";
+  EXPECT_EQ(povray, 2u);  // none vs its own truth and vs the evaluator's, one variant
+  bool listed = false;
+  for (const json& m : report.at("missing"))
+    if (m.contains("variants")) {
+      listed = m.at("renderer") == "povray" && m.at("variants") == json({"v001"}) &&
+               m.at("why").get<std::string>().find("GGX") != std::string::npos;
+    }
+  EXPECT_TRUE(listed) << report.at("missing").dump();
+  // The variant's scene has both values set.
+  const std::string scene = read_text(path("out/metrics.csv"));
+  EXPECT_NE(scene.find("GGX, all lobes"), std::string::npos);
+}
+
 TEST_F(Study, ReportIsWrittenAsDumpedAndCsvHasOneRowPerComparison) {
   const ::penumbra::Study study = load_study(write("tiny.json", tiny()));
   StudyOptions o;
