@@ -150,7 +150,7 @@ int command_report(const std::string& folder, bool self_contained, std::ostream&
     throw UsageError(fmt::format("{}: no such file (give a study output folder)", report.string()));
   read_json_file(report.string());  // strict: a damaged report is bad input, named here
   const std::string html =
-      draw_report(folder, self_contained, "", 600.0, [&err](const std::string& line) {
+      draw_report(folder, self_contained, "", kFiguresTimeoutS, [&err](const std::string& line) {
         err << "penumbra report: " << line << "\n" << std::flush;
       });
   out << fmt::format("report: {}\n", html);

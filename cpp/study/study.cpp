@@ -287,8 +287,12 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
           fmt::format("figures: drawing the figures and report.html (harness/report.py, "
                       "log {}) ...",
                       (out / "report.log").string()));
+    // The figures grow with variants x methods (72 x 20 in the default
+    // study: about 5 min on 2 idle cores), so they get at least an hour,
+    // not one render's time-out.
+    const double figures_timeout_s = std::max(options.timeout_s, kFiguresTimeoutS);
     stats.report_html = draw_report(out.string(), options.self_contained_html, options.python,
-                                    options.timeout_s, [&](const std::string& line) {
+                                    figures_timeout_s, [&](const std::string& line) {
                                       if (options.log) options.log("figures: " + line);
                                     });
   }

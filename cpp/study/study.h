@@ -21,10 +21,13 @@
 
 namespace penumbra {
 
+// The least time the figures and report.html may take (seconds).
+inline constexpr double kFiguresTimeoutS = 3600.0;
+
 struct StudyOptions {
   std::string output_dir;
   int jobs = 1;
-  double timeout_s = 600.0;
+  double timeout_s = 600.0;  // per render; the figures get at least kFiguresTimeoutS
   // Stop starting renders after this many new (uncached) ones; -1: no limit.
   // Resuming later finishes the rest. Tests use it to simulate an interrupt.
   long max_new_renders = -1;
