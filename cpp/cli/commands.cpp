@@ -1003,11 +1003,18 @@ int print_dry_run(const Study& study, const StudyRunStats& stats, const std::str
   out << fmt::format(
       "study {}: {} renders ({}); {} found in {}/cache, {} to render; nothing written (dry run)\n",
       study.name, stats.renders, per, stats.cached, dir, stats.renders - stats.cached);
+  const std::string checks =
+      stats.planned_checks == 0
+          ? std::string("every ground-truth convergence check is cached")
+          : fmt::format(
+                "{} ground-truth convergence checks to render first (more may follow, up to 3 "
+                "renders per variant and round)",
+                stats.planned_checks);
   out << fmt::format(
       "cache: the renders to do write at most {:.3f} GiB (uncompressed EXR); the largest needs "
-      "about {:.3f} GiB of memory (--max-memory {:.3g} GiB); ground-truth convergence checks "
-      "come on top (up to 3 renders per variant and round)\n",
-      stats.planned_output_bytes / kGiB, stats.planned_peak_memory_bytes / kGiB, max_memory_gib);
+      "about {:.3f} GiB of memory (--max-memory {:.3g} GiB); {}\n",
+      stats.planned_output_bytes / kGiB, stats.planned_peak_memory_bytes / kGiB, max_memory_gib,
+      checks);
   print_cost(stats.cost, out);
   return kExitOk;
 }

@@ -4,8 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <limits>
+#include <list>
+#include <mutex>
 #include <stdexcept>
+
+#include <fmt/format.h>
 
 #include "render/embree_mesh.h"
 
@@ -108,6 +113,80 @@ std::optional<MeshHit> DisplacedMesh::intersect(const Ray& ray) const {
 
 bool DisplacedMesh::occluded(const Ray& ray, double t_max) const {
   return impl_->bvh->occluded(ray, 0.0, t_max);
+}
+
+std::string displaced_mesh_key(const Scene& scene) {
+  const Shape& s = scene.shape;
+  std::string key =
+      fmt::format("{} {:a} {:a} {:a} {:a} {:a} {:a} {:a} {:a} {} | {:a} {:a} {}",
+                  static_cast<int>(s.type), s.center.x, s.center.y, s.center.z, s.axis.x, s.axis.y,
+                  s.axis.z, s.radius, s.height, s.caps, scene.displacement.edge_length,
+                  scene.height.amplitude, static_cast<int>(scene.height.function.combine));
+  for (const SineTerm& t : scene.height.function.terms)
+    key += fmt::format(" {:a} {:a} {:a} {:a} {:a}", t.k.x, t.k.y, t.k.z, t.phase, t.weight);
+  return key;
+}
+
+namespace {
+
+using MeshFuture = std::shared_future<std::shared_ptr<const DisplacedMesh>>;
+
+struct CachedMesh {
+  std::string key;
+  MeshFuture mesh;
+  std::size_t triangles = 0;  // 0 while it is being built
+};
+
+// Most recent first.
+std::mutex cache_mutex;
+std::list<CachedMesh> cached_meshes;
+
+void trim_cache() {
+  std::size_t total = 0;
+  for (auto it = cached_meshes.begin(); it != cached_meshes.end();) {
+    total += it->triangles;
+    // Never drop a build in flight (triangles 0): others may wait on it.
+    if (it->triangles > 0 && total > kMeshCacheTriangles && it != cached_meshes.begin())
+      it = cached_meshes.erase(it);
+    else
+      ++it;
+  }
+}
+
+}  // namespace
+
+std::shared_ptr<const DisplacedMesh> shared_displaced_mesh(const Scene& scene, bool* reused) {
+  const std::string key = displaced_mesh_key(scene);
+  std::promise<std::shared_ptr<const DisplacedMesh>> promise;
+  std::optional<MeshFuture> found;
+  {
+    std::lock_guard<std::mutex> lock(cache_mutex);
+    const auto it = std::find_if(cached_meshes.begin(), cached_meshes.end(),
+                                 [&](const CachedMesh& c) { return c.key == key; });
+    if (it != cached_meshes.end()) {
+      cached_meshes.splice(cached_meshes.begin(), cached_meshes, it);
+      found = it->mesh;
+    } else {
+      cached_meshes.push_front({key, promise.get_future().share(), 0});
+    }
+  }
+  if (reused) *reused = found.has_value();
+  if (found) return found->get();  // waits, outside the lock, for a build in flight
+  std::shared_ptr<const DisplacedMesh> mesh;
+  try {
+    mesh = std::make_shared<const DisplacedMesh>(scene);
+  } catch (...) {
+    promise.set_exception(std::current_exception());
+    std::lock_guard<std::mutex> lock(cache_mutex);
+    cached_meshes.remove_if([&](const CachedMesh& c) { return c.key == key; });
+    throw;
+  }
+  promise.set_value(mesh);
+  std::lock_guard<std::mutex> lock(cache_mutex);
+  for (CachedMesh& c : cached_meshes)
+    if (c.key == key) c.triangles = std::max<std::size_t>(mesh->triangle_count(), 1);
+  trim_cache();
+  return mesh;
 }
 
 }  // namespace penumbra

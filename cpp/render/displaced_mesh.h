@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <memory>
 #include <optional>
+#include <string>
 
 #include "core/shape.h"
 #include "scene/scene.h"
@@ -45,5 +46,23 @@ class DisplacedMesh {
   std::size_t triangles_ = 0, vertices_ = 0;
   double shadow_offset_ = 0.0;
 };
+
+// What a mesh is built from: the shape, the height field, its amplitude and
+// the edge length (hex floats, exact). Renders whose keys are equal can share
+// one mesh; light, material, camera and method do not enter.
+std::string displaced_mesh_key(const Scene& scene);
+
+// The mesh for `scene`, shared with the other renders of this process that
+// asked for the same key. A study renders one geometry many times (the
+// truth's convergence checks at more samples; variants that differ in light,
+// material or method), and the build is most of a truth's cost. The meshes
+// built last are kept while they hold at most kMeshCacheTriangles triangles
+// together (about 130 bytes each: 1 GiB); a render asking for a key being
+// built waits for that build. Queries on a shared mesh are thread-safe
+// (Embree's rtcIntersect1/rtcOccluded1 on a committed scene). `reused`
+// says whether it came from the cache.
+inline constexpr std::size_t kMeshCacheTriangles = 8'000'000;
+std::shared_ptr<const DisplacedMesh> shared_displaced_mesh(const Scene& scene,
+                                                           bool* reused = nullptr);
 
 }  // namespace penumbra

@@ -355,10 +355,12 @@ Image render(const Scene& scene, const RenderOptions& options, RenderStats* stat
   image.channels = evaluator_channels();
   image.pixels.assign(std::size_t(image.width) * image.height * image.channels.size(), 0.0f);
   if (scene.representation == Representation::kDisplacement) {
-    const DisplacedMesh mesh(scene);
-    local.triangles = mesh.triangle_count();
+    const std::shared_ptr<const DisplacedMesh> mesh =
+        options.share_meshes ? shared_displaced_mesh(scene, &local.mesh_reused)
+                             : std::make_shared<const DisplacedMesh>(scene);
+    local.triangles = mesh->triangle_count();
     local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    render_image(scene, MeshTracer(scene, mesh), options, &image, &local);
+    render_image(scene, MeshTracer(scene, *mesh), options, &image, &local);
   } else if (scene.tessellation) {
     const LowPolyMesh mesh(scene.shape, *scene.tessellation);
     local.triangles = mesh.triangle_count();

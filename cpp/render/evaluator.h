@@ -33,12 +33,16 @@ struct RenderStats {
   double seconds = 0.0;        // wall time, preparation included
   double build_seconds = 0.0;  // displacement and low-poly meshes: mesh + BVH build
   std::size_t triangles = 0;   // displacement and low-poly meshes: mesh size
+  bool mesh_reused = false;    // displacement: the mesh came from this process's cache
 };
 
 struct RenderOptions {
   // Called with the fraction done, at most a few times per second, from
   // whichever worker thread finished a row; must be thread-safe.
   std::function<void(double)> progress;
+  // Displacement: take the mesh from this process's cache of recent meshes
+  // (render/displaced_mesh.h, shared_displaced_mesh) rather than build it.
+  bool share_meshes = true;
 };
 
 Image render(const Scene& scene, const RenderOptions& options = {}, RenderStats* stats = nullptr);

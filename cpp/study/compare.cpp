@@ -5,9 +5,11 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
 
 #include "image/image_io.h"
 #include "study/names.h"
+#include "util/parallel.h"
 
 namespace penumbra {
 namespace fs = std::filesystem;
@@ -149,17 +151,35 @@ std::vector<RankEntry> rank_rows(const Plan& plan, const std::vector<ComparisonR
 }  // namespace
 
 Comparisons compare_study(const Plan& plan, const RenderedImages& renders,
-                          const std::string& study_folder) {
+                          const std::string& study_folder, int jobs) {
   const fs::path out(study_folder);
+  // Each job's rows in its own slot, joined in job order afterwards: the
+  // report is the same for any number of threads (every bootstrap has its
+  // own fixed seed).
+  struct JobRows {
+    std::optional<RenderRow> render;
+    Comparisons rows;
+  };
+  std::vector<std::size_t> order;
+  for (const Variant& v : plan.variants)
+    for (std::size_t i : v.jobs)
+      if (renders.done[i]) order.push_back(i);
+  std::vector<JobRows> slots(order.size());
+  run_parallel(jobs, order.size(), [&](std::size_t k) {
+    const std::size_t i = order[k];
+    slots[k].render = render_row(plan, renders, i, out);
+    if (!plan.jobs[i].truth) add_comparisons(plan, renders, i, slots[k].rows);
+    add_agreement(plan, renders, i, slots[k].rows);
+  });
   Comparisons c;
   c.renders.resize(plan.variants.size());
-  for (std::size_t v = 0; v < plan.variants.size(); ++v)
-    for (std::size_t i : plan.variants[v].jobs) {
-      if (!renders.done[i]) continue;
-      c.renders[v].push_back(render_row(plan, renders, i, out));
-      if (!plan.jobs[i].truth) add_comparisons(plan, renders, i, c);
-      add_agreement(plan, renders, i, c);
-    }
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    JobRows& s = slots[k];
+    c.renders[plan.jobs[order[k]].variant].push_back(std::move(*s.render));
+    for (ComparisonRow& row : s.rows.rows) c.rows.push_back(std::move(row));
+    for (AgreementRow& row : s.rows.agreement) c.agreement.push_back(std::move(row));
+    c.nonfinite += s.rows.nonfinite;
+  }
   return c;
 }
 

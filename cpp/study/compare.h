@@ -62,9 +62,10 @@ struct Comparisons {
 };
 
 // Compares every done test job with its truths and writes the preview and
-// difference PNGs into `study_folder`/images.
+// difference PNGs into `study_folder`/images, `jobs` jobs at a time (the
+// result does not depend on it).
 Comparisons compare_study(const Plan& plan, const RenderedImages& renders,
-                          const std::string& study_folder);
+                          const std::string& study_folder, int jobs);
 
 // One method's mean over the rows a ranking selects.
 struct RankEntry {

@@ -1,9 +1,11 @@
 #include "study/figures.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <optional>
 #include <string_view>
 
@@ -11,7 +13,10 @@
 
 #include "renderers/renderers.h"
 #include "util/data_files.h"
+#include "util/files.h"
+#include "util/hash.h"
 #include "util/process.h"
+#include "util/version.h"
 
 namespace penumbra {
 namespace fs = std::filesystem;
@@ -100,13 +105,84 @@ void run_plot_script(const std::vector<std::string>& arguments, const std::strin
                     log_path, tail_lines(log_path, 12)));
 }
 
+namespace {
+
+constexpr const char* kStampName = "figures/.inputs";
+
+std::string file_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Everything the figures are drawn from: report.json names every render by
+// its content key (so the same text means the same images), the scripts,
+// the interpreter and the HTML mode.
+std::string figure_inputs_digest(const fs::path& out, bool self_contained,
+                                 const std::string& python) {
+  std::uint64_t h = fnv1a(file_bytes(out / "report.json"));
+  h = fnv1a(file_bytes(out / "lowpoly.csv"), h);
+  std::vector<fs::path> scripts;
+  std::error_code ec;
+  for (const auto& e :
+       fs::directory_iterator(fs::path(data_file("harness/report.py")).parent_path(), ec))
+    if (e.path().extension() == ".py") scripts.push_back(e.path());
+  std::sort(scripts.begin(), scripts.end());
+  for (const fs::path& s : scripts) h = fnv1a(s.filename().string() + file_bytes(s), h);
+  h = fnv1a(python_executable(python) + (self_contained ? "\nself-contained" : "\nlinked") + "\n" +
+                kPenumbraVersion,
+            h);
+  return fmt::format("{:016x}", h);
+}
+
+// The stamp holds the digest, then the files the script wrote; all must
+// still be there for the last drawing to count.
+bool drawing_is_current(const fs::path& out, const std::string& digest) {
+  std::ifstream in(out / kStampName);
+  std::string line;
+  if (!std::getline(in, line) || line != digest) return false;
+  std::size_t files = 0;
+  while (std::getline(in, line)) {
+    if (!fs::is_regular_file(line)) return false;
+    ++files;
+  }
+  return files > 0;
+}
+
+void write_stamp(const fs::path& out, const std::string& digest, const std::string& log_path) {
+  std::string text = digest + "\n";
+  std::ifstream log(log_path);
+  // The script prints the paths it wrote, one per line, after its progress.
+  for (std::string line; std::getline(log, line);)
+    if (line.rfind(kProgress, 0) != 0 && fs::path(line).is_absolute() && fs::is_regular_file(line))
+      text += line + "\n";
+  const std::string path = (out / kStampName).string(), tmp = temporary_name(path);
+  std::ofstream(tmp, std::ios::binary) << text;
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+}
+
+}  // namespace
+
 std::string draw_report(const std::string& folder, bool self_contained, const std::string& python,
-                        double timeout_s, const ProgressLog& progress) {
+                        double timeout_s, const ProgressLog& progress, bool reuse_unchanged) {
   const fs::path out(folder);
+  const std::string html = (out / "report.html").string();
+  const std::string digest = figure_inputs_digest(out, self_contained, python);
+  if (reuse_unchanged && drawing_is_current(out, digest)) {
+    if (progress)
+      progress(
+          "report.json, lowpoly.csv and the scripts are unchanged: kept the figures and "
+          "report.html of the last run (`penumbra report` redraws them)");
+    return html;
+  }
+  std::error_code ignored;
+  fs::remove(out / kStampName, ignored);  // a drawing killed halfway is not current
   std::vector<std::string> arguments{"report", fs::absolute(out).string()};
   if (self_contained) arguments.push_back("--self-contained");
-  run_plot_script(arguments, (out / "report.log").string(), python, timeout_s, progress);
-  return (out / "report.html").string();
+  const std::string log_path = (out / "report.log").string();
+  run_plot_script(arguments, log_path, python, timeout_s, progress);
+  write_stamp(out, digest, log_path);
+  return html;
 }
 
 }  // namespace penumbra

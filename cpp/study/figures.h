@@ -25,8 +25,11 @@ void run_plot_script(const std::vector<std::string>& arguments, const std::strin
 // Draws the figures and report.html of the study folder `folder` (which holds
 // report.json); returns the path of report.html, which links its images
 // (relative URLs into images/ and figures/) or, self_contained, embeds them.
+// With `reuse_unchanged`, a drawing from the same inputs (report.json,
+// lowpoly.csv, the scripts, the interpreter; stamped in figures/.inputs)
+// whose files are all still there is kept rather than redrawn.
 std::string draw_report(const std::string& folder, bool self_contained = false,
                         const std::string& python = "", double timeout_s = 600.0,
-                        const ProgressLog& progress = nullptr);
+                        const ProgressLog& progress = nullptr, bool reuse_unchanged = false);
 
 }  // namespace penumbra

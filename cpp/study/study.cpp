@@ -4,11 +4,13 @@
 #include <chrono>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <utility>
 
 #include <fmt/format.h>
 
 #include "image/image_io.h"
+#include "render/displaced_mesh.h"
 #include "scene/scene_json.h"
 #include "study/cache.h"
 #include "study/compare.h"
@@ -71,6 +73,36 @@ std::vector<std::size_t> use_cache(const std::vector<Job>& jobs, const RenderCac
   return todo;
 }
 
+// The evaluator's displacement renders of one geometry one after another,
+// so that they share its mesh while this process still holds it
+// (render/displaced_mesh.h: the checks of a truth, the variants that differ
+// in light or material); the rest in the plan's order.
+std::vector<std::size_t> group_by_mesh(const std::vector<Job>& jobs,
+                                       const std::vector<std::size_t>& todo) {
+  std::vector<std::string> keys(todo.size());
+  std::map<std::string, std::vector<std::size_t>> groups;
+  for (std::size_t k = 0; k < todo.size(); ++k) {
+    const Job& job = jobs[todo[k]];
+    if (job.renderer != RendererKind::kEvaluator ||
+        job.scene.representation != Representation::kDisplacement)
+      continue;
+    keys[k] = displaced_mesh_key(job.scene);
+    groups[keys[k]].push_back(todo[k]);
+  }
+  std::vector<std::size_t> order;
+  for (std::size_t k = 0; k < todo.size(); ++k) {
+    if (keys[k].empty()) {
+      order.push_back(todo[k]);
+      continue;
+    }
+    const auto group = groups.find(keys[k]);
+    if (group == groups.end()) continue;  // placed with the first of its group
+    order.insert(order.end(), group->second.begin(), group->second.end());
+    groups.erase(group);
+  }
+  return order;
+}
+
 // Copies each job's result to the later jobs with the same key; counts what
 // never started.
 void settle_duplicates(const std::vector<Job>& jobs, Renders& r, StudyRunStats& stats) {
@@ -122,7 +154,8 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
                     const Renderers& renderers, StudyRunStats& stats) {
   Renders r(jobs.size());
   const std::size_t cached_before = stats.cached;
-  const std::vector<std::size_t> todo = use_cache(jobs, cache, options, r, stats);
+  const std::vector<std::size_t> todo =
+      group_by_mesh(jobs, use_cache(jobs, cache, options, r, stats));
   const std::size_t cached = stats.cached - cached_before;
   // The cache must hold what is to be rendered (uncompressed EXR sizes).
   ResourceEstimate needed;
@@ -229,6 +262,52 @@ std::vector<VariantConvergence> converge(const Study& study, Plan& plan, const R
   return out;
 }
 
+// A dry run decides the truths' settings from the cached check renders
+// alone, as the real run would, so that the jobs it counts carry the keys
+// the run will look up (the bump renders share their truth's samples). A
+// check missing from the cache stops that variant at the settings reached;
+// it is counted as a render to do.
+void dry_run_convergence(const Study& study, Plan& plan, const RenderCache& cache,
+                         const StudyOptions& options, const Renderers& renderers,
+                         StudyRunStats& stats) {
+  const RenderBatch from_cache = [&](const std::vector<Job>& jobs,
+                                     std::vector<std::string>* errors) {
+    std::vector<Job> keyed = jobs;
+    assign_keys(keyed, renderers.identities);
+    std::vector<std::optional<Image>> images(keyed.size());
+    errors->assign(keyed.size(), "");
+    for (std::size_t i = 0; i < keyed.size(); ++i) {
+      std::string reason;
+      if (cache.contains(keyed[i].key)) images[i] = cache.lookup(keyed[i].key, &reason);
+      if (!images[i]) {
+        (*errors)[i] = "not rendered yet (dry run)";
+        ++stats.planned_checks;
+        stats.planned_output_bytes += keyed[i].resources.output_bytes;
+      }
+    }
+    return images;
+  };
+  converge_truths(plan, study.ground_truth, options.max_memory_bytes, from_cache);
+  assign_keys(plan, renderers.identities);
+}
+
+void count_planned(const Plan& plan, const RenderCache& cache, StudyRunStats& stats) {
+  std::vector<char> to_render(plan.jobs.size(), 0);
+  for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
+    const Job& job = plan.jobs[i];
+    ++stats.planned[to_string(job.renderer)];
+    if (cache.contains(job.key)) {
+      ++stats.cached;
+    } else {
+      to_render[i] = 1;
+      stats.planned_output_bytes += job.resources.output_bytes;
+    }
+    stats.planned_peak_memory_bytes =
+        std::max(stats.planned_peak_memory_bytes, job.resources.memory_bytes);
+  }
+  stats.cost = estimate_cost(plan, cache, to_render);
+}
+
 }  // namespace
 
 StudyRunStats run_study(const Study& study, const StudyOptions& options) {
@@ -248,20 +327,8 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   StudyRunStats stats;
   stats.renders = plan.jobs.size();
   if (options.dry_run) {
-    std::vector<char> to_render(plan.jobs.size(), 0);
-    for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
-      const Job& job = plan.jobs[i];
-      ++stats.planned[to_string(job.renderer)];
-      if (cache.contains(job.key)) {
-        ++stats.cached;
-      } else {
-        to_render[i] = 1;
-        stats.planned_output_bytes += job.resources.output_bytes;
-      }
-      stats.planned_peak_memory_bytes =
-          std::max(stats.planned_peak_memory_bytes, job.resources.memory_bytes);
-    }
-    stats.cost = estimate_cost(plan, cache, to_render);
+    dry_run_convergence(study, plan, cache, options, renderers, stats);
+    count_planned(plan, cache, stats);
     return stats;
   }
   prepare_folders(out, options, stats);
@@ -269,7 +336,10 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   renderers.blender_sessions = blender_sessions.get();
   const std::vector<VariantConvergence> convergence =
       converge(study, plan, cache, options, renderers, stats);
-  if (stats.not_started > 0) return stats;  // interrupted while checking the truths
+  if (stats.not_started > 0) {  // interrupted while checking the truths
+    stats.seconds = seconds_since(start);
+    return stats;
+  }
   const Renders r = render_jobs(study.file, plan.jobs, cache, options, renderers, stats);
   stats.blender_processes = blender_sessions->started();
   blender_sessions.reset();  // the processes end here, not after the figures
@@ -277,7 +347,7 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   stats.seconds = seconds_since(start);
   if (stats.not_started > 0) return stats;  // interrupted: no report from a partial study
 
-  const Comparisons comparisons = compare_study(plan, r.images, out.string());
+  const Comparisons comparisons = compare_study(plan, r.images, out.string(), options.jobs);
   write_report_files(
       {study, plan, comparisons, renderers.versions, r.errors, r.images.done, convergence},
       out.string());
@@ -291,10 +361,12 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     // study: about 5 min on 2 idle cores), so they get at least an hour,
     // not one render's time-out.
     const double figures_timeout_s = std::max(options.timeout_s, kFiguresTimeoutS);
-    stats.report_html = draw_report(out.string(), options.self_contained_html, options.python,
-                                    figures_timeout_s, [&](const std::string& line) {
-                                      if (options.log) options.log("figures: " + line);
-                                    });
+    stats.report_html = draw_report(
+        out.string(), options.self_contained_html, options.python, figures_timeout_s,
+        [&](const std::string& line) {
+          if (options.log) options.log("figures: " + line);
+        },
+        /*reuse_unchanged=*/true);
   }
   stats.seconds = seconds_since(start);
   return stats;

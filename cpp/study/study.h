@@ -59,6 +59,9 @@ struct StudyRunStats {
   double seconds = 0.0;
   std::string report_html;                     // path, when written
   std::map<std::string, std::size_t> planned;  // dry run: renders per renderer
+  // Dry run: ground-truth convergence checks the cache lacks, in the rounds
+  // the cache lets it replay (later rounds depend on these renders).
+  std::size_t planned_checks = 0;
   // Dry run: the most the renders still to do may write into the cache
   // (uncompressed EXR), and the largest estimated memory of one render.
   double planned_output_bytes = 0.0, planned_peak_memory_bytes = 0.0;

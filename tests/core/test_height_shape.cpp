@@ -100,8 +100,8 @@ TEST(Height, VisibilityOfAGratingAgainstABruteForceHorizon) {
     constexpr int kAzimuths = 720, kSteps = 4000;
     for (int a = 0; a < kAzimuths; ++a) {
       const double phi = 2.0 * kPi * (a + 0.5) / kAzimuths;
-      double tan_horizon = std::max(
-          0.0, amplitude * 2.0 * kPi * f * std::cos(2.0 * kPi * f * p.x) * std::cos(phi));
+      double tan_horizon =
+          std::max(0.0, amplitude * 2.0 * kPi * f * std::cos(2.0 * kPi * f * p.x) * std::cos(phi));
       for (int j = 1; j <= kSteps; ++j) {
         const double t = reach * j / kSteps;
         const double x = p.x + t * std::cos(phi);
@@ -122,6 +122,48 @@ TEST(Height, VisibilityOfAGratingAgainstABruteForceHorizon) {
   // More relief, less visibility.
   EXPECT_LT(height_field_visibility(grating, 2.0 * amplitude, trough, n),
             height_field_visibility(grating, amplitude, trough, n));
+}
+
+TEST(Height, VisibilityMarchEqualsStepByStepEvaluation) {
+  // The visibility advances each term's phase by rotation; the definition
+  // evaluates h at every step. Over 24 steps the two may differ by rounding
+  // only, for sums and products of any number of terms.
+  const Vec3 dirs[] = {{1, 0, 0}, {0, 1, 0}, {0.6, 0.8, 0.0}};
+  const HeightFunction families[] = {
+      make_grating({1, 2, 0.5}, 7.0, 0.3), make_weave(dirs, 9.0, HeightCombine::kProduct),
+      make_weave(dirs, 9.0, HeightCombine::kSum), make_noise(24, 4.0, 16.0, 5)};
+  auto direct = [](const HeightFunction& f, double amplitude, const Vec3& p, const Vec3& n) {
+    double shortest_k = 1e300;
+    for (const SineTerm& t : f.terms) shortest_k = std::min(shortest_k, length(t.k));
+    const double reach = 2.0 / shortest_k;
+    const Frame frame = Frame::from_z(n);
+    const HeightSample here = evaluate_height(f, p);
+    double open = 0.0;
+    for (int a = 0; a < kVisibilityAzimuths; ++a) {
+      const double phi = 2.0 * kPi * (a + 0.5) / kVisibilityAzimuths;
+      const Vec3 d = frame.s * std::cos(phi) + frame.t * std::sin(phi);
+      double tan_horizon = std::max(0.0, amplitude * dot(here.gradient, d));
+      for (int j = 1; j <= kVisibilitySteps; ++j) {
+        const double t = reach * j / kVisibilitySteps;
+        tan_horizon =
+            std::max(tan_horizon, amplitude * (evaluate_height(f, p + d * t).h - here.h) / t);
+      }
+      open += 1.0 / (1.0 + tan_horizon * tan_horizon);
+    }
+    return open / kVisibilityAzimuths;
+  };
+  Pcg32 rng(41);
+  int occluded = 0;
+  for (const HeightFunction& f : families)
+    for (int i = 0; i < 200; ++i) {
+      const Vec3 p{rng.next_double(), rng.next_double(), rng.next_double()};
+      const Vec3 n = normalize(Vec3{rng.next_double() - 0.5, rng.next_double() - 0.5, 1.0});
+      const double amplitude = 0.03 * rng.next_double();
+      const double v = height_field_visibility(f, amplitude, p, n);
+      EXPECT_NEAR(v, direct(f, amplitude, p, n), 1e-12);
+      occluded += v < 0.999;
+    }
+  EXPECT_GT(occluded, 400);  // the comparison is not between two ones
 }
 
 TEST(Vec, AcosApproximationStaysWithinItsStatedBound) {

@@ -5,10 +5,12 @@
 
 #include <cmath>
 #include <map>
+#include <thread>
 #include <vector>
 
 #include <tbb/global_control.h>
 
+#include "render/displaced_mesh.h"
 #include "render/evaluator.h"
 #include "scene/scene_json.h"
 
@@ -127,18 +129,72 @@ TEST(Render, SameBitsWhateverTheThreadCount) {
         "cylinder-noise.json",
         {std::string("/representation=") + representation, "/camera/width=64", "/camera/height=64",
          "/camera/spp=4", "/terminator/method=estevez2019", "/displacement/edge_length=0.01"});
+    // Each render builds its own mesh, under its own thread count.
+    RenderOptions own_mesh;
+    own_mesh.share_meshes = false;
     std::vector<float> one, two;
     {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-      one = render(scene).pixels;
+      one = render(scene, own_mesh).pixels;
     }
     {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-      two = render(scene).pixels;
+      two = render(scene, own_mesh).pixels;
     }
     EXPECT_EQ(one, two) << representation;
-    EXPECT_EQ(render(scene).pixels, two) << representation;
+    EXPECT_EQ(render(scene, own_mesh).pixels, two) << representation;
   }
+}
+
+// A study's displacement renders share meshes by geometry (shape, height
+// field, amplitude, edge length): what else differs does not split them,
+// what the mesh is made of does, and a shared mesh renders the same bits as
+// one built for the render, also when two threads ask for it at once.
+TEST(Render, DisplacementRendersShareAMeshOnlyWithTheSameGeometry) {
+  const std::vector<std::string> base{"/representation=displacement", "/camera/width=48",
+                                      "/camera/height=48", "/camera/spp=2",
+                                      "/displacement/edge_length=0.013"};
+  auto with = [&](std::vector<std::string> more) {
+    more.insert(more.begin(), base.begin(), base.end());
+    return scene_with("sphere-weave.json", more);
+  };
+  const Scene a = with({});
+  const std::string key = displaced_mesh_key(a);
+  for (const std::vector<std::string>& same :
+       {std::vector<std::string>{"/light/direction=[1,0.2,-1]"},
+        {"/material/albedo=0.3"},
+        {"/camera/spp=8"},
+        {"/terminator/method=estevez2019"},
+        {"/camera/width=20"}})
+    EXPECT_EQ(displaced_mesh_key(with(same)), key) << same[0];
+  for (const std::vector<std::string>& other :
+       {std::vector<std::string>{"/displacement/edge_length=0.0131"},
+        {"/height/amplitude=0.011"},
+        {"/height/frequency=6.5"},
+        {"/shape/radius=0.9"},
+        {"/height/combine=sum"}})
+    EXPECT_NE(displaced_mesh_key(with(other)), key) << other[0];
+
+  RenderOptions own_mesh;
+  own_mesh.share_meshes = false;
+  const Scene lit_elsewhere = with({"/light/direction=[1,0.2,-1]"});
+  const std::vector<float> fresh_a = render(a, own_mesh).pixels;
+  const std::vector<float> fresh_b = render(lit_elsewhere, own_mesh).pixels;
+  ASSERT_NE(fresh_a, fresh_b);  // the light moved: another image, one mesh
+  RenderStats first, second, third;
+  EXPECT_EQ(render(a, {}, &first).pixels, fresh_a);
+  EXPECT_EQ(render(lit_elsewhere, {}, &second).pixels, fresh_b);
+  EXPECT_TRUE(second.mesh_reused);
+  // Two threads at once on a geometry not built yet: one builds, one waits.
+  const Scene c = with({"/height/amplitude=0.012"});
+  const std::vector<float> fresh_c = render(c, own_mesh).pixels;
+  std::vector<float> from_thread;
+  RenderStats thread_stats;
+  std::thread t([&] { from_thread = render(c, {}, &thread_stats).pixels; });
+  EXPECT_EQ(render(c, {}, &third).pixels, fresh_c);
+  t.join();
+  EXPECT_EQ(from_thread, fresh_c);
+  EXPECT_NE(third.mesh_reused, thread_stats.mesh_reused) << "exactly one of them built it";
 }
 
 // Raw bump: light is lost exactly where the base geometry turns away from it,

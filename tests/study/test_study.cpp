@@ -2,6 +2,8 @@
 // report in a real browser.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "temp_dir_test.h"
 
 #include <cmath>
@@ -70,8 +72,22 @@ TEST_F(Study, InterruptedAndResumedEqualsCleanWithNoRenderDoneTwice) {
   clean.output_dir = path("clean");
   clean.jobs = 2;
   clean.figures = false;
+  // A dry run counts from the cache alone: the first round of checks (3
+  // per variant) and the 12 planned renders, none cached yet.
+  StudyOptions dry = clean;
+  dry.dry_run = true;
+  const StudyRunStats d0 = run_study(study, dry);
+  EXPECT_EQ(d0.renders, 2u * (4 + 2));
+  EXPECT_EQ(d0.cached, 0u);
+  EXPECT_EQ(d0.planned_checks, 2u * 3);
+  EXPECT_FALSE(fs::exists(path("clean")));
   const StudyRunStats a = run_study(study, clean);
   ASSERT_TRUE(a.complete());
+  // Afterwards it replays the convergence from the cached checks and finds
+  // every render the run used, with the settings the truths reached.
+  const StudyRunStats d1 = run_study(study, dry);
+  EXPECT_EQ(d1.planned_checks, 0u);
+  EXPECT_EQ(d1.cached, d1.renders);
   // The plan, plus 3 check renders per variant; the truth is one of them.
   EXPECT_EQ(a.renders, 2u * (4 + 2) + 2u * 3);
   EXPECT_EQ(a.rendered, a.renders - 2);
@@ -84,6 +100,9 @@ TEST_F(Study, InterruptedAndResumedEqualsCleanWithNoRenderDoneTwice) {
   EXPECT_EQ(b1.rendered, 5u);
   EXPECT_EQ(b1.not_started, 2u * 3 - 5);                  // stopped inside the convergence checks
   EXPECT_FALSE(fs::exists(path("resumed/report.json")));  // no report from a partial study
+  StudyOptions dry_resumed = dry;
+  dry_resumed.output_dir = first.output_dir;
+  EXPECT_EQ(run_study(study, dry_resumed).planned_checks, 1u);  // the check not started
   StudyOptions second = first;
   second.max_new_renders = -1;
   const StudyRunStats b2 = run_study(study, second);
@@ -336,6 +355,59 @@ TEST_F(Study, AReportOfManyVariantsShowsASampleAndSaysSo) {
         entry.path().filename().string().rfind("profile", 0) == 0)
       ++profile_figures;
   EXPECT_EQ(profile_figures, 48u);
+}
+
+// A rerun whose report.json, lowpoly.csv and scripts are unchanged keeps
+// the figures (the bulk of a warm run); a missing figure, another HTML mode
+// or another report.json draws them again, and so does `penumbra report`.
+TEST_F(Study, UnchangedFiguresAreKeptAndAnyChangeRedrawsThem) {
+  json j = tiny();
+  j["set"]["/camera/width"] = j["set"]["/camera/height"] = 8;
+  j["methods"] = {"chiang2019"};
+  j["renderers"] = {"evaluator"};
+  const ::penumbra::Study study = load_study(write("figures.json", j));
+  std::vector<std::string> lines;
+  StudyOptions o;
+  o.output_dir = path("figures");
+  o.jobs = 2;
+  o.log = [&](const std::string& line) { lines.push_back(line); };
+  auto kept = [&] {
+    lines.clear();
+    const StudyRunStats stats = run_study(study, o);
+    EXPECT_TRUE(stats.complete());
+    EXPECT_TRUE(fs::exists(stats.report_html));
+    return std::any_of(lines.begin(), lines.end(), [](const std::string& l) {
+      return l.find("kept the figures and report.html of the last run") != std::string::npos;
+    });
+  };
+  EXPECT_FALSE(kept()) << "a first run draws";
+  EXPECT_TRUE(kept()) << "nothing changed";
+  std::ifstream stamp(path("figures/figures/.inputs"));
+  std::string digest, figure;
+  ASSERT_TRUE(std::getline(stamp, digest) && std::getline(stamp, figure));
+  ASSERT_TRUE(fs::remove(figure)) << figure;
+  EXPECT_FALSE(kept()) << "a figure was missing";
+  EXPECT_TRUE(fs::exists(figure));
+  o.self_contained_html = true;
+  EXPECT_FALSE(kept()) << "another HTML mode";
+  EXPECT_TRUE(kept());
+  j["set"]["/camera/spp"] = 2;  // other renders, so another report.json
+  const ::penumbra::Study other = load_study(write("figures.json", j));
+  lines.clear();
+  run_study(other, o);
+  EXPECT_EQ(std::count_if(lines.begin(), lines.end(),
+                          [](const std::string& l) {
+                            return l.find("kept the figures") != std::string::npos;
+                          }),
+            0);
+  // Drawing on request (penumbra report) never reuses.
+  lines.clear();
+  draw_report(path("figures"), /*self_contained=*/true, "", 600.0,
+              [&](const std::string& line) { lines.push_back(line); });
+  EXPECT_TRUE(std::any_of(lines.begin(), lines.end(), [](const std::string& l) {
+    return l.rfind("report.html", 0) == 0;
+  })) << "the script ran";
+  EXPECT_TRUE(fs::exists(path("figures/figures/.inputs")));
 }
 
 // The smoke study end to end, every renderer, then its report.html in
