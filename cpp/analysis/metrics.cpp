@@ -49,22 +49,32 @@ double ssim_in_mask(const Image& test, const Image& reference, const int trgb[3]
   const int w = test.width, h = test.height, radius = SsimWindow::kRadius;
   const SsimWindow window(peak);
   const double* kernel = window.kernel;
-  auto inside = [&](int x, int y) {
-    return test.at(x, y, ta) >= min_coverage && reference.at(x, y, ra) >= min_coverage;
-  };
+  // Radiance and mask once per pixel, not once per window that takes it
+  // (121 times); the sums below run in the same order, so the bits agree.
+  std::vector<float> a(std::size_t(w) * h), b(a.size());
+  std::vector<char> inside(a.size());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = std::size_t(y) * w + x;
+      a[i] = radiance(test, x, y, trgb), b[i] = radiance(reference, x, y, rrgb);
+      inside[i] = test.at(x, y, ta) >= min_coverage && reference.at(x, y, ra) >= min_coverage;
+    }
   double sum = 0.0;
   std::size_t n = 0;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      if (!inside(x, y)) continue;
+      if (!inside[std::size_t(y) * w + x]) continue;
       double sw = 0, mx = 0, my = 0, sxx = 0, syy = 0, sxy = 0;
       for (int dy = -radius; dy <= radius; ++dy)
         for (int dx = -radius; dx <= radius; ++dx) {
           const int u = x + dx, v = y + dy;
-          if (u < 0 || v < 0 || u >= w || v >= h || !inside(u, v)) continue;
+          if (u < 0 || v < 0 || u >= w || v >= h) continue;
+          const std::size_t i = std::size_t(v) * w + u;
+          if (!inside[i]) continue;
           const double k = kernel[dx + radius] * kernel[dy + radius];
-          const double a = radiance(test, u, v, trgb), b = radiance(reference, u, v, rrgb);
-          sw += k, mx += k * a, my += k * b, sxx += k * a * a, syy += k * b * b, sxy += k * a * b;
+          const double ai = a[i], bi = b[i];
+          sw += k, mx += k * ai, my += k * bi, sxx += k * ai * ai, syy += k * bi * bi,
+              sxy += k * ai * bi;
         }
       mx /= sw, my /= sw;
       const double vx = std::max(0.0, sxx / sw - mx * mx), vy = std::max(0.0, syy / sw - my * my);

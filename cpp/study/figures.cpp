@@ -115,19 +115,30 @@ std::string file_bytes(const fs::path& path) {
 }
 
 // Everything the figures are drawn from: report.json names every render by
-// its content key (so the same text means the same images), the scripts,
-// the interpreter and the HTML mode.
+// its content key (so the same text means the same images), the harness's
+// scripts and templates, the interpreter and the HTML mode.
 std::string figure_inputs_digest(const fs::path& out, bool self_contained,
                                  const std::string& python) {
   std::uint64_t h = fnv1a(file_bytes(out / "report.json"));
   h = fnv1a(file_bytes(out / "lowpoly.csv"), h);
-  std::vector<fs::path> scripts;
+  // The scripts, the page's templates and style sheet, and the column
+  // table; not __pycache__, which Python rewrites as it pleases.
+  const fs::path harness = fs::path(data_file("harness/report.py")).parent_path();
+  std::vector<fs::path> sources;
   std::error_code ec;
-  for (const auto& e :
-       fs::directory_iterator(fs::path(data_file("harness/report.py")).parent_path(), ec))
-    if (e.path().extension() == ".py") scripts.push_back(e.path());
-  std::sort(scripts.begin(), scripts.end());
-  for (const fs::path& s : scripts) h = fnv1a(s.filename().string() + file_bytes(s), h);
+  for (auto it = fs::recursive_directory_iterator(harness, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    if (it->is_directory() && it->path().filename() == "__pycache__") {
+      it.disable_recursion_pending();
+      continue;
+    }
+    const std::string ext = it->path().extension().string();
+    if (ext == ".py" || ext == ".j2" || ext == ".css" || ext == ".json")
+      sources.push_back(it->path());
+  }
+  std::sort(sources.begin(), sources.end());
+  for (const fs::path& s : sources)
+    h = fnv1a(fs::relative(s, harness).string() + "\n" + file_bytes(s), h);
   h = fnv1a(python_executable(python) + (self_contained ? "\nself-contained" : "\nlinked") + "\n" +
                 kPenumbraVersion,
             h);

@@ -26,7 +26,8 @@ void run_plot_script(const std::vector<std::string>& arguments, const std::strin
 // report.json); returns the path of report.html, which links its images
 // (relative URLs into images/ and figures/) or, self_contained, embeds them.
 // With `reuse_unchanged`, a drawing from the same inputs (report.json,
-// lowpoly.csv, the scripts, the interpreter; stamped in figures/.inputs)
+// lowpoly.csv, the harness scripts and templates, the interpreter;
+// stamped in figures/.inputs)
 // whose files are all still there is kept rather than redrawn.
 std::string draw_report(const std::string& folder, bool self_contained = false,
                         const std::string& python = "", double timeout_s = 600.0,

@@ -21,6 +21,7 @@
 #include "study/rendering.h"
 #include "study/report_files.h"
 #include "util/files.h"
+#include "util/parallel.h"
 
 namespace penumbra {
 namespace fs = std::filesystem;
@@ -49,20 +50,31 @@ struct Renders {
 // (a ground truth shared by every tessellation level) are rendered once.
 std::vector<std::size_t> use_cache(const std::vector<Job>& jobs, const RenderCache& cache,
                                    const StudyOptions& options, Renders& r, StudyRunStats& stats) {
+  // Reading and verifying an entry (EXR decompression, checksum) is most of
+  // a warm run: in parallel, each into its own slot; the verdicts are taken
+  // in job order below.
+  std::vector<std::string> reasons(jobs.size());
+  std::vector<char> damaged(jobs.size(), 0);
+  run_parallel(options.jobs, jobs.size(), [&](std::size_t i) {
+    if (!cache.contains(jobs[i].key)) return;
+    if (std::optional<Image> image = cache.lookup(jobs[i].key, &reasons[i])) {
+      r.images.images[i] = std::move(*image);
+      r.images.done[i] = 1;
+    } else {
+      damaged[i] = 1;
+    }
+  });
   std::vector<std::size_t> todo;
   std::map<std::string, std::size_t> first_with_key;
   for (std::size_t i = 0; i < jobs.size(); ++i) {
-    if (cache.contains(jobs[i].key)) {
-      std::string reason;
-      if (std::optional<Image> image = cache.lookup(jobs[i].key, &reason)) {
-        r.images.images[i] = std::move(*image);
-        r.images.done[i] = 1;
-        ++stats.cached;
-        continue;
-      }
+    if (r.images.done[i]) {
+      ++stats.cached;
+      continue;
+    }
+    if (damaged[i] && !first_with_key.count(jobs[i].key)) {  // once per entry
       warn(options, stats,
            fmt::format("cache entry {} of {} is damaged: {}; rendering it again",
-                       cache.exr_path(jobs[i].key), jobs[i].label, reason));
+                       cache.exr_path(jobs[i].key), jobs[i].label, reasons[i]));
       cache.remove(jobs[i].key);
     }
     if (const auto [it, inserted] = first_with_key.try_emplace(jobs[i].key, i); !inserted)
