@@ -973,7 +973,8 @@ void print_cost(const CostEstimate& cost, std::ostream& out) {
   if (cost.lines.empty()) return;
   out << fmt::format(
       "estimated cost of the renders to do: {:.3f} core-hours (cores x wall time; {} on {} "
-      "cores), before ground-truth convergence checks:\n",
+      "cores), at the samples planned now: the convergence checks come on top, and a truth "
+      "that needs more samples raises its variant's bump renders with it:\n",
       cost.core_seconds / 3600.0,
       duration_text(cost.core_seconds / std::max(1u, std::thread::hardware_concurrency())),
       std::max(1u, std::thread::hardware_concurrency()));
