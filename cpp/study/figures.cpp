@@ -5,7 +5,6 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <optional>
 #include <string_view>
 
@@ -109,18 +108,13 @@ namespace {
 
 constexpr const char* kStampName = "figures/.inputs";
 
-std::string file_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
 // Everything the figures are drawn from: report.json names every render by
 // its content key (so the same text means the same images), the harness's
 // scripts and templates, the interpreter and the HTML mode.
 std::string figure_inputs_digest(const fs::path& out, bool self_contained,
                                  const std::string& python) {
-  std::uint64_t h = fnv1a(file_bytes(out / "report.json"));
-  h = fnv1a(file_bytes(out / "lowpoly.csv"), h);
+  std::uint64_t h = fnv1a(read_file((out / "report.json").string()));
+  h = fnv1a(read_file((out / "lowpoly.csv").string()), h);
   // The scripts, the page's templates and style sheet, and the column
   // table; not __pycache__, which Python rewrites as it pleases.
   const fs::path harness = fs::path(data_file("harness/report.py")).parent_path();
@@ -138,7 +132,7 @@ std::string figure_inputs_digest(const fs::path& out, bool self_contained,
   }
   std::sort(sources.begin(), sources.end());
   for (const fs::path& s : sources)
-    h = fnv1a(fs::relative(s, harness).string() + "\n" + file_bytes(s), h);
+    h = fnv1a(fs::relative(s, harness).string() + "\n" + read_file(s.string()), h);
   h = fnv1a(python_executable(python) + (self_contained ? "\nself-contained" : "\nlinked") + "\n" +
                 kPenumbraVersion,
             h);

@@ -39,9 +39,7 @@ std::string failure_path(const RenderCache& cache, const std::string& key) {
 }
 
 std::string read_failure(const RenderCache& cache, const std::string& key) {
-  std::ifstream in(failure_path(cache, key));
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return text;
+  return read_file(failure_path(cache, key));
 }
 
 // ---- batch files -------------------------------------------------------------------------
@@ -92,8 +90,7 @@ std::string run_slurm_command(const std::vector<std::string>& argv, const SlurmO
   std::error_code ec;
   fs::remove(log, ec);
   const ProcessResult p = run_process(full, logs.string(), log, options.timeout_s);
-  std::ifstream in(log);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string text = read_file(log);
   fs::remove(log, ec);
   if (!p.ok())
     throw RendererError(fmt::format("slurm: `{}` {}: {}", argv[0],

@@ -8,6 +8,10 @@
 
 namespace penumbra {
 
+// The whole file, as bytes; empty when it is missing or unreadable (for
+// logs and stamps, whose absence the caller handles as "nothing there").
+std::string read_file(const std::string& path);
+
 // This machine's host name, reduced to [A-Za-z0-9-] ("host" if none).
 const std::string& host_tag();
 
