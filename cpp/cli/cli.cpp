@@ -274,6 +274,30 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   bench->add_option("--size", bench_size, "image size in pixels")->check(CLI::Range(16, 4096));
   bench->add_option("--spp", bench_spp, "samples per pixel")->check(CLI::Range(1, 1024));
 
+  PyramidArgs pyramid_args;
+  CLI::App* pyramid_cmd =
+      app.add_subcommand("pyramid",
+                         "a height map's bump (offset) and roughness pyramids, one EXR per level "
+                         "(Schilling; see README)");
+  pyramid_cmd->add_option("heights", pyramid_args.heights, "height map (EXR, PNG, ...)")
+      ->required();
+  pyramid_cmd->add_option("-o,--output", pyramid_args.output, "output folder")->required();
+  pyramid_cmd->add_option("--channel", pyramid_args.channel,
+                          "the height channel (required when the file has several)");
+  pyramid_cmd
+      ->add_option("--texel-size", pyramid_args.texel_size,
+                   "scene units per texel (default: 1 / width, the map spans one unit)")
+      ->check(CLI::PositiveNumber);
+  pyramid_cmd
+      ->add_option("--height-scale", pyramid_args.height_scale,
+                   "scene units per unit of the file's values")
+      ->capture_default_str();
+  pyramid_cmd
+      ->add_option("--edge", pyramid_args.edge,
+                   "differences across the map's edge: wrap (tiled) or clamp")
+      ->capture_default_str();
+  pyramid_cmd->add_flag("-q,--quiet", pyramid_args.quiet, "print nothing on success");
+
   for (CLI::App* sub : app.get_subcommands({})) sub->footer(kExitCodes);
   if (const auto unknown = unknown_subcommand(app, argc, argv)) {
     err << "penumbra: error: " << *unknown << " (see penumbra --help)\n";
@@ -304,6 +328,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     if (*status_cmd) return command_status(status_folder, out);
     if (*contour_cmd) return command_contour(contour_methods, contour_step, contour_output, out);
     if (*bench) return command_bench(bench_size, bench_spp, out);
+    if (*pyramid_cmd) return command_pyramid(pyramid_args, out);
   } catch (const InputError& e) {
     err << "penumbra: error: " << e.what() << "\n";
     return kExitBadInput;

@@ -29,7 +29,9 @@
 #include "analysis/intervals.h"
 #include "analysis/metrics.h"
 #include "analysis/metrics_json.h"
+#include "core/roughness_filter.h"
 #include "export/export.h"
+#include "image/bump_maps.h"
 #include "image/image_io.h"
 #include "render/evaluator.h"
 #include "renderers/renderers.h"
@@ -257,6 +259,44 @@ std::string method_family_text(const MethodInfo& m) {
 
 }  // namespace
 
+const char* distribution_name(FilteredDistribution d) {
+  switch (d) {
+    case FilteredDistribution::kGgx:
+      return "ggx";
+    case FilteredDistribution::kBeckmann:
+      return "beckmann";
+    case FilteredDistribution::kSchillingBlinnPhong:
+      return "schilling-blinn-phong";
+  }
+  return "?";
+}
+
+void add_roughness_filters(json& list) {
+  for (const RoughnessFilterInfo& f : all_roughness_filters())
+    list.push_back({{"id", f.id},
+                    {"kind", "roughness_filter"},
+                    {"source", f.source},
+                    {"summary", f.summary},
+                    {"parameters", parameters_json(f.parameters)},
+                    {"distribution", distribution_name(f.distribution)},
+                    {"input", f.needs_normal_derivatives ? "normal screen-space derivatives"
+                                                         : "bump and roughness pyramid"}});
+}
+
+void print_roughness_filters(std::ostream& out) {
+  out << fmt::format(
+      "\nRoughness filters (bump-map filtering; `penumbra pyramid` builds their input; the "
+      "lobe they give is a slope-space alpha^2 tensor A on the named distribution):\n{:<24} "
+      "{:<40} {}\n",
+      "id", "distribution", "source");
+  for (const RoughnessFilterInfo& f : all_roughness_filters()) {
+    out << fmt::format("{:<24} {:<40} {}\n", f.id, distribution_name(f.distribution), f.source);
+    out << fmt::format("{:<24} {}\n", "", f.summary);
+    for (const FilterParameter& p : f.parameters)
+      out << fmt::format("{:<24} parameter {}: {}\n", "", parameter_domain(p), p.description);
+  }
+}
+
 int command_methods(bool as_json, std::ostream& out) {
   if (as_json) {
     json list = json::array();
@@ -288,6 +328,7 @@ int command_methods(bool as_json, std::ostream& out) {
                       {"summary", m.summary},
                       {"parameters", parameters}});
     }
+    add_roughness_filters(list);
     out << list.dump(2) << "\n";
     return kExitOk;
   }
@@ -320,6 +361,7 @@ int command_methods(bool as_json, std::ostream& out) {
     out << fmt::format("{:<24} {:<40} {}\n", m.id, parameters, m.source);
     out << fmt::format("{:<24} {}\n", "", m.summary);
   }
+  print_roughness_filters(out);
   return kExitOk;
 }
 
@@ -1298,6 +1340,48 @@ int command_bench(int size, int spp, std::ostream& out) {
       "samples/s; peak RSS {:.0f} MiB (before: {:.0f} MiB)\n",
       scene.displacement.edge_length, stats.triangles, stats.build_seconds, stats.seconds,
       double(stats.camera_samples) / stats.seconds / 1e6, peak_rss_mib(), rss_before);
+  return kExitOk;
+}
+
+int command_pyramid(const PyramidArgs& a, std::ostream& out) {
+  MapEdge edge = MapEdge::kWrap;
+  bool edge_known = false;
+  for (const EnumName<MapEdge>& e : kMapEdgeNames)
+    if (a.edge == e.name) edge = e.value, edge_known = true;
+  if (!edge_known)
+    throw UsageError(fmt::format("--edge: expected wrap or clamp, got \"{}\"", a.edge));
+  if (!std::isfinite(a.height_scale))
+    throw UsageError(
+        fmt::format("--height-scale: expected a finite number, got {}", a.height_scale));
+  const auto start = std::chrono::steady_clock::now();
+  const HeightMap map = read_height_map(a.heights, a.channel);
+  const double texel_size = a.texel_size > 0.0 ? a.texel_size : 1.0 / map.width;
+  const auto read = std::chrono::steady_clock::now();
+  const std::vector<PyramidLevel> levels = build_bump_pyramid(
+      offsets_from_heights(map.heights, map.width, map.height, texel_size, a.height_scale, edge));
+  const auto built = std::chrono::steady_clock::now();
+  write_pyramid(levels, {a.heights, map.channel, texel_size, a.height_scale, edge}, a.output);
+  const auto written = std::chrono::steady_clock::now();
+  if (a.quiet) return kExitOk;
+  const auto seconds = [](auto from, auto to) {
+    return std::chrono::duration<double>(to - from).count();
+  };
+  const PyramidLevel& top = levels.back();
+  const Covariance2 k = top.covariance(0, 0);
+  out << fmt::format(
+      "{} (channel {}, {}x{} texels, texel {:.6g} scene units, heights x {:.6g}, edge {}): "
+      "{} levels in {}\n",
+      a.heights, map.channel, map.width, map.height, texel_size, a.height_scale, a.edge,
+      levels.size(), a.output);
+  out << fmt::format(
+      "whole map (level {}): mean offset ({:.6g}, {:.6g}), slope standard deviations "
+      "sqrt(K_uu) {:.6g}, sqrt(K_vv) {:.6g}, lambda1 {:.6g} (slopes, dimensionless); "
+      "mean normal length {:.6f}\n",
+      levels.size() - 1, top.f_u[0], top.f_v[0], std::sqrt(k.a), std::sqrt(k.c),
+      isotropic_roughness(k), length(top.mean_normal(0, 0)));
+  out << fmt::format(
+      "read {:.3f} s, built {:.3f} s (1 thread), written {:.3f} s; peak RSS {:.0f} MiB\n",
+      seconds(start, read), seconds(read, built), seconds(built, written), peak_rss_mib());
   return kExitOk;
 }
 

@@ -90,6 +90,15 @@ struct RunArgs {
   SlurmOptions slurm;              // --partition, --array-limit, ... (chain: --slurm-chain)
 };
 
+// penumbra pyramid: a height map's bump and roughness pyramids.
+struct PyramidArgs {
+  std::string heights, output, channel;
+  double texel_size = 0.0;  // 0: 1 / width (the map spans one scene unit)
+  double height_scale = 1.0;
+  std::string edge = "wrap";
+  bool quiet = false;
+};
+
 struct RunBatchArgs {
   std::string batch;
   int task = -1;  // default: SLURM_ARRAY_TASK_ID
@@ -114,5 +123,6 @@ int command_report(const std::string& folder, bool self_contained, std::ostream&
 int command_contour(const std::vector<std::string>& ids, double step, const std::string& output,
                     std::ostream& out);
 int command_bench(int size, int spp, std::ostream& out);
+int command_pyramid(const PyramidArgs& a, std::ostream& out);
 
 }  // namespace penumbra

@@ -1,0 +1,187 @@
+#include "image/bump_maps.h"
+
+#include <fmt/format.h>
+
+#include <ImfThreading.h>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "image/image_io.h"
+#include "util/files.h"
+#include "util/strict_json.h"
+#include "util/version.h"
+
+namespace fs = std::filesystem;
+
+namespace penumbra {
+
+namespace {
+
+std::string channel_list(const Image& image) {
+  std::string list;
+  for (const std::string& name : image.channels) list += (list.empty() ? "" : ", ") + name;
+  return list;
+}
+
+int pick_channel(const Image& image, const std::string& path, const std::string& channel) {
+  if (channel.empty()) {
+    if (image.channels.size() == 1) return 0;
+    throw InputError(path, "",
+                     fmt::format("has {} channels ({}); name the height channel",
+                                 image.channels.size(), channel_list(image)));
+  }
+  const int index = image.channel_index(channel);
+  if (index < 0)
+    throw InputError(
+        path, "", fmt::format("has no channel \"{}\" (it has {})", channel, channel_list(image)));
+  return index;
+}
+
+}  // namespace
+
+HeightMap read_height_map(const std::string& path, const std::string& channel) {
+  if (!fs::is_regular_file(path)) throw InputError(path, "", "no such file");
+  Image image;
+  try {
+    image = read_image(path);
+  } catch (const std::exception& e) {
+    throw InputError(path, "", fmt::format("cannot read it as an image: {}", e.what()));
+  }
+  if (image.width <= 0 || image.height <= 0)
+    throw InputError(path, "", fmt::format("is empty ({}x{})", image.width, image.height));
+  const int index = pick_channel(image, path, channel);
+  HeightMap map{image.width, image.height, {}, image.channels[index]};
+  map.heights.resize(std::size_t(image.width) * image.height);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const float h = image.at(x, y, index);
+      if (!std::isfinite(h))
+        throw InputError(path, "",
+                         fmt::format("channel {} holds {} at texel ({}, {}) (column, row from "
+                                     "the top); heights must be finite",
+                                     map.channel, h, x, y));
+      map.heights[std::size_t(y) * image.width + x] = h;
+    }
+  return map;
+}
+
+Image pyramid_level_image(const PyramidLevel& level) {
+  Image image;
+  image.width = level.width;
+  image.height = level.height;
+  image.channels = {"bump.f_u",     "bump.f_v",          "roughness.d1", "roughness.d2",
+                    "roughness.d3", "roughness.lambda1", "normal.length"};
+  image.pixels.resize(std::size_t(level.width) * level.height * image.channels.size());
+  for (int y = 0; y < level.height; ++y)
+    for (int x = 0; x < level.width; ++x) {
+      const Covariance2 k = level.covariance(x, y);
+      const RoughnessFactor d = roughness_factor(k);
+      const std::size_t i = level.index(x, y);
+      const float values[] = {level.f_u[i],
+                              level.f_v[i],
+                              float(d.d1),
+                              float(d.d2),
+                              float(d.d3),
+                              float(isotropic_roughness(k)),
+                              float(length(level.mean_normal(x, y)))};
+      for (int c = 0; c < 7; ++c) image.at(x, y, c) = values[c];
+    }
+  return image;
+}
+
+namespace {
+
+nlohmann::json manifest(const std::vector<PyramidLevel>& levels, const PyramidSource& source) {
+  nlohmann::json list = nlohmann::json::array();
+  for (std::size_t l = 0; l < levels.size(); ++l)
+    list.push_back({{"level", l},
+                    {"file", fmt::format("level_{:02}.exr", l)},
+                    {"width", levels[l].width},
+                    {"height", levels[l].height},
+                    {"finest_texels_per_texel", 1L << (2 * l)}});
+  return {
+      {"format", "penumbra-bump-pyramid"},
+      {"version", 1},
+      {"penumbra", kPenumbraVersion},
+      {"source", {{"file", source.path}, {"channel", source.channel}}},
+      {"texel_size", source.texel_size},
+      {"height_scale", source.height_scale},
+      {"edge", name_of<MapEdge>(kMapEdgeNames, source.edge)},
+      {"conventions",
+       "offsets f_u = dh/du, f_v = dh/dv by central differences (one-sided at a clamped edge), "
+       "u along columns, v up (against rows); h = height_scale x file value; offsets are "
+       "slopes (scene units per scene unit) with texel_size in scene units. Level l texel "
+       "(x, y) covers finest texels [x 2^l, (x+1) 2^l) x [y 2^l, (y+1) 2^l). roughness: "
+       "D = [[d1, d2], [0, d3]], D D^T = K, the covariance of the covered finest offsets "
+       "(Schilling's recursion); lambda1 = sqrt of K's largest eigenvalue. normal.length: length "
+       "of the mean of the covered unit normals (f_u, f_v, 1)/|.|, which Toksvig's filter "
+       "reads."},
+      {"levels", list}};
+}
+
+// OpenEXR compresses line blocks on a thread pool while this is alive; the
+// finest level of a 4096^2 map is 450 MB of floats, which one thread
+// compresses at ~30 MB/s.
+class ExrThreads {
+ public:
+  ExrThreads() : previous_(Imf::globalThreadCount()) {
+    Imf::setGlobalThreadCount(int(std::max(1u, std::thread::hardware_concurrency())));
+  }
+  ~ExrThreads() { Imf::setGlobalThreadCount(previous_); }
+  ExrThreads(const ExrThreads&) = delete;
+  ExrThreads& operator=(const ExrThreads&) = delete;
+
+ private:
+  int previous_;
+};
+
+void replace_folder(const std::string& built, const std::string& folder) {
+  std::error_code ec;
+  if (fs::exists(folder)) {
+    const bool pyramid = fs::exists(fs::path(folder) / "pyramid.json");
+    if (!pyramid && !fs::is_empty(folder, ec))
+      throw OutputError(fmt::format(
+          "{}: exists and is not a pyramid folder (no pyramid.json); not overwriting it", folder));
+    fs::remove_all(folder, ec);
+  }
+  fs::rename(built, folder, ec);
+  if (ec)
+    throw OutputError(
+        fmt::format("{}: cannot move the pyramid into place: {}", folder, ec.message()));
+}
+
+}  // namespace
+
+void write_pyramid(const std::vector<PyramidLevel>& levels, const PyramidSource& source,
+                   const std::string& folder) {
+  fs::path target = fs::absolute(folder).lexically_normal();
+  if (!target.has_filename()) target = target.parent_path();  // "dir/"
+  const fs::path parent = target.parent_path();
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  if (fs::exists(target) && !fs::is_directory(target))
+    throw OutputError(fmt::format("{}: exists and is not a folder", folder));
+  const std::string built = temporary_name((parent / target.filename()).string());
+  fs::create_directory(built, ec);
+  if (ec)
+    throw OutputError(
+        fmt::format("{}: cannot create a folder beside it: {}", folder, ec.message()));
+  try {
+    const ExrThreads threads;
+    for (std::size_t l = 0; l < levels.size(); ++l)
+      write_exr(pyramid_level_image(levels[l]),
+                (fs::path(built) / fmt::format("level_{:02}.exr", l)).string(),
+                {{"penumbra:pyramid_level", std::to_string(l)}});
+    write_text_file((fs::path(built) / "pyramid.json").string(),
+                    manifest(levels, source).dump(2) + "\n");
+    replace_folder(built, target.string());
+  } catch (...) {
+    fs::remove_all(built, ec);
+    throw;
+  }
+}
+
+}  // namespace penumbra

@@ -1,0 +1,48 @@
+// Bump maps from image files: a height map read and checked, and the bump
+// and roughness pyramids (core/bump_pyramid.h) written as one EXR per level
+// with a manifest. Errors name the file (InputError); a pyramid folder is
+// written under a temporary name and renamed into place, so a failed or
+// interrupted build never leaves one that looks complete.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/bump_pyramid.h"
+#include "image/image.h"
+
+namespace penumbra {
+
+// One channel of an image file as heights (the file's values, before any
+// scale). `channel` "" takes the only channel, and is required when the file
+// has several. Refuses a missing or unreadable file, an unknown channel, a
+// zero-size image and any NaN or infinite value (naming the first texel).
+struct HeightMap {
+  int width = 0, height = 0;
+  std::vector<float> heights;  // row-major from the top row
+  std::string channel;         // the channel read
+};
+HeightMap read_height_map(const std::string& path, const std::string& channel = "");
+
+// How a pyramid was made, for its manifest.
+struct PyramidSource {
+  std::string path;       // the height map
+  std::string channel;    // its channel
+  double texel_size = 0;  // scene units per finest texel
+  double height_scale = 1;
+  MapEdge edge = MapEdge::kWrap;
+};
+
+// Level `level` of the pyramids as an image, channels "bump.f_u", "bump.f_v"
+// (mean offset), "roughness.d1", "roughness.d2", "roughness.d3" (Schilling's
+// D with D D^T = K), "roughness.lambda1" (isotropic), "normal.length" (of the
+// mean unit normal, for Toksvig).
+Image pyramid_level_image(const PyramidLevel& level);
+
+// Writes `levels` into `folder`: level_NN.exr for each and pyramid.json
+// (source, conventions, units, level sizes). Replaces a previous pyramid
+// folder; refuses (OutputError) a non-empty folder that is not one.
+void write_pyramid(const std::vector<PyramidLevel>& levels, const PyramidSource& source,
+                   const std::string& folder);
+
+}  // namespace penumbra
