@@ -52,6 +52,10 @@ lowpoly-external-<group>.* (other renderers vs their own analytic render) and
 lowpoly-shadow-<group>.* (cast-shadow loss and shift, scenes with a cast
 shadow); a group is a scene plus the values of any other axes.
 
+  /usr/bin/python3 harness/report.py filtering FILTERING.json OUTDIR
+      writes OUTDIR/filtering-{profile_error,width_ratio,energy_ratio}.*
+      (penumbra_filtering.py describes the input).
+
 contour JSON ("format": "penumbra-contour", "version": 1): light_deg[],
 deviation_deg[], methods[{id, G[deviation][light]}] (null: undefined).
 """
@@ -67,6 +71,7 @@ sys.dont_write_bytecode = True
 from penumbra_contour import contour_figures, load_contour  # noqa: E402
 from penumbra_data import BadInput, PageImages, Report  # noqa: E402
 from penumbra_figures import report_figures  # noqa: E402
+from penumbra_filtering import filtering_figures  # noqa: E402
 from penumbra_html import write_report  # noqa: E402
 from penumbra_plot import progress  # noqa: E402
 
@@ -92,9 +97,12 @@ def main(argv):
             written = run_report(argv[1], len(argv) == 3)
         elif len(argv) == 3 and argv[0] == 'contour':
             written = run_contour(argv[1], argv[2])
+        elif len(argv) == 3 and argv[0] == 'filtering':
+            written = filtering_figures(argv[1], argv[2])
         else:
             print('usage: report.py report OUT [--self-contained] | '
-                  'report.py contour CONTOUR.json OUTDIR', file=sys.stderr)
+                  'report.py contour CONTOUR.json OUTDIR | '
+                  'report.py filtering FILTERING.json OUTDIR', file=sys.stderr)
             return 2
     except BadInput as e:
         print(f'report.py: {e}', file=sys.stderr)

@@ -68,6 +68,21 @@ std::optional<std::string> unknown_subcommand(CLI::App& app, int argc, const cha
                      names);
 }
 
+// The height map and its pyramid: shared by `pyramid` and `filtering`.
+void add_map_options(CLI::App* cmd, PyramidArgs& a) {
+  cmd->add_option("heights", a.heights, "height map (EXR, PNG, ...)")->required();
+  cmd->add_option("-o,--output", a.output, "output folder")->required();
+  cmd->add_option("--channel", a.channel,
+                  "the height channel (required when the file has several)");
+  cmd->add_option("--texel-size", a.texel_size,
+                  "scene units per texel (default: 1 / width, the map spans one unit)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--height-scale", a.height_scale, "scene units per unit of the file's values")
+      ->capture_default_str();
+  cmd->add_option("--edge", a.edge, "differences across the map's edge: wrap (tiled) or clamp")
+      ->capture_default_str();
+}
+
 }  // namespace
 
 int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
@@ -279,24 +294,37 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       app.add_subcommand("pyramid",
                          "a height map's bump (offset) and roughness pyramids, one EXR per level "
                          "(Schilling; see README)");
-  pyramid_cmd->add_option("heights", pyramid_args.heights, "height map (EXR, PNG, ...)")
-      ->required();
-  pyramid_cmd->add_option("-o,--output", pyramid_args.output, "output folder")->required();
-  pyramid_cmd->add_option("--channel", pyramid_args.channel,
-                          "the height channel (required when the file has several)");
-  pyramid_cmd
-      ->add_option("--texel-size", pyramid_args.texel_size,
-                   "scene units per texel (default: 1 / width, the map spans one unit)")
-      ->check(CLI::PositiveNumber);
-  pyramid_cmd
-      ->add_option("--height-scale", pyramid_args.height_scale,
-                   "scene units per unit of the file's values")
-      ->capture_default_str();
-  pyramid_cmd
-      ->add_option("--edge", pyramid_args.edge,
-                   "differences across the map's edge: wrap (tiled) or clamp")
-      ->capture_default_str();
+  add_map_options(pyramid_cmd, pyramid_args);
   pyramid_cmd->add_flag("-q,--quiet", pyramid_args.quiet, "print nothing on success");
+
+  FilteringArgs filtering_args;
+  CLI::App* filtering_cmd = app.add_subcommand(
+      "filtering",
+      "the bump-filtering experiment (RTG Fig. 12-6) on a height map: each roughness "
+      "filter against the unfiltered footprint, 1 to 64 texels per pixel");
+  add_map_options(filtering_cmd, filtering_args.map);
+  filtering_cmd->add_option("--alpha", filtering_args.alphas,
+                            "base GGX alpha (repeatable; default 0.01 0.05 0.1 0.2 0.4 0.8)");
+  filtering_cmd->add_option("--filter", filtering_args.filters,
+                            "roughness filter id (repeatable; default: every measurable one)");
+  filtering_cmd
+      ->add_option("--max-level", filtering_args.max_level,
+                   "coarsest level measured (2^level texels per pixel side)")
+      ->check(CLI::Range(0, 16))
+      ->capture_default_str();
+  filtering_cmd->add_option("--footprints", filtering_args.footprints, "footprints per level")
+      ->check(CLI::Range(2, 100000))
+      ->capture_default_str();
+  filtering_cmd->add_option("--view", filtering_args.view_deg, "view zenith angle, degrees")
+      ->check(CLI::Range(0.0, 80.0))
+      ->capture_default_str();
+  filtering_cmd
+      ->add_option("--sweep-step", filtering_args.sweep_step_deg, "light sweep step, degrees")
+      ->check(CLI::Range(0.05, 10.0))
+      ->capture_default_str();
+  filtering_cmd->add_option("--jobs", filtering_args.jobs, "threads (default: all cores)")
+      ->check(CLI::NonNegativeNumber);
+  filtering_cmd->add_flag("-q,--quiet", filtering_args.map.quiet, "print nothing on success");
 
   for (CLI::App* sub : app.get_subcommands({})) sub->footer(kExitCodes);
   if (const auto unknown = unknown_subcommand(app, argc, argv)) {
@@ -329,6 +357,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     if (*contour_cmd) return command_contour(contour_methods, contour_step, contour_output, out);
     if (*bench) return command_bench(bench_size, bench_spp, out);
     if (*pyramid_cmd) return command_pyramid(pyramid_args, out);
+    if (*filtering_cmd) return command_filtering(filtering_args, out, err);
   } catch (const InputError& e) {
     err << "penumbra: error: " << e.what() << "\n";
     return kExitBadInput;

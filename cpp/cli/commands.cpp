@@ -26,6 +26,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/contour.h"
+#include "analysis/filtering.h"
 #include "analysis/intervals.h"
 #include "analysis/metrics.h"
 #include "analysis/metrics_json.h"
@@ -1343,16 +1344,26 @@ int command_bench(int size, int spp, std::ostream& out) {
   return kExitOk;
 }
 
-int command_pyramid(const PyramidArgs& a, std::ostream& out) {
-  MapEdge edge = MapEdge::kWrap;
-  bool edge_known = false;
+namespace {
+
+MapEdge parse_edge(const PyramidArgs& a) {
   for (const EnumName<MapEdge>& e : kMapEdgeNames)
-    if (a.edge == e.name) edge = e.value, edge_known = true;
-  if (!edge_known)
-    throw UsageError(fmt::format("--edge: expected wrap or clamp, got \"{}\"", a.edge));
+    if (a.edge == e.name) return e.value;
+  throw UsageError(fmt::format("--edge: expected wrap or clamp, got \"{}\"", a.edge));
+}
+
+void check_map_args(const PyramidArgs& a) {
+  parse_edge(a);
   if (!std::isfinite(a.height_scale))
     throw UsageError(
         fmt::format("--height-scale: expected a finite number, got {}", a.height_scale));
+}
+
+}  // namespace
+
+int command_pyramid(const PyramidArgs& a, std::ostream& out) {
+  check_map_args(a);
+  const MapEdge edge = parse_edge(a);
   const auto start = std::chrono::steady_clock::now();
   const HeightMap map = read_height_map(a.heights, a.channel);
   const double texel_size = a.texel_size > 0.0 ? a.texel_size : 1.0 / map.width;
@@ -1382,6 +1393,73 @@ int command_pyramid(const PyramidArgs& a, std::ostream& out) {
   out << fmt::format(
       "read {:.3f} s, built {:.3f} s (1 thread), written {:.3f} s; peak RSS {:.0f} MiB\n",
       seconds(start, read), seconds(read, built), seconds(built, written), peak_rss_mib());
+  return kExitOk;
+}
+
+namespace {
+
+FilteringOptions filtering_options(const FilteringArgs& a) {
+  FilteringOptions o;
+  if (!a.alphas.empty()) o.alphas = a.alphas;
+  for (const std::string& id : a.filters) {
+    const auto f = roughness_filter_from_id(id);
+    if (!f)
+      throw UsageError(
+          fmt::format("--filter: unknown roughness filter \"{}\" (see penumbra methods)", id));
+    if (roughness_filter_info(*f).distribution == FilteredDistribution::kSchillingBlinnPhong)
+      throw UsageError(fmt::format(
+          "--filter: {} has no normalised BRDF in its source, so it cannot be measured", id));
+    o.filters.push_back(*f);
+  }
+  for (double alpha : o.alphas)
+    if (!(alpha > 0.0 && alpha <= 1.0))
+      throw UsageError(fmt::format("--alpha: expected a GGX alpha in (0, 1], got {}", alpha));
+  o.max_level = a.max_level;
+  o.footprints = a.footprints;
+  o.view_deg = a.view_deg;
+  o.sweep_step_deg = a.sweep_step_deg;
+  o.jobs = a.jobs > 0 ? a.jobs : int(std::max(1u, std::thread::hardware_concurrency()));
+  return o;
+}
+
+}  // namespace
+
+int command_filtering(const FilteringArgs& a, std::ostream& out, std::ostream& err) {
+  check_map_args(a.map);
+  const FilteringOptions options = filtering_options(a);
+  const HeightMap map = read_height_map(a.map.heights, a.map.channel);
+  std::error_code ec;
+  fs::create_directories(a.map.output, ec);
+  check_writable((fs::path(a.map.output) / "filtering.json").string());
+  const double texel_size = a.map.texel_size > 0.0 ? a.map.texel_size : 1.0 / map.width;
+  const std::vector<PyramidLevel> pyramid = build_bump_pyramid(offsets_from_heights(
+      map.heights, map.width, map.height, texel_size, a.map.height_scale, parse_edge(a.map)));
+  const auto start = std::chrono::steady_clock::now();
+  std::size_t reported = 0;
+  const FilteringResult result =
+      run_filtering_experiment(pyramid, options, [&](std::size_t done, std::size_t total) {
+        if (a.map.quiet || done * 10 / total == reported) return;
+        reported = done * 10 / total;
+        err << fmt::format("filtering: {}/{} footprints measured\n", done, total);
+      });
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const FilteringSource source{a.map.heights, map.channel,        map.width, map.height,
+                               texel_size,    a.map.height_scale, a.map.edge};
+  write_text_file((fs::path(a.map.output) / "filtering.csv").string(), filtering_csv(result));
+  const std::string json_path = (fs::path(a.map.output) / "filtering.json").string();
+  write_text_file(json_path, filtering_json(result, options, source) + "\n");
+  run_plot_script(
+      {"filtering", fs::absolute(json_path).string(), fs::absolute(a.map.output).string()},
+      (fs::path(a.map.output) / "filtering.log").string());
+  if (a.map.quiet) return kExitOk;
+  out << fmt::format("{} footprints over {} levels, {} filters x {} alphas, in {:.1f} s\n",
+                     result.footprints, result.levels, result.filters.size(), options.alphas.size(),
+                     seconds);
+  for (const std::string& line : filtering_findings(result)) out << line << "\n";
+  out << fmt::format(
+      "wrote {0}/filtering.json, {0}/filtering.csv and {0}/filtering-*.{{png,svg,pdf}}\n",
+      a.map.output);
   return kExitOk;
 }
 

@@ -99,6 +99,15 @@ struct PyramidArgs {
   bool quiet = false;
 };
 
+// penumbra filtering: the bump-filtering experiment on a height map.
+struct FilteringArgs {
+  PyramidArgs map;  // heights, output folder, channel, texel size, scale, edge
+  std::vector<double> alphas;
+  std::vector<std::string> filters;
+  int max_level = 6, footprints = 32, jobs = 0;
+  double view_deg = 0.0, sweep_step_deg = 0.5;
+};
+
 struct RunBatchArgs {
   std::string batch;
   int task = -1;  // default: SLURM_ARRAY_TASK_ID
@@ -124,5 +133,6 @@ int command_contour(const std::vector<std::string>& ids, double step, const std:
                     std::ostream& out);
 int command_bench(int size, int spp, std::ostream& out);
 int command_pyramid(const PyramidArgs& a, std::ostream& out);
+int command_filtering(const FilteringArgs& a, std::ostream& out, std::ostream& err);
 
 }  // namespace penumbra
