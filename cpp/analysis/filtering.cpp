@@ -113,19 +113,67 @@ FootprintMetrics compare(const std::vector<double>& filtered, const std::vector<
   return m;
 }
 
-// What the filters read at texel (x, y) of `level`: K, the mean normal's
-// length, and the per-pixel change of the shading normal to the
-// neighbouring footprints (central differences, wrapped).
-FootprintStatistics footprint_statistics(const PyramidLevel& level, int x, int y) {
-  const auto normal = [&](int xx, int yy) {
-    const Offset2 f =
-        level.offset((xx + level.width) % level.width, (yy + level.height) % level.height);
-    return world_normal(f.f_u, f.f_v);
+// Length of [a, a + 1) inside [lo, hi).
+double overlap(int a, double lo, double hi) {
+  return std::max(0.0, std::min(a + 1.0, hi) - std::max(double(a), lo));
+}
+
+// Calls visit(offset, weight) for every finest texel in the square
+// [x0, x0 + size) x [y0, y0 + size), weights = area / size^2 (tiled map).
+template <typename Visit>
+void for_each_covered(const PyramidLevel& finest, double x0, double y0, double size,
+                      Visit&& visit) {
+  for (int j = int(std::floor(y0)); j < int(std::ceil(y0 + size)); ++j)
+    for (int i = int(std::floor(x0)); i < int(std::ceil(x0 + size)); ++i) {
+      const double weight = overlap(i, x0, x0 + size) * overlap(j, y0, y0 + size) / (size * size);
+      if (weight > 0.0)
+        visit(finest.offset(((i % finest.width) + finest.width) % finest.width,
+                            ((j % finest.height) + finest.height) % finest.height),
+              weight);
+    }
+}
+
+// The exact moments of the square footprint centred at (cx, cy).
+FilteredTexel box_moments(const PyramidLevel& finest, double cx, double cy, double size) {
+  FilteredTexel t;
+  double suu = 0, suv = 0, svv = 0;
+  for_each_covered(finest, cx - 0.5 * size, cy - 0.5 * size, size, [&](const Offset2& f, double w) {
+    t.mean.f_u += w * f.f_u;
+    t.mean.f_v += w * f.f_v;
+    suu += w * f.f_u * f.f_u;
+    suv += w * f.f_u * f.f_v;
+    svv += w * f.f_v * f.f_v;
+    t.mean_normal += normalize(Vec3(f.f_u, f.f_v, 1.0)) * w;
+  });
+  t.covariance = {std::max(suu - t.mean.f_u * t.mean.f_u, 0.0), suv - t.mean.f_u * t.mean.f_v,
+                  std::max(svv - t.mean.f_v * t.mean.f_v, 0.0)};
+  return t;
+}
+
+// What the filters read for the footprint of `size` finest texels centred
+// at (cx, cy): K and the mean normal's length (box or trilinear), and the
+// per-pixel change of the shading normal to the neighbouring footprints
+// (central differences).
+struct Lookup {
+  Vec3 normal;
+  FootprintStatistics stats;
+};
+Lookup lookup(const std::vector<PyramidLevel>& pyramid, double cx, double cy, double size,
+              FilteringOptions::Lookup kind) {
+  const auto read = [&](double x, double y) {
+    return kind == FilteringOptions::Lookup::kBox
+               ? box_moments(pyramid[0], x, y, size)
+               : sample_pyramid(pyramid, x, y, size, MapEdge::kWrap);
   };
-  const Vec3 dx = (normal(x + 1, y) - normal(x - 1, y)) * 0.5;
-  const Vec3 dy = (normal(x, y + 1) - normal(x, y - 1)) * 0.5;
-  return {level.covariance(x, y), length(level.mean_normal(x, y)),
-          length_squared(dx) + length_squared(dy)};
+  const auto normal_at = [&](double x, double y) {
+    const FilteredTexel t = read(x, y);
+    return world_normal(t.mean.f_u, t.mean.f_v);
+  };
+  const FilteredTexel centre = read(cx, cy);
+  const Vec3 dx = (normal_at(cx + size, cy) - normal_at(cx - size, cy)) * 0.5;
+  const Vec3 dy = (normal_at(cx, cy + size) - normal_at(cx, cy - size)) * 0.5;
+  return {world_normal(centre.mean.f_u, centre.mean.f_v),
+          {centre.covariance, length(centre.mean_normal), length_squared(dx) + length_squared(dy)}};
 }
 
 // Texels of `level` to measure: all, or `count` drawn without replacement.
@@ -150,23 +198,19 @@ FootprintTable measure_footprint(const std::vector<PyramidLevel>& pyramid, int l
   const Vec3 wo{std::sin(radians(o.view_deg)), 0.0, std::cos(radians(o.view_deg))};
   std::vector<std::vector<double>> reference(o.alphas.size(), std::vector<double>(n_dir, 0.0));
   const PyramidLevel& finest = pyramid[0];
-  const int x0 = x << l, y0 = y << l;
-  const int x1 = std::min(x0 + (1 << l), finest.width), y1 = std::min(y0 + (1 << l), finest.height);
-  const double weight = 1.0 / double((x1 - x0) * (y1 - y0));
-  for (int j = y0; j < y1; ++j)
-    for (int i = x0; i < x1; ++i) {
-      const Offset2 f = finest.offset(i, j);
-      const Vec3 n = world_normal(f.f_u, f.f_v);
-      for (std::size_t a = 0; a < o.alphas.size(); ++a) {
-        const double a2 = o.alphas[a] * o.alphas[a];
-        add_profile(n, FilteredDistribution::kGgx, {a2, 0.0, a2}, sweep, wo, weight,
-                    reference[a].data());
-      }
+  const double size = double(1L << l);
+  const double x0 = (x + o.shift) * size, y0 = (y + o.shift) * size;
+  for_each_covered(finest, x0, y0, size, [&](const Offset2& f, double weight) {
+    const Vec3 n = world_normal(f.f_u, f.f_v);
+    for (std::size_t a = 0; a < o.alphas.size(); ++a) {
+      const double a2 = o.alphas[a] * o.alphas[a];
+      add_profile(n, FilteredDistribution::kGgx, {a2, 0.0, a2}, sweep, wo, weight,
+                  reference[a].data());
     }
-  const PyramidLevel& level = pyramid[l];
-  const Offset2 mean = level.offset(x, y);
-  const Vec3 n_mean = world_normal(mean.f_u, mean.f_v);
-  const FootprintStatistics stats = footprint_statistics(level, x, y);
+  });
+  const Lookup filtered_at = lookup(pyramid, x0 + 0.5 * size, y0 + 0.5 * size, size, o.lookup);
+  const Vec3& n_mean = filtered_at.normal;
+  const FootprintStatistics& stats = filtered_at.stats;
   FootprintTable table(o.alphas.size());
   for (std::size_t a = 0; a < o.alphas.size(); ++a)
     for (RoughnessFilter filter : o.filters) {
@@ -232,7 +276,8 @@ void summarise_filters(const std::vector<FootprintTable>& tables,
 void check_options(const std::vector<PyramidLevel>& pyramid, const FilteringOptions& o) {
   if (pyramid.empty()) throw std::invalid_argument("no pyramid levels");
   if (o.alphas.empty() || o.filters.empty() || o.footprints < 1 || o.max_level < 0 ||
-      !(o.sweep_step_deg > 0.0) || !(o.sweep_max_deg > 0.0 && o.sweep_max_deg < 90.0))
+      !(o.sweep_step_deg > 0.0) || !(o.sweep_max_deg > 0.0 && o.sweep_max_deg < 90.0) ||
+      !(o.shift >= 0.0 && o.shift < 1.0))
     throw std::invalid_argument("filtering options out of their domains");
   for (double alpha : o.alphas)
     if (!(alpha > 0.0 && alpha <= 1.0)) throw std::invalid_argument("alpha must lie in (0, 1]");

@@ -1,7 +1,9 @@
 // The bump-filtering experiment of the Ray Tracing Gems chapter (Fig. 12-6)
 // and Schilling's Figs. 8-11, measured on a bump-mapped plane: a GGX mirror-
 // like material (Fresnel 1, no diffuse) whose bump map is seen at 2^l
-// texels per pixel. A pixel footprint is one texel of pyramid level l.
+// texels per pixel. A pixel footprint is a square of 2^l finest texels a
+// side: one texel of pyramid level l, or that square shifted by a fraction
+// of a pixel.
 //
 // Reference: the unfiltered, fully supersampled footprint: the radiance
 // averaged over every finest texel it covers, each shaded with its own
@@ -42,6 +44,16 @@ struct FilteringOptions {
   double sweep_max_deg = 80.0;           // light zenith range [-max, max]
   double sweep_step_deg = 0.5;
   int footprints = 32;  // sampled per level (all texels when fewer)
+  // The pixel grid's offset from the texel grid, in pixels (both axes),
+  // [0, 1): 0 aligns each footprint with a texel of its level; otherwise
+  // the reference covers the shifted square (partial texels by area).
+  double shift = 0.0;
+  // What the filters read: kBox, the exact moments of the footprint's
+  // square (the mapping's own error, whatever the shift); kTrilinear, the
+  // pyramid's trilinear lookup at its centre (sample_pyramid: what a
+  // renderer with mip maps reads; adds the lookup kernel's error, which
+  // depends on where the footprint falls on the texel grid).
+  enum class Lookup { kBox, kTrilinear } lookup = Lookup::kBox;
   std::uint64_t seed = 1;
   int jobs = 1;
 };

@@ -322,6 +322,17 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       ->add_option("--sweep-step", filtering_args.sweep_step_deg, "light sweep step, degrees")
       ->check(CLI::Range(0.05, 10.0))
       ->capture_default_str();
+  filtering_cmd
+      ->add_option("--shift", filtering_args.shift,
+                   "pixel grid offset from the texel grid, pixels, [0, 1) (0: aligned)")
+      ->check(CLI::Range(0.0, 0.999))
+      ->capture_default_str();
+  filtering_cmd
+      ->add_option("--lookup", filtering_args.lookup,
+                   "what the filters read: box (the footprint's exact moments) or trilinear "
+                   "(the pyramid's mip-map lookup)")
+      ->check(CLI::IsMember({"box", "trilinear"}))
+      ->capture_default_str();
   filtering_cmd->add_option("--jobs", filtering_args.jobs, "threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);
   filtering_cmd->add_flag("-q,--quiet", filtering_args.map.quiet, "print nothing on success");

@@ -1418,6 +1418,9 @@ FilteringOptions filtering_options(const FilteringArgs& a) {
   o.footprints = a.footprints;
   o.view_deg = a.view_deg;
   o.sweep_step_deg = a.sweep_step_deg;
+  o.shift = a.shift;
+  o.lookup = a.lookup == "trilinear" ? FilteringOptions::Lookup::kTrilinear
+                                     : FilteringOptions::Lookup::kBox;
   o.jobs = a.jobs > 0 ? a.jobs : int(std::max(1u, std::thread::hardware_concurrency()));
   return o;
 }

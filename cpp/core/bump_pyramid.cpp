@@ -200,6 +200,69 @@ std::vector<PyramidLevel> build_bump_pyramid(PyramidLevel finest) {
   return levels;
 }
 
+namespace {
+
+// Texel index along an axis of `size` texels, past the edge per `edge`.
+int texel_index(int i, int size, MapEdge edge) {
+  if (edge == MapEdge::kClamp) return std::clamp(i, 0, size - 1);
+  return ((i % size) + size) % size;
+}
+
+struct Weighted {
+  int level, x, y;
+  double w;
+};
+
+// The (up to four) texels of `level` a bilinear lookup at (x, y) (finest
+// texel units) blends, with weights scaled by `scale`.
+void bilinear(const PyramidLevel& level, int l, double x, double y, double scale, MapEdge edge,
+              std::vector<Weighted>& out) {
+  const double xl = x / double(1L << l) - 0.5, yl = y / double(1L << l) - 0.5;
+  const double fx = std::floor(xl), fy = std::floor(yl);
+  const double tx = xl - fx, ty = yl - fy;
+  for (int dy = 0; dy < 2; ++dy)
+    for (int dx = 0; dx < 2; ++dx) {
+      const double w = scale * (dx ? tx : 1.0 - tx) * (dy ? ty : 1.0 - ty);
+      if (w > 0.0)
+        out.push_back({l, texel_index(int(fx) + dx, level.width, edge),
+                       texel_index(int(fy) + dy, level.height, edge), w});
+    }
+}
+
+}  // namespace
+
+FilteredTexel sample_pyramid(const std::vector<PyramidLevel>& levels, double x, double y,
+                             double footprint, MapEdge edge) {
+  const int top = int(levels.size()) - 1;
+  const double lod = std::clamp(std::log2(std::max(footprint, 1.0)), 0.0, double(top));
+  const int l0 = std::min(int(std::floor(lod)), top);
+  const double t = lod - l0;
+  std::vector<Weighted> texels;
+  bilinear(levels[l0], l0, x, y, 1.0 - t, edge, texels);
+  if (t > 0.0 && l0 < top) bilinear(levels[l0 + 1], l0 + 1, x, y, t, edge, texels);
+  double w_sum = 0.0;
+  FilteredTexel out;
+  for (const Weighted& k : texels) {
+    const Offset2 f = levels[k.level].offset(k.x, k.y);
+    w_sum += k.w;
+    out.mean.f_u += k.w * f.f_u;
+    out.mean.f_v += k.w * f.f_v;
+    out.mean_normal += levels[k.level].mean_normal(k.x, k.y) * k.w;
+  }
+  out.mean.f_u /= w_sum;
+  out.mean.f_v /= w_sum;
+  out.mean_normal = out.mean_normal / w_sum;
+  for (const Weighted& k : texels) {
+    const Offset2 f = levels[k.level].offset(k.x, k.y);
+    const Covariance2 c = levels[k.level].covariance(k.x, k.y);
+    const double du = f.f_u - out.mean.f_u, dv = f.f_v - out.mean.f_v;
+    out.covariance.a += k.w / w_sum * (c.a + du * du);
+    out.covariance.b += k.w / w_sum * (c.b + du * dv);
+    out.covariance.c += k.w / w_sum * (c.c + dv * dv);
+  }
+  return out;
+}
+
 double schilling_cos2_alpha(const Vec3& h_local, const Covariance2& k) {
   const double cos2 = h_local.z * h_local.z;
   const double dx = h_local.x, dy = h_local.y;

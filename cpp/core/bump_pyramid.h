@@ -115,6 +115,24 @@ std::vector<PyramidLevel> build_bump_pyramid(PyramidLevel finest);
 PyramidLevel coarser_level(const PyramidLevel& finer, int level, int finest_width,
                            int finest_height);
 
+// What a footprint reads from the pyramids: the mixture of the texels a
+// trilinear lookup blends, with the moments of a mixture (mean of the
+// means; mean of K plus the spread of the means about their mean), so that
+// a lookup at a texel's centre at its own level returns that texel.
+struct FilteredTexel {
+  Offset2 mean;
+  Covariance2 covariance;
+  Vec3 mean_normal;  // frame (s_u, s_v, n), as PyramidLevel::mean_normal
+};
+// Centre (x, y) in finest-texel units (texel i spans [i, i + 1); x along
+// columns, y down the rows), footprint width in finest texels (>= 1 reads
+// level log2(footprint), linear between the two nearest levels; below 1,
+// level 0). Bilinear within a level between texel centres; `edge` decides
+// past the map's edge (kWrap: tiled). Levels of non-power-of-two maps are
+// addressed as if their last texel were whole.
+FilteredTexel sample_pyramid(const std::vector<PyramidLevel>& levels, double x, double y,
+                             double footprint, MapEdge edge);
+
 // Schilling's modified Blinn-Phong (appendix A). h_local: the unit half
 // vector in the frame (e1, e2, n); cos(alpha) = h_local.z and d = (h.x, h.y)
 // (the projection of n - h onto the tangent plane, up to a sign that the

@@ -197,6 +197,44 @@ TEST(BumpPyramid, Lambda1BoundsTheVarianceInEveryDirection) {
   }
 }
 
+// A lookup at a texel's centre at its own level is that texel; halfway
+// between two texels of a level, the equal-weight mixture of the two is
+// exactly the pooled covariance of every finest offset both cover.
+TEST(BumpPyramid, LookupMixesTexelsWithTheMomentsOfTheirUnion) {
+  const int n = 16;
+  const std::vector<PyramidLevel> levels =
+      build_bump_pyramid(level_from_offsets(random_offsets(n * n, 21), n, n));
+  for (int l = 0; l < 3; ++l) {  // level 2 is 4x4: texels 2 and 3 of a row exist
+    const double size = double(1 << l);
+    const FilteredTexel t = sample_pyramid(levels, 2.5 * size, 1.5 * size, size, MapEdge::kWrap);
+    const Covariance2 k = levels[l].covariance(2, 1);
+    EXPECT_NEAR(t.covariance.a, k.a, 1e-7);
+    EXPECT_NEAR(t.covariance.c, k.c, 1e-7);
+    EXPECT_NEAR(t.mean.f_u, levels[l].offset(2, 1).f_u, 1e-7);
+    // Between texels (2, 1) and (3, 1): the centre x = 3 size.
+    const FilteredTexel mid = sample_pyramid(levels, 3.0 * size, 1.5 * size, size, MapEdge::kWrap);
+    Moments left = direct_moments(levels[0], l, 2, 1), right = direct_moments(levels[0], l, 3, 1);
+    const double mu_u = 0.5 * (left.mu_u + right.mu_u), mu_v = 0.5 * (left.mu_v + right.mu_v);
+    const double pooled_a = 0.5 * (left.k.a + (left.mu_u - mu_u) * (left.mu_u - mu_u)) +
+                            0.5 * (right.k.a + (right.mu_u - mu_u) * (right.mu_u - mu_u));
+    const double pooled_b = 0.5 * (left.k.b + (left.mu_u - mu_u) * (left.mu_v - mu_v)) +
+                            0.5 * (right.k.b + (right.mu_u - mu_u) * (right.mu_v - mu_v));
+    EXPECT_NEAR(mid.mean.f_u, mu_u, 1e-6);
+    EXPECT_NEAR(mid.covariance.a, pooled_a, 1e-6) << "level " << l;
+    EXPECT_NEAR(mid.covariance.b, pooled_b, 1e-6);
+  }
+  // Wrapped: a lookup at x = 0 blends the last column and the first.
+  const FilteredTexel edge = sample_pyramid(levels, 0.0, 0.5, 1.0, MapEdge::kWrap);
+  EXPECT_NEAR(edge.mean.f_u, 0.5 * (levels[0].offset(15, 0).f_u + levels[0].offset(0, 0).f_u),
+              1e-7);
+  // Between levels: footprint 2^1.5 mixes levels 1 and 2 half and half.
+  const FilteredTexel between =
+      sample_pyramid(levels, 4.0, 4.0, std::pow(2.0, 1.5), MapEdge::kWrap);
+  const FilteredTexel at1 = sample_pyramid(levels, 4.0, 4.0, 2.0, MapEdge::kWrap);
+  const FilteredTexel at2 = sample_pyramid(levels, 4.0, 4.0, 4.0, MapEdge::kWrap);
+  EXPECT_NEAR(between.mean.f_u, 0.5 * (at1.mean.f_u + at2.mean.f_u), 1e-12);
+}
+
 // Appendix A: "We get alpha' < alpha, if the variance of n in the regarded
 // direction is larger than 1, otherwise we get alpha' >= alpha", and the
 // isotropic form is the unmodified Blinn-Phong at lambda1 = 1.
