@@ -297,6 +297,19 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   add_map_options(pyramid_cmd, pyramid_args);
   pyramid_cmd->add_flag("-q,--quiet", pyramid_args.quiet, "print nothing on success");
 
+  BakeArgs bake_args;
+  CLI::App* bake_cmd = app.add_subcommand(
+      "bake", "a scene's analytic height function (/height) as a height map of the plane z = 0");
+  bake_cmd->add_option("scene", bake_args.scene, "scene file (JSON)")->required();
+  bake_cmd->add_option("-o,--output", bake_args.output, "height map (.exr)")->required();
+  bake_cmd->add_option("--set", bake_args.sets, "JSON-pointer override, /pointer=VALUE");
+  bake_cmd->add_option("--size", bake_args.size, "texels a side")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
+  bake_cmd->add_option("--extent", bake_args.extent, "side of the baked square, scene units")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+
   FilteringArgs filtering_args;
   CLI::App* filtering_cmd = app.add_subcommand(
       "filtering",
@@ -369,6 +382,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     if (*bench) return command_bench(bench_size, bench_spp, out);
     if (*pyramid_cmd) return command_pyramid(pyramid_args, out);
     if (*filtering_cmd) return command_filtering(filtering_args, out, err);
+    if (*bake_cmd) return command_bake(bake_args, out);
   } catch (const InputError& e) {
     err << "penumbra: error: " << e.what() << "\n";
     return kExitBadInput;

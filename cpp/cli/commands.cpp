@@ -1466,4 +1466,28 @@ int command_filtering(const FilteringArgs& a, std::ostream& out, std::ostream& e
   return kExitOk;
 }
 
+int command_bake(const BakeArgs& a, std::ostream& out) {
+  SceneArgs scene_args;
+  scene_args.sets = a.sets;
+  const std::vector<Override> overrides = collect_overrides(scene_args);
+  json document = read_json_file(a.scene);
+  const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
+  apply_overrides(document, overrides, origin);
+  const Scene scene = scene_from_json(document, origin);
+  if (scene.height.family == HeightFamily::kNone)
+    throw InputError(origin, "/height", "expected a height function to bake, got none");
+  check_extension(a.output, ".exr", "-o", ": a baked height map is float OpenEXR");
+  check_writable(a.output);
+  const Image map =
+      bake_height_map(scene.height.function, scene.height.amplitude, a.size, a.extent);
+  write_exr(map, a.output, {{"penumbra:baked_from", a.scene}});
+  const double texel = a.extent / a.size;
+  out << fmt::format(
+      "wrote {} ({}x{}, heights in scene units, texel {:.6g} scene units): use penumbra pyramid "
+      "{} --texel-size {:.6g} --edge {}\n",
+      a.output, a.size, a.size, texel, a.output, texel,
+      "wrap (if the extent holds whole periods) or clamp");
+  return kExitOk;
+}
+
 }  // namespace penumbra

@@ -109,6 +109,14 @@ struct FilteringArgs {
   std::string lookup = "box";
 };
 
+// penumbra bake: a scene's analytic height function as a height map.
+struct BakeArgs {
+  std::string scene, output;
+  std::vector<std::string> sets;
+  int size = 1024;
+  double extent = 1.0;
+};
+
 struct RunBatchArgs {
   std::string batch;
   int task = -1;  // default: SLURM_ARRAY_TASK_ID
@@ -134,6 +142,7 @@ int command_contour(const std::vector<std::string>& ids, double step, const std:
                     std::ostream& out);
 int command_bench(int size, int spp, std::ostream& out);
 int command_pyramid(const PyramidArgs& a, std::ostream& out);
+int command_bake(const BakeArgs& a, std::ostream& out);
 int command_filtering(const FilteringArgs& a, std::ostream& out, std::ostream& err);
 
 }  // namespace penumbra

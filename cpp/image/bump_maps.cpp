@@ -68,6 +68,21 @@ HeightMap read_height_map(const std::string& path, const std::string& channel) {
   return map;
 }
 
+Image bake_height_map(const HeightFunction& f, double amplitude, int size, double extent) {
+  if (size < 1 || !(extent > 0.0) || !std::isfinite(extent))
+    throw std::invalid_argument("baking needs size >= 1 and a finite extent > 0");
+  Image image;
+  image.width = image.height = size;
+  image.channels = {"Y"};
+  image.pixels.resize(std::size_t(size) * size);
+  const double t = extent / size;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x)
+      image.at(x, y, 0) =
+          float(amplitude * evaluate_height(f, Vec3((x + 0.5) * t, (size - y - 0.5) * t, 0.0)).h);
+  return image;
+}
+
 Image pyramid_level_image(const PyramidLevel& level) {
   Image image;
   image.width = level.width;

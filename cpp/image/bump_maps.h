@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/bump_pyramid.h"
+#include "core/height.h"
 #include "image/image.h"
 
 namespace penumbra {
@@ -23,6 +24,16 @@ struct HeightMap {
   std::string channel;         // the channel read
 };
 HeightMap read_height_map(const std::string& path, const std::string& channel = "");
+
+// An analytic height function baked into a size x size single-channel
+// ("Y") height map of the plane z = 0 over [0, extent)^2: texel (x, y) holds
+// amplitude * h(u, v, 0) at its centre, u = (x + 0.5) t along the columns
+// and v = (size - y - 0.5) t up the rows, t = extent / size (scene units),
+// so that `penumbra pyramid --texel-size t` gives offsets that approximate
+// amplitude * (dh/du, dh/dv) (central differences: a sine of k cycles per
+// unit is scaled by sin(2 pi k t) / (2 pi k t)). The map tiles only where
+// extent is a whole number of every term's periods.
+Image bake_height_map(const HeightFunction& f, double amplitude, int size, double extent);
 
 // How a pyramid was made, for its manifest.
 struct PyramidSource {

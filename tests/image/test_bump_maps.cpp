@@ -134,6 +134,39 @@ TEST_F(BumpMaps, SixteenBitPngHeightsAreReadAsTheirNormalisedValues) {
       EXPECT_NEAR(map.heights[y * 16 + x], ramp(x, y), 0.5 / 65535 + 1e-7);
 }
 
+// A baked grating (whole periods over the extent, so it tiles) gives the
+// analytic slope times the central difference's transfer sin(w t)/(w t),
+// along u for a grating in x and along v (up) for one in y: the bake and
+// the pyramid agree on the texel conventions.
+TEST_F(BumpMaps, BakedGratingsGiveTheAnalyticSlopes) {
+  const int size = 64;
+  const double extent = 1.0, t = extent / size, amplitude = 0.01, frequency = 4.0;
+  for (int axis = 0; axis < 2; ++axis) {
+    const Vec3 direction = axis == 0 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+    const HeightFunction f = make_grating(direction, frequency, 0.3);
+    const Image map = bake_height_map(f, amplitude, size, extent);
+    const PyramidLevel level = offsets_from_heights(map.pixels, size, size, t, 1.0, MapEdge::kWrap);
+    const double w = 2 * kPi * frequency, transfer = std::sin(w * t) / (w * t);
+    for (int y = 0; y < size; y += 7)
+      for (int x = 0; x < size; x += 5) {
+        const Vec3 p{(x + 0.5) * t, (size - y - 0.5) * t, 0.0};
+        const Vec3 g = evaluate_height(f, p).gradient * (amplitude * transfer);
+        EXPECT_NEAR(level.offset(x, y).f_u, g.x, 2e-5) << "axis " << axis;
+        EXPECT_NEAR(level.offset(x, y).f_v, g.y, 2e-5) << "axis " << axis;
+      }
+  }
+  const CliResult r =
+      run_penumbra({"bake", std::string(PENUMBRA_SOURCE_DIR) + "/scenes/cylinder-weave.json", "-o",
+                    path("weave.exr"), "--size", "32"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(read_height_map(path("weave.exr")).width, 32);
+  EXPECT_EQ(run_penumbra({"bake", std::string(PENUMBRA_SOURCE_DIR) + "/scenes/cylinder-weave.json",
+                          "-o", path("weave.png")})
+                .code,
+            2);
+  EXPECT_FALSE(fs::exists(path("weave.png")));
+}
+
 TEST_F(BumpMaps, BadHeightMapsExitTwoNamingTheFileAndWriteNothing) {
   const auto expect_refused = [&](const std::vector<std::string>& args, const std::string& says) {
     std::vector<std::string> full = {"pyramid"};
