@@ -192,14 +192,21 @@ std::vector<std::pair<int, int>> pick_footprints(const PyramidLevel& level, int 
 // Metrics of every (alpha, filter) at one footprint, [alpha][filter].
 using FootprintTable = std::vector<std::vector<FootprintMetrics>>;
 
-FootprintTable measure_footprint(const std::vector<PyramidLevel>& pyramid, int l, int x, int y,
+// A footprint: level l's texel (x, y), its square moved by (sx, sy) pixels.
+struct Footprint {
+  int level, x, y;
+  double sx, sy;
+};
+
+FootprintTable measure_footprint(const std::vector<PyramidLevel>& pyramid, const Footprint& fp,
                                  const FilteringOptions& o, const Sweep& sweep) {
+  const int l = fp.level;
   const std::size_t n_dir = sweep.wi.size();
   const Vec3 wo{std::sin(radians(o.view_deg)), 0.0, std::cos(radians(o.view_deg))};
   std::vector<std::vector<double>> reference(o.alphas.size(), std::vector<double>(n_dir, 0.0));
   const PyramidLevel& finest = pyramid[0];
   const double size = double(1L << l);
-  const double x0 = (x + o.shift) * size, y0 = (y + o.shift) * size;
+  const double x0 = (fp.x + fp.sx) * size, y0 = (fp.y + fp.sy) * size;
   for_each_covered(finest, x0, y0, size, [&](const Offset2& f, double weight) {
     const Vec3 n = world_normal(f.f_u, f.f_v);
     for (std::size_t a = 0; a < o.alphas.size(); ++a) {
@@ -300,22 +307,23 @@ FilteringResult run_filtering_experiment(
   check_options(pyramid, o);
   const Sweep sweep = make_sweep(o);
   const int levels = std::min<int>(o.max_level + 1, int(pyramid.size()));
-  struct Task {
-    int level, x, y;
-  };
-  std::vector<Task> tasks;
+  std::vector<Footprint> tasks;
   std::vector<std::size_t> level_begin;
+  std::mt19937_64 shifts(o.seed ^ 0x5eedf00dULL);
+  const auto draw = [&] { return o.random_shift ? double(shifts() >> 11) * 0x1.0p-53 : o.shift; };
   for (int l = 0; l < levels; ++l) {
     level_begin.push_back(tasks.size());
-    for (const auto& [x, y] : pick_footprints(pyramid[l], o.footprints, o.seed + l))
-      tasks.push_back({l, x, y});
+    for (const auto& [x, y] : pick_footprints(pyramid[l], o.footprints, o.seed + l)) {
+      const double sx = draw(), sy = draw();
+      tasks.push_back({l, x, y, sx, sy});
+    }
   }
   level_begin.push_back(tasks.size());
   std::vector<FootprintTable> tables(tasks.size());
   std::atomic<std::size_t> done{0};
   std::mutex progress_mutex;
   run_parallel(o.jobs, tasks.size(), [&](std::size_t t) {
-    tables[t] = measure_footprint(pyramid, tasks[t].level, tasks[t].x, tasks[t].y, o, sweep);
+    tables[t] = measure_footprint(pyramid, tasks[t], o, sweep);
     const std::size_t finished = ++done;
     if (progress) {
       const std::lock_guard lock(progress_mutex);

@@ -48,6 +48,9 @@ struct FilteringOptions {
   // [0, 1): 0 aligns each footprint with a texel of its level; otherwise
   // the reference covers the shifted square (partial texels by area).
   double shift = 0.0;
+  // Instead, each footprint's own shift, uniform in [0, 1)^2 from `seed`:
+  // the average over where a pixel can fall on the texel grid.
+  bool random_shift = false;
   // What the filters read: kBox, the exact moments of the footprint's
   // square (the mapping's own error, whatever the shift); kTrilinear, the
   // pyramid's trilinear lookup at its centre (sample_pyramid: what a

@@ -337,8 +337,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       ->capture_default_str();
   filtering_cmd
       ->add_option("--shift", filtering_args.shift,
-                   "pixel grid offset from the texel grid, pixels, [0, 1) (0: aligned)")
-      ->check(CLI::Range(0.0, 0.999))
+                   "pixel grid offset from the texel grid, pixels, [0, 1) (0: aligned), or "
+                   "random (each footprint its own, from the seed)")
       ->capture_default_str();
   filtering_cmd
       ->add_option("--lookup", filtering_args.lookup,

@@ -1418,7 +1418,20 @@ FilteringOptions filtering_options(const FilteringArgs& a) {
   o.footprints = a.footprints;
   o.view_deg = a.view_deg;
   o.sweep_step_deg = a.sweep_step_deg;
-  o.shift = a.shift;
+  if (a.shift == "random") {
+    o.random_shift = true;
+  } else {
+    std::size_t used = 0;
+    double shift = -1.0;
+    try {
+      shift = std::stod(a.shift, &used);
+    } catch (const std::exception&) {
+    }
+    if (used != a.shift.size() || !(shift >= 0.0 && shift < 1.0))
+      throw UsageError(fmt::format(
+          "--shift: expected a number of pixels in [0, 1) or \"random\", got \"{}\"", a.shift));
+    o.shift = shift;
+  }
   o.lookup = a.lookup == "trilinear" ? FilteringOptions::Lookup::kTrilinear
                                      : FilteringOptions::Lookup::kBox;
   o.jobs = a.jobs > 0 ? a.jobs : int(std::max(1u, std::thread::hardware_concurrency()));

@@ -105,7 +105,8 @@ struct FilteringArgs {
   std::vector<double> alphas;
   std::vector<std::string> filters;
   int max_level = 6, footprints = 32, jobs = 0;
-  double view_deg = 0.0, sweep_step_deg = 0.5, shift = 0.0;
+  double view_deg = 0.0, sweep_step_deg = 0.5;
+  std::string shift = "0";  // pixels in [0, 1), or "random"
   std::string lookup = "box";
 };
 

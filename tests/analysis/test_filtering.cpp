@@ -112,20 +112,25 @@ TEST(Filtering, HalfAPixelShiftKeepsTheSummaryWithExactFootprintMoments) {
   o.footprints = 24;
   const FilteringResult aligned = run_filtering_experiment(pyramid, o);
   o.shift = 0.5;
-  const FilteringResult shifted = run_filtering_experiment(pyramid, o);
-  for (const FilterSummary& a : aligned.summary)
-    for (const FilterSummary& b : shifted.summary) {
-      if (a.filter != b.filter) continue;
-      const auto close = [](const MeanWithInterval& x, const MeanWithInterval& y) {
-        const double spread =
-            (x.interval.high - x.interval.low) + (y.interval.high - y.interval.low);
-        return std::abs(x.mean - y.mean) <= spread;
-      };
-      EXPECT_TRUE(close(a.profile_error, b.profile_error))
-          << roughness_filter_info(a.filter).id << ": " << a.profile_error.mean << " vs "
-          << b.profile_error.mean;
-      EXPECT_TRUE(close(a.width_ratio, b.width_ratio)) << roughness_filter_info(a.filter).id;
-    }
+  const FilteringResult half = run_filtering_experiment(pyramid, o);
+  o.shift = 0.0;
+  o.random_shift = true;  // each footprint anywhere on the texel grid
+  const FilteringResult random = run_filtering_experiment(pyramid, o);
+  o.random_shift = false;
+  for (const FilteringResult* shifted : {&half, &random})
+    for (const FilterSummary& a : aligned.summary)
+      for (const FilterSummary& b : shifted->summary) {
+        if (a.filter != b.filter) continue;
+        const auto close = [](const MeanWithInterval& x, const MeanWithInterval& y) {
+          const double spread =
+              (x.interval.high - x.interval.low) + (y.interval.high - y.interval.low);
+          return std::abs(x.mean - y.mean) <= spread;
+        };
+        EXPECT_TRUE(close(a.profile_error, b.profile_error))
+            << roughness_filter_info(a.filter).id << ": " << a.profile_error.mean << " vs "
+            << b.profile_error.mean;
+        EXPECT_TRUE(close(a.width_ratio, b.width_ratio)) << roughness_filter_info(a.filter).id;
+      }
   o.shift = 0.0;
   o.lookup = FilteringOptions::Lookup::kTrilinear;
   const FilteringResult trilinear = run_filtering_experiment(pyramid, o);
