@@ -83,6 +83,74 @@ void add_map_options(CLI::App* cmd, PyramidArgs& a) {
       ->capture_default_str();
 }
 
+// `pyramid`, `bake` and `filtering`: the bump-map filtering commands.
+CLI::App* add_pyramid_command(CLI::App& app, PyramidArgs& pyramid_args) {
+  CLI::App* pyramid_cmd =
+      app.add_subcommand("pyramid",
+                         "a height map's bump (offset) and roughness pyramids, one EXR per level "
+                         "(Schilling; see README)");
+  add_map_options(pyramid_cmd, pyramid_args);
+  pyramid_cmd->add_flag("-q,--quiet", pyramid_args.quiet, "print nothing on success");
+  return pyramid_cmd;
+}
+
+CLI::App* add_bake_command(CLI::App& app, BakeArgs& bake_args) {
+  CLI::App* bake_cmd = app.add_subcommand(
+      "bake", "a scene's analytic height function (/height) as a height map of the plane z = 0");
+  bake_cmd->add_option("scene", bake_args.scene, "scene file (JSON)")->required();
+  bake_cmd->add_option("-o,--output", bake_args.output, "height map (.exr)")->required();
+  bake_cmd->add_option("--set", bake_args.sets, "JSON-pointer override, /pointer=VALUE");
+  bake_cmd->add_option("--size", bake_args.size, "texels a side")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
+  bake_cmd->add_option("--extent", bake_args.extent, "side of the baked square, scene units")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  return bake_cmd;
+}
+
+CLI::App* add_filtering_command(CLI::App& app, FilteringArgs& filtering_args) {
+  CLI::App* filtering_cmd = app.add_subcommand(
+      "filtering",
+      "the bump-filtering experiment (RTG Fig. 12-6) on a height map: each roughness "
+      "filter against the unfiltered footprint, 1 to 64 texels per pixel");
+  add_map_options(filtering_cmd, filtering_args.map);
+  filtering_cmd->add_option("--alpha", filtering_args.alphas,
+                            "base GGX alpha (repeatable; default 0.01 0.05 0.1 0.2 0.4 0.8)");
+  filtering_cmd->add_option("--filter", filtering_args.filters,
+                            "roughness filter id (repeatable; default: every measurable one)");
+  filtering_cmd
+      ->add_option("--max-level", filtering_args.max_level,
+                   "coarsest level measured (2^level texels per pixel side)")
+      ->check(CLI::Range(0, 16))
+      ->capture_default_str();
+  filtering_cmd->add_option("--footprints", filtering_args.footprints, "footprints per level")
+      ->check(CLI::Range(2, 100000))
+      ->capture_default_str();
+  filtering_cmd->add_option("--view", filtering_args.view_deg, "view zenith angle, degrees")
+      ->check(CLI::Range(0.0, 80.0))
+      ->capture_default_str();
+  filtering_cmd
+      ->add_option("--sweep-step", filtering_args.sweep_step_deg, "light sweep step, degrees")
+      ->check(CLI::Range(0.05, 10.0))
+      ->capture_default_str();
+  filtering_cmd
+      ->add_option("--shift", filtering_args.shift,
+                   "pixel grid offset from the texel grid, pixels, [0, 1) (0: aligned), or "
+                   "random (each footprint its own, from the seed)")
+      ->capture_default_str();
+  filtering_cmd
+      ->add_option("--lookup", filtering_args.lookup,
+                   "what the filters read: box (the footprint's exact moments) or trilinear "
+                   "(the pyramid's mip-map lookup)")
+      ->check(CLI::IsMember({"box", "trilinear"}))
+      ->capture_default_str();
+  filtering_cmd->add_option("--jobs", filtering_args.jobs, "threads (default: all cores)")
+      ->check(CLI::NonNegativeNumber);
+  filtering_cmd->add_flag("-q,--quiet", filtering_args.map.quiet, "print nothing on success");
+  return filtering_cmd;
+}
+
 }  // namespace
 
 int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
@@ -290,65 +358,11 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   bench->add_option("--spp", bench_spp, "samples per pixel")->check(CLI::Range(1, 1024));
 
   PyramidArgs pyramid_args;
-  CLI::App* pyramid_cmd =
-      app.add_subcommand("pyramid",
-                         "a height map's bump (offset) and roughness pyramids, one EXR per level "
-                         "(Schilling; see README)");
-  add_map_options(pyramid_cmd, pyramid_args);
-  pyramid_cmd->add_flag("-q,--quiet", pyramid_args.quiet, "print nothing on success");
-
+  CLI::App* pyramid_cmd = add_pyramid_command(app, pyramid_args);
   BakeArgs bake_args;
-  CLI::App* bake_cmd = app.add_subcommand(
-      "bake", "a scene's analytic height function (/height) as a height map of the plane z = 0");
-  bake_cmd->add_option("scene", bake_args.scene, "scene file (JSON)")->required();
-  bake_cmd->add_option("-o,--output", bake_args.output, "height map (.exr)")->required();
-  bake_cmd->add_option("--set", bake_args.sets, "JSON-pointer override, /pointer=VALUE");
-  bake_cmd->add_option("--size", bake_args.size, "texels a side")
-      ->check(CLI::Range(1, 16384))
-      ->capture_default_str();
-  bake_cmd->add_option("--extent", bake_args.extent, "side of the baked square, scene units")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-
+  CLI::App* bake_cmd = add_bake_command(app, bake_args);
   FilteringArgs filtering_args;
-  CLI::App* filtering_cmd = app.add_subcommand(
-      "filtering",
-      "the bump-filtering experiment (RTG Fig. 12-6) on a height map: each roughness "
-      "filter against the unfiltered footprint, 1 to 64 texels per pixel");
-  add_map_options(filtering_cmd, filtering_args.map);
-  filtering_cmd->add_option("--alpha", filtering_args.alphas,
-                            "base GGX alpha (repeatable; default 0.01 0.05 0.1 0.2 0.4 0.8)");
-  filtering_cmd->add_option("--filter", filtering_args.filters,
-                            "roughness filter id (repeatable; default: every measurable one)");
-  filtering_cmd
-      ->add_option("--max-level", filtering_args.max_level,
-                   "coarsest level measured (2^level texels per pixel side)")
-      ->check(CLI::Range(0, 16))
-      ->capture_default_str();
-  filtering_cmd->add_option("--footprints", filtering_args.footprints, "footprints per level")
-      ->check(CLI::Range(2, 100000))
-      ->capture_default_str();
-  filtering_cmd->add_option("--view", filtering_args.view_deg, "view zenith angle, degrees")
-      ->check(CLI::Range(0.0, 80.0))
-      ->capture_default_str();
-  filtering_cmd
-      ->add_option("--sweep-step", filtering_args.sweep_step_deg, "light sweep step, degrees")
-      ->check(CLI::Range(0.05, 10.0))
-      ->capture_default_str();
-  filtering_cmd
-      ->add_option("--shift", filtering_args.shift,
-                   "pixel grid offset from the texel grid, pixels, [0, 1) (0: aligned), or "
-                   "random (each footprint its own, from the seed)")
-      ->capture_default_str();
-  filtering_cmd
-      ->add_option("--lookup", filtering_args.lookup,
-                   "what the filters read: box (the footprint's exact moments) or trilinear "
-                   "(the pyramid's mip-map lookup)")
-      ->check(CLI::IsMember({"box", "trilinear"}))
-      ->capture_default_str();
-  filtering_cmd->add_option("--jobs", filtering_args.jobs, "threads (default: all cores)")
-      ->check(CLI::NonNegativeNumber);
-  filtering_cmd->add_flag("-q,--quiet", filtering_args.map.quiet, "print nothing on success");
+  CLI::App* filtering_cmd = add_filtering_command(app, filtering_args);
 
   for (CLI::App* sub : app.get_subcommands({})) sub->footer(kExitCodes);
   if (const auto unknown = unknown_subcommand(app, argc, argv)) {

@@ -1352,18 +1352,19 @@ MapEdge parse_edge(const PyramidArgs& a) {
   throw UsageError(fmt::format("--edge: expected wrap or clamp, got \"{}\"", a.edge));
 }
 
-void check_map_args(const PyramidArgs& a) {
-  parse_edge(a);
+// The edge mode, after checking the map options CLI11 cannot.
+MapEdge check_map_args(const PyramidArgs& a) {
+  const MapEdge edge = parse_edge(a);
   if (!std::isfinite(a.height_scale))
     throw UsageError(
         fmt::format("--height-scale: expected a finite number, got {}", a.height_scale));
+  return edge;
 }
 
 }  // namespace
 
 int command_pyramid(const PyramidArgs& a, std::ostream& out) {
-  check_map_args(a);
-  const MapEdge edge = parse_edge(a);
+  const MapEdge edge = check_map_args(a);
   const auto start = std::chrono::steady_clock::now();
   const HeightMap map = read_height_map(a.heights, a.channel);
   const double texel_size = a.texel_size > 0.0 ? a.texel_size : 1.0 / map.width;
@@ -1441,7 +1442,7 @@ FilteringOptions filtering_options(const FilteringArgs& a) {
 }  // namespace
 
 int command_filtering(const FilteringArgs& a, std::ostream& out, std::ostream& err) {
-  check_map_args(a.map);
+  const MapEdge edge = check_map_args(a.map);
   const FilteringOptions options = filtering_options(a);
   const HeightMap map = read_height_map(a.map.heights, a.map.channel);
   std::error_code ec;
@@ -1449,7 +1450,7 @@ int command_filtering(const FilteringArgs& a, std::ostream& out, std::ostream& e
   check_writable((fs::path(a.map.output) / "filtering.json").string());
   const double texel_size = a.map.texel_size > 0.0 ? a.map.texel_size : 1.0 / map.width;
   const std::vector<PyramidLevel> pyramid = build_bump_pyramid(offsets_from_heights(
-      map.heights, map.width, map.height, texel_size, a.map.height_scale, parse_edge(a.map)));
+      map.heights, map.width, map.height, texel_size, a.map.height_scale, edge));
   const auto start = std::chrono::steady_clock::now();
   std::size_t reported = 0;
   const FilteringResult result =
