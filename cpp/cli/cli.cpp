@@ -96,7 +96,9 @@ CLI::App* add_pyramid_command(CLI::App& app, PyramidArgs& pyramid_args) {
 
 CLI::App* add_bake_command(CLI::App& app, BakeArgs& bake_args) {
   CLI::App* bake_cmd = app.add_subcommand(
-      "bake", "a scene's analytic height function (/height) as a height map of the plane z = 0");
+      "bake",
+      "a scene's analytic height function (/height) as a height map of the plane z = 0, or as a "
+      "height or normal map over its shape's (u, v)");
   bake_cmd->add_option("scene", bake_args.scene, "scene file (JSON)")->required();
   bake_cmd->add_option("-o,--output", bake_args.output, "height map (.exr)")->required();
   bake_cmd->add_option("--set", bake_args.sets, "JSON-pointer override, /pointer=VALUE");
@@ -105,6 +107,19 @@ CLI::App* add_bake_command(CLI::App& app, BakeArgs& bake_args) {
       ->capture_default_str();
   bake_cmd->add_option("--extent", bake_args.extent, "side of the baked square, scene units")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  bake_cmd
+      ->add_option("--on", bake_args.on,
+                   "plane: the plane z = 0 (for penumbra pyramid and filtering); shape: the "
+                   "scene's cylinder or sphere over its map parameters (u, v), --size texels "
+                   "around and as many along v as keep texels square")
+      ->check(CLI::IsMember({"plane", "shape"}))
+      ->capture_default_str();
+  bake_cmd
+      ->add_option("--kind", bake_args.kind,
+                   "height: amplitude * h in scene units (channel Y); normal: the exact bump "
+                   "normal as a tangent-space normal map (R, G, B = 0.5 n + 0.5; --on shape only)")
+      ->check(CLI::IsMember({"height", "normal"}))
       ->capture_default_str();
   return bake_cmd;
 }

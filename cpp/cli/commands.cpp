@@ -112,7 +112,11 @@ json renderer_json(const RendererInfo& info) {
           {"methods_why_not", info.methods_why_not},
           {"offsets", offset_ids(offsets_offered(info.kind))},
           {"offsets_why_not", info.offsets_why_not},
-          {"props", info.props}};
+          {"props", info.props},
+          {"image_maps", info.image_maps},
+          {"image_maps_why_not", info.image_maps_why_not},
+          {"plane", info.plane},
+          {"plane_why_not", info.plane_why_not}};
 }
 
 }  // namespace
@@ -142,6 +146,8 @@ int command_renderers(bool as_json, std::ostream& out) {
     if (*info.methods_why_not) out << fmt::format("  why not more: {}\n", info.methods_why_not);
     if (*info.props_why_not) out << fmt::format("  props: {}\n", info.props_why_not);
     if (*info.specular_why_not) out << fmt::format("  glossy: {}\n", info.specular_why_not);
+    if (*info.image_maps_why_not) out << fmt::format("  image maps: {}\n", info.image_maps_why_not);
+    if (*info.plane_why_not) out << fmt::format("  plane: {}\n", info.plane_why_not);
   }
   return kExitOk;
 }
@@ -286,8 +292,9 @@ void add_roughness_filters(json& list) {
 
 void print_roughness_filters(std::ostream& out) {
   out << fmt::format(
-      "\nRoughness filters (bump-map filtering; `penumbra pyramid` builds their input; the "
-      "lobe they give is a slope-space alpha^2 tensor A on the named distribution):\n{:<24} "
+      "\nRoughness filters (bump-map filtering: a scene's /height/filter and `penumbra "
+      "filtering`; `penumbra pyramid` builds their input; the lobe they give is a slope-space "
+      "alpha^2 tensor A on the named distribution):\n{:<24} "
       "{:<40} {}\n",
       "id", "distribution", "source");
   for (const RoughnessFilterInfo& f : all_roughness_filters()) {
@@ -414,6 +421,7 @@ int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
         fmt::format("--renderer: expected evaluator, povray or blender, got \"{}\"", a.renderer));
   const std::vector<Override> overrides = collect_overrides(a.scene_args);
   json document = read_json_file(a.scene);
+  resolve_map_files(document, a.scene);
   const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
   apply_overrides(document, overrides, origin);
   const Scene scene = scene_from_json(document, origin);
@@ -484,6 +492,7 @@ int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
 int command_export(const ExportArgs& a, std::ostream& out) {
   const std::vector<Override> overrides = collect_overrides(a.scene_args);
   json document = read_json_file(a.scene);
+  resolve_map_files(document, a.scene);
   const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
   apply_overrides(document, overrides, origin);
   const Scene scene = scene_from_json(document, origin);
@@ -654,6 +663,8 @@ std::vector<std::string> scene_differences(const std::string& reference, const s
     for (const char* key : {"camera", "light", "shape", "height"})
       if (scene.is_object() && scene.contains(key)) out[key] = scene[key];
     if (out.contains("shape") && out["shape"].is_object()) out["shape"].erase("tessellation");
+    // A filter changes how the bumps are shaded, not which surface it is.
+    if (out.contains("height") && out["height"].is_object()) out["height"].erase("filter");
     if (out.contains("camera") && out["camera"].is_object())
       for (const char* key : {"spp", "seed"}) out["camera"].erase(key);
     return out;
@@ -1480,18 +1491,48 @@ int command_filtering(const FilteringArgs& a, std::ostream& out, std::ostream& e
   return kExitOk;
 }
 
+namespace {
+
+// --on shape: the map over the shape's (u, v), texels as square as the
+// parameterisation allows (on the sphere, at the equator).
+int bake_on_shape(const BakeArgs& a, const Scene& scene, std::ostream& out) {
+  const Shape& s = scene.shape;
+  const MapLengths lengths = map_lengths(s);
+  const int rows =
+      std::clamp(static_cast<int>(std::lround(a.size * lengths.v / lengths.u)), 1, kMaxImageSize);
+  const MapKind kind = a.kind == "normal" ? MapKind::kNormal : MapKind::kHeight;
+  const Image map =
+      bake_surface_map(s, scene.height.function, scene.height.amplitude, a.size, rows, kind);
+  write_exr(map, a.output, {{"penumbra:baked_from", a.scene}});
+  const std::string use =
+      kind == MapKind::kHeight
+          ? fmt::format(R"({{"type": "height-map", "file": "{}", "amplitude": 1}})", a.output)
+          : fmt::format(R"({{"type": "normal-map", "file": "{}"}})", a.output);
+  out << fmt::format("wrote {} ({}x{} over the {}'s (u, v)): use it as /height = {}\n", a.output,
+                     a.size, rows, name_of<ShapeType>(kShapeTypeNames, s.type), use);
+  return kExitOk;
+}
+
+}  // namespace
+
 int command_bake(const BakeArgs& a, std::ostream& out) {
   SceneArgs scene_args;
   scene_args.sets = a.sets;
   const std::vector<Override> overrides = collect_overrides(scene_args);
   json document = read_json_file(a.scene);
+  resolve_map_files(document, a.scene);
   const std::string origin = overrides.empty() ? a.scene : a.scene + " (after --set)";
   apply_overrides(document, overrides, origin);
   const Scene scene = scene_from_json(document, origin);
-  if (scene.height.family == HeightFamily::kNone)
-    throw InputError(origin, "/height", "expected a height function to bake, got none");
-  check_extension(a.output, ".exr", "-o", ": a baked height map is float OpenEXR");
+  if (scene.height.family == HeightFamily::kNone || scene.height.map)
+    throw InputError(origin, "/height",
+                     fmt::format("expected an analytic height function to bake, got \"{}\"",
+                                 to_string(scene.height.family)));
+  check_extension(a.output, ".exr", "-o", ": a baked map is float OpenEXR");
+  if (a.kind == "normal" && a.on != "shape")
+    throw InputError("--kind", "", "a normal map is baked over a shape: add --on shape");
   check_writable(a.output);
+  if (a.on == "shape") return bake_on_shape(a, scene, out);
   const Image map =
       bake_height_map(scene.height.function, scene.height.amplitude, a.size, a.extent);
   write_exr(map, a.output, {{"penumbra:baked_from", a.scene}});

@@ -116,6 +116,8 @@ struct BakeArgs {
   std::vector<std::string> sets;
   int size = 1024;
   double extent = 1.0;
+  std::string on = "plane";     // "plane": z = 0 over [0, extent)^2; "shape": the shape's (u, v)
+  std::string kind = "height";  // "height" or "normal" (shape only)
 };
 
 struct RunBatchArgs {

@@ -1,5 +1,7 @@
 #include "core/bsdf.h"
 
+#include "core/filtered_lobe.h"
+
 #include <cmath>
 
 namespace penumbra {
@@ -33,7 +35,12 @@ LobeValues evaluate_lobes(const Material& m, const Vec3& ns, const Vec3& wi, con
   // Lambert does not look at wo, as in POV-Ray and Cycles: a bump normal
   // turned away from the viewer still shows diffuse light.
   out.diffuse = (1.0 - m.specular_weight) * m.albedo * kInvPi;
-  if (m.specular_weight > 0.0 && cos_theta_o > 0.0) {
+  if (m.specular_weight > 0.0 && cos_theta_o > 0.0 && m.filtered.active) {
+    const Vec3 t = normalize(m.filtered.tangent - ns * dot(ns, m.filtered.tangent));
+    const Frame frame{t, cross(ns, t), ns};
+    out.specular = m.specular_weight * lobe_brdf(m.filtered.distribution, m.filtered.alpha2,
+                                                 frame.to_local(wi), frame.to_local(wo));
+  } else if (m.specular_weight > 0.0 && cos_theta_o > 0.0) {
     const Vec3 half = normalize(wi + wo);
     out.specular = m.specular_weight * ggx_d(dot(ns, half), m.specular_roughness) *
                    ggx_g2(cos_theta_i, cos_theta_o, m.specular_roughness) /

@@ -1,9 +1,20 @@
 // Material lobes in the shading frame of Ns. Values are BSDF values (1/sr).
 #pragma once
 
+#include "core/roughness_filter.h"
 #include "core/vec.h"
 
 namespace penumbra {
+
+// A specular lobe widened by a roughness filter (roughness_filter.h) for
+// one shading point: replaces the isotropic GGX of specular_roughness with
+// `alpha2` in the frame (tangent projected onto Ns, Ns x that, Ns).
+struct FilteredSpecular {
+  bool active = false;
+  FilteredDistribution distribution = FilteredDistribution::kGgx;
+  Covariance2 alpha2;
+  Vec3 tangent;
+};
 
 // Diffuse albedo plus an optional GGX specular lobe. Fresnel is left out
 // (F = 1) on purpose: the lobe exists so that a study can choose whether a
@@ -12,6 +23,7 @@ struct Material {
   double albedo = 0.8;              // diffuse reflectance, [0,1]
   double specular_weight = 0.0;     // [0,1]; diffuse is scaled by 1 - weight
   double specular_roughness = 0.3;  // GGX alpha, (0,1]
+  FilteredSpecular filtered;        // set per sample by a filtered map, never by a scene
 };
 
 // GGX normal distribution D(m) for cos_theta_m = dot(m, n) (Walter et al. 2007).

@@ -8,11 +8,21 @@ namespace penumbra {
 GridResolution grid_resolution(const Shape& shape, double edge, double reach) {
   const double r = shape.radius + reach;
   GridResolution g;
+  if (shape.type == ShapeType::kPlane) {
+    g.nu = std::max(1u, static_cast<unsigned>(std::ceil(shape.width / edge)));
+    g.nv = std::max(1u, static_cast<unsigned>(std::ceil(shape.height / edge)));
+    return g;
+  }
   g.nu = std::max(8u, static_cast<unsigned>(std::ceil(2.0 * kPi * r / edge)));
   g.nv = shape.type == ShapeType::kSphere
              ? std::max(4u, static_cast<unsigned>(std::ceil(kPi * r / edge)))
              : std::max(1u, static_cast<unsigned>(std::ceil(shape.height / edge)));
   return g;
+}
+
+double grid_u(const Shape& shape, GridResolution r, unsigned i) {
+  return shape.type == ShapeType::kPlane ? -0.5 * shape.width + shape.width * i / r.nu
+                                         : 2.0 * kPi * i / r.nu;
 }
 
 double grid_v(const Shape& shape, GridResolution r, unsigned j) {
@@ -26,6 +36,7 @@ namespace {
 struct GridWriter {
   const Shape& shape;
   const HeightFunction& height;
+  const SurfaceMap* map;
   double amplitude;
   GridResolution res;
   TriangleMesh mesh;
@@ -39,7 +50,7 @@ struct GridWriter {
   // The displaced surface point and normal at (u, v).
   void vertex(std::size_t index, double u, double v) {
     const SurfaceGeometry g = surface_at(shape, u, v);
-    const HeightSample h = evaluate_height(height, g.p);
+    const HeightSample h = height_at(height, map, shape, g);
     put(index, displaced_point(g, amplitude, h), displaced_normal(g, amplitude, h));
   }
   void tri(std::size_t t, std::size_t a, std::size_t b, std::size_t c) {
@@ -65,7 +76,8 @@ void sphere_grid(GridWriter& w) {
   w.vertex(vertex_count - 1, 0.0, kPi);
   for (unsigned j = 1; j < nv; ++j)
     for (unsigned i = 0; i < nu; ++i)
-      w.vertex(1 + std::size_t(j - 1) * nu + i, grid_u(w.res, i), grid_v(w.shape, w.res, j));
+      w.vertex(1 + std::size_t(j - 1) * nu + i, grid_u(w.shape, w.res, i),
+               grid_v(w.shape, w.res, j));
   auto ring = [&](unsigned j, unsigned i) { return 1 + std::size_t(j - 1) * nu + (i % nu); };
   const std::size_t south = vertex_count - 1;
   for (unsigned i = 0; i < nu; ++i) {
@@ -113,7 +125,7 @@ void cylinder_grid(GridWriter& w) {
            side_triangles + (caps ? 2 * nu : 0));
   for (unsigned j = 0; j <= nv; ++j)
     for (unsigned i = 0; i < nu; ++i)
-      w.vertex(std::size_t(j) * nu + i, grid_u(w.res, i), grid_v(w.shape, w.res, j));
+      w.vertex(std::size_t(j) * nu + i, grid_u(w.shape, w.res, i), grid_v(w.shape, w.res, j));
   auto at = [&](unsigned j, unsigned i) { return std::size_t(j) * nu + (i % nu); };
   for (unsigned j = 0; j < nv; ++j)
     for (unsigned i = 0; i < nu; ++i) {
@@ -124,15 +136,39 @@ void cylinder_grid(GridWriter& w) {
   if (caps) cylinder_caps(w, side_triangles);
 }
 
+// (nu + 1) x (nv + 1) vertices, no wrap.
+void plane_grid(GridWriter& w) {
+  const unsigned nu = w.res.nu, nv = w.res.nv;
+  const std::size_t triangles = 2 * std::size_t(nu) * nv;
+  w.resize(std::size_t(nu + 1) * (nv + 1), triangles, triangles);
+  for (unsigned j = 0; j <= nv; ++j)
+    for (unsigned i = 0; i <= nu; ++i)
+      w.vertex(std::size_t(j) * (nu + 1) + i, grid_u(w.shape, w.res, i), grid_v(w.shape, w.res, j));
+  auto at = [&](unsigned j, unsigned i) { return std::size_t(j) * (nu + 1) + i; };
+  for (unsigned j = 0; j < nv; ++j)
+    for (unsigned i = 0; i < nu; ++i) {
+      const std::size_t t = 2 * (std::size_t(j) * nu + i);
+      w.tri(t, at(j, i), at(j, i + 1), at(j + 1, i + 1));
+      w.tri(t + 1, at(j, i), at(j + 1, i + 1), at(j + 1, i));
+    }
+}
+
 }  // namespace
 
 TriangleMesh make_grid_mesh(const Shape& shape, const HeightFunction& height, double amplitude,
-                            GridResolution res) {
-  GridWriter w{shape, height, amplitude, res, {}};
-  if (shape.type == ShapeType::kSphere)
-    sphere_grid(w);
-  else
-    cylinder_grid(w);
+                            GridResolution res, const SurfaceMap* map) {
+  GridWriter w{shape, height, map, amplitude, res, {}};
+  switch (shape.type) {
+    case ShapeType::kSphere:
+      sphere_grid(w);
+      break;
+    case ShapeType::kCylinder:
+      cylinder_grid(w);
+      break;
+    case ShapeType::kPlane:
+      plane_grid(w);
+      break;
+  }
   return std::move(w.mesh);
 }
 

@@ -9,6 +9,8 @@
 //    vertices, with their own rim vertices so that their normals stay flat.
 //  sphere: pole 0, rings j = 1..nv-1 at 1 + (j-1) nu + i, pole last;
 //    triangles: top fan [0, nu), quads, bottom fan.
+//  plane: vertex (i, j) = j*(nu+1) + i, i in [0, nu], j in [0, nv]; quad
+//    (i, j) -> triangles 2 (j nu + i) + {0, 1}, split as the cylinder's.
 #pragma once
 
 #include <cstddef>
@@ -16,12 +18,13 @@
 
 #include "core/height.h"
 #include "core/shape.h"
+#include "core/surface_map.h"
 
 namespace penumbra {
 
 struct GridResolution {
-  unsigned nu = 0;  // segments around (azimuth)
-  unsigned nv = 0;  // segments along the axis (cylinder) or pole to pole (sphere)
+  unsigned nu = 0;  // segments around (azimuth), or along the plane's width
+  unsigned nv = 0;  // segments along the axis (cylinder), pole to pole (sphere), the plane's height
 };
 
 // Segments so that no edge of the displaced grid is much longer than `edge`
@@ -38,15 +41,15 @@ struct TriangleMesh {
 };
 
 // The displaced surface P + A h(P) N(P) (A = 0: the base surface), its
-// vertex normals the exact normals of that surface. Shape must carry its
+// vertex normals the exact normals of that surface; h is the height map
+// `map` where one is given (height_at), else `height`. Shape must carry its
 // frame (with_frame).
 TriangleMesh make_grid_mesh(const Shape& shape, const HeightFunction& height, double amplitude,
-                            GridResolution resolution);
+                            GridResolution resolution, const SurfaceMap* map = nullptr);
 
-// Grid parameters of vertex column i and row j (see the layout above).
-inline double grid_u(GridResolution r, unsigned i) {
-  return 2.0 * kPi * i / r.nu;
-}
+// Grid parameters (surface_at's u and v) of vertex column i and row j (see
+// the layout above).
+double grid_u(const Shape& shape, GridResolution r, unsigned i);
 double grid_v(const Shape& shape, GridResolution r, unsigned j);
 
 }  // namespace penumbra

@@ -57,6 +57,25 @@ SurfaceGeometry sphere_at_direction(const Shape& s, const Vec3& local_n) {
   return g;
 }
 
+SurfaceGeometry plane_at(const Shape& s, double x, double y) {
+  SurfaceGeometry g;
+  g.n = s.axis;
+  g.p = s.center + s.frame.s * x + s.frame.t * y;
+  g.t1 = s.frame.s;
+  g.t2 = s.frame.t;
+  return g;
+}
+
+// The plane's hit distance along a local ray, or a negative value when the
+// ray is parallel to it or misses the rectangle.
+double plane_hit(const Shape& s, const Vec3& o, const Vec3& d) {
+  if (d.z == 0.0) return -1.0;
+  const double t = -o.z / d.z;
+  const double x = o.x + t * d.x, y = o.y + t * d.y;
+  if (std::abs(x) > 0.5 * s.width || std::abs(y) > 0.5 * s.height) return -1.0;
+  return t;
+}
+
 // Candidate hits in ascending t; calls visit(t, kind) for each, kind 0 side,
 // +1 / -1 caps. Stops when visit returns true.
 template <typename Visit>
@@ -105,6 +124,13 @@ Shape with_frame(Shape shape) {
 bool intersect(const Shape& s, const Ray& ray, double t_min, double t_max, Hit* hit) {
   const Vec3 o = s.frame.to_local(ray.origin - s.center);
   const Vec3 d = s.frame.to_local(ray.direction);
+  if (s.type == ShapeType::kPlane) {
+    const double t = plane_hit(s, o, d);
+    if (!(t > t_min && t < t_max)) return false;
+    hit->t = t;
+    hit->geometry = plane_at(s, o.x + t * d.x, o.y + t * d.y);
+    return true;
+  }
   if (s.type == ShapeType::kSphere) {
     double t0, t1;
     if (!solve_quadratic(dot(d, d), dot(o, d), dot(o, o) - s.radius * s.radius, &t0, &t1))
@@ -130,6 +156,10 @@ bool intersect(const Shape& s, const Ray& ray, double t_min, double t_max, Hit* 
 bool occluded(const Shape& s, const Ray& ray, double t_min, double t_max) {
   const Vec3 o = s.frame.to_local(ray.origin - s.center);
   const Vec3 d = s.frame.to_local(ray.direction);
+  if (s.type == ShapeType::kPlane) {
+    const double t = plane_hit(s, o, d);
+    return t > t_min && t < t_max;
+  }
   if (s.type == ShapeType::kSphere) {
     double t0, t1;
     if (!solve_quadratic(dot(d, d), dot(o, d), dot(o, o) - s.radius * s.radius, &t0, &t1))
@@ -147,7 +177,8 @@ bool occluded(const Shape& s, const Ray& ray, double t_min, double t_max) {
 SurfaceGeometry surface_at(const Shape& s, double u, double v) {
   const double sin_v = std::sin(v);
   SurfaceGeometry g =
-      s.type == ShapeType::kSphere
+      s.type == ShapeType::kPlane ? plane_at(s, u, v)
+      : s.type == ShapeType::kSphere
           ? sphere_at_direction(s, {sin_v * std::cos(u), sin_v * std::sin(u), std::cos(v)})
           : cylinder_side(s, {std::cos(u), std::sin(u), v});
   g.u = u;
@@ -158,6 +189,9 @@ SurfaceGeometry surface_at(const Shape& s, double u, double v) {
 SurfaceGeometry base_geometry_under(const Shape& s, const Vec3& p, int cap) {
   const Vec3 local = s.frame.to_local(p - s.center);
   if (cap != 0) return cylinder_cap(s, local, cap);
+  if (s.type == ShapeType::kPlane)
+    return plane_at(s, std::clamp(local.x, -0.5 * s.width, 0.5 * s.width),
+                    std::clamp(local.y, -0.5 * s.height, 0.5 * s.height));
   if (s.type == ShapeType::kSphere) return sphere_at_direction(s, normalize(local));
   return cylinder_side(s, {local.x, local.y, std::clamp(local.z, -0.5 * s.height, 0.5 * s.height)});
 }

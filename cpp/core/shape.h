@@ -13,20 +13,25 @@ struct Ray {
   Vec3 direction;  // unit length
 };
 
-enum class ShapeType { kCylinder, kSphere };
+enum class ShapeType { kCylinder, kSphere, kPlane };
 inline constexpr EnumName<ShapeType> kShapeTypeNames[] = {{"cylinder", ShapeType::kCylinder},
-                                                          {"sphere", ShapeType::kSphere}};
+                                                          {"sphere", ShapeType::kSphere},
+                                                          {"plane", ShapeType::kPlane}};
 
 // Cylinder: side of the given radius around `axis` through `center`, from
 // -height/2 to +height/2 along the axis, optionally closed by flat caps.
 // Sphere: `radius` around `center`; `axis` only fixes its (u, v)
 // parameterisation (poles on the axis).
+// Plane: a width x height rectangle through `center` with normal `axis`,
+// spanning frame.s (width) and frame.t (height); its `radius` is half its
+// longer side, the size scale every epsilon and default edge length uses.
 struct Shape {
   ShapeType type = ShapeType::kSphere;
   Vec3 center;
   Vec3 axis{0, 1, 0};  // unit length
   double radius = 1.0;
   double height = 2.0;
+  double width = 2.0;  // plane only
   bool caps = false;
 
   // Frame whose n is the axis; set by with_frame() before intersecting.
@@ -43,7 +48,8 @@ struct SurfaceGeometry {
   double kappa1 = 0.0, kappa2 = 0.0;
   // Parameters of the displaceable part: cylinder side u = azimuth in
   // [0, 2 pi), v = axial coordinate in [-height/2, height/2]; sphere
-  // u = azimuth in [0, 2 pi), v = polar angle from +axis in [0, pi].
+  // u = azimuth in [0, 2 pi), v = polar angle from +axis in [0, pi];
+  // plane u, v = coordinates along frame.s and frame.t from the centre.
   // Set by surface_at(); intersect() leaves them 0 (no renderer needs them
   // there, and the azimuth costs an atan2 per camera ray).
   double u = 0.0, v = 0.0;
@@ -66,7 +72,8 @@ SurfaceGeometry surface_at(const Shape& shape, double u, double v);
 
 // Geometry of the base surface under a point near it: its radial projection
 // onto the sphere or the cylinder side (cap = 0), or onto a cap (cap = +1 top,
-// -1 bottom). For mesh hits: the analytic point a tessellation approximates.
+// -1 bottom); on the plane, the orthogonal projection, clamped to the
+// rectangle. For mesh hits: the analytic point a tessellation approximates.
 // Leaves u and v at 0, like intersect().
 SurfaceGeometry base_geometry_under(const Shape& shape, const Vec3& p, int cap = 0);
 

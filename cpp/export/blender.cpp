@@ -80,6 +80,7 @@ void check_blender_scene(const Scene& scene) {
     throw ExportError("Blender export supports Lambertian materials only (specular_weight 0)");
   if (!scene.props.empty())
     throw ExportError("Blender export: props are evaluator-only (remove /props)");
+  refuse_unoffered(scene, RendererKind::kBlender, "Blender");
   // Cycles' object "Geometry Offset" is its only shadow-ray offset; 0 turns
   // it off, which is `none`.
   if (!offers(RendererKind::kBlender, scene.offset.method))

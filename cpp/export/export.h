@@ -22,6 +22,16 @@ class ExportError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Refuses, with the renderer table's reason, the scene features the table
+// says renderer `r` (exported as `name`) cannot render: image maps, the plane.
+inline void refuse_unoffered(const Scene& scene, RendererKind r, const char* name) {
+  const RendererInfo& info = renderer_info(r);
+  if (scene.height.map && !info.image_maps)
+    throw ExportError(std::string(name) + " export: " + info.image_maps_why_not);
+  if (scene.shape.type == ShapeType::kPlane && !info.plane)
+    throw ExportError(std::string(name) + " export: " + info.plane_why_not);
+}
+
 // ---- POV-Ray 3.7 ----------------------------------------------------------
 
 // POV-Ray renders supersample_x * supersample_y samples per pixel as an

@@ -111,6 +111,7 @@ void check_povray_scene(const Scene& scene) {
     throw ExportError("POV-Ray export supports Lambertian materials only (specular_weight 0)");
   if (!scene.props.empty())
     throw ExportError("POV-Ray export: props are evaluator-only (remove /props)");
+  refuse_unoffered(scene, RendererKind::kPovray, "POV-Ray");
   // POV-Ray starts shadow rays at the hit itself: the smooth-shading
   // terminator cannot be moved there (reference sheet, section 6).
   if (!offers(RendererKind::kPovray, scene.offset.method))

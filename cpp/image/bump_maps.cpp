@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -40,9 +42,7 @@ int pick_channel(const Image& image, const std::string& path, const std::string&
   return index;
 }
 
-}  // namespace
-
-HeightMap read_height_map(const std::string& path, const std::string& channel) {
+Image read_map_image(const std::string& path) {
   if (!fs::is_regular_file(path)) throw InputError(path, "", "no such file");
   Image image;
   try {
@@ -52,6 +52,102 @@ HeightMap read_height_map(const std::string& path, const std::string& channel) {
   }
   if (image.width <= 0 || image.height <= 0)
     throw InputError(path, "", fmt::format("is empty ({}x{})", image.width, image.height));
+  return image;
+}
+
+// The three channels of a normal map: R, G, B, or the file's only three.
+std::array<int, 3> normal_channels(const Image& image, const std::string& path) {
+  const std::array<int, 3> rgb{image.channel_index("R"), image.channel_index("G"),
+                               image.channel_index("B")};
+  if (rgb[0] >= 0 && rgb[1] >= 0 && rgb[2] >= 0) return rgb;
+  if (image.channels.size() == 3) return {0, 1, 2};
+  throw InputError(path, "",
+                   fmt::format("has channels {}; a normal map needs R, G and B (or exactly three "
+                               "channels)",
+                               channel_list(image)));
+}
+
+SurfaceMap read_surface_map(const std::string& path, MapKind kind, const std::string& channel) {
+  SurfaceMap map;
+  map.kind = kind;
+  if (kind == MapKind::kHeight) {
+    HeightMap h = read_height_map(path, channel);
+    map.width = h.width, map.height = h.height;
+    map.texels = std::move(h.heights);
+  } else {
+    const Image image = read_map_image(path);
+    const std::array<int, 3> c = normal_channels(image, path);
+    map.width = image.width, map.height = image.height;
+    map.texels.resize(std::size_t(image.width) * image.height * 3);
+    for (int y = 0; y < image.height; ++y)
+      for (int x = 0; x < image.width; ++x)
+        for (int k = 0; k < 3; ++k) {
+          const float value = image.at(x, y, c[k]);
+          if (!std::isfinite(value))
+            throw InputError(path, "",
+                             fmt::format("channel {} holds {} at texel ({}, {}) (column, row from "
+                                         "the top); normals must be finite",
+                                         image.channels[c[k]], value, x, y));
+          map.texels[(std::size_t(y) * image.width + x) * 3 + k] = value;
+        }
+  }
+  map.digest = map_digest(map);
+  return map;
+}
+
+}  // namespace
+
+std::shared_ptr<const SurfaceMap> load_surface_map(const std::string& path, MapKind kind,
+                                                   const std::string& channel) {
+  // A study reads each of its scenes once per render job; the map behind
+  // them is read once.
+  static std::mutex mutex;
+  static std::map<std::string, std::shared_ptr<const SurfaceMap>> loaded;
+  std::error_code error;
+  const auto size = fs::file_size(path, error);
+  const auto time = fs::last_write_time(path, error);
+  const std::string key =
+      fmt::format("{}\n{}\n{}\n{}\n{}", path, static_cast<int>(kind), channel, error ? 0 : size,
+                  error ? 0 : time.time_since_epoch().count());
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (const auto it = loaded.find(key); it != loaded.end()) return it->second;
+  }
+  auto map = std::make_shared<const SurfaceMap>(read_surface_map(path, kind, channel));
+  std::lock_guard<std::mutex> lock(mutex);
+  if (loaded.size() > 64) loaded.clear();
+  loaded[key] = map;
+  return map;
+}
+
+Image bake_surface_map(const Shape& shape, const HeightFunction& f, double amplitude, int width,
+                       int height, MapKind kind) {
+  if (width < 1 || height < 1) throw std::invalid_argument("baking needs a size of at least 1x1");
+  Image image;
+  image.width = width, image.height = height;
+  image.channels = kind == MapKind::kHeight ? std::vector<std::string>{"Y"}
+                                            : std::vector<std::string>{"R", "G", "B"};
+  image.pixels.resize(std::size_t(width) * height * image.channels.size());
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const double u = (x + 0.5) / width, v = 1.0 - (y + 0.5) / height;
+      const SurfaceGeometry g = surface_at_parameters(shape, u, v);
+      const HeightSample h = evaluate_height(f, g.p);
+      if (kind == MapKind::kHeight) {
+        image.at(x, y, 0) = float(amplitude * h.h);
+        continue;
+      }
+      const SurfaceParameters q = surface_parameters(shape, g.p);
+      const Vec3 n = displaced_normal(g, amplitude, h);
+      const Vec3 tangent = normalize(q.dp_du), bitangent = normalize(q.dp_dv);
+      const Vec3 local{dot(n, tangent), dot(n, bitangent), dot(n, g.n)};
+      for (int k = 0; k < 3; ++k) image.at(x, y, k) = float(0.5 * local[k] + 0.5);
+    }
+  return image;
+}
+
+HeightMap read_height_map(const std::string& path, const std::string& channel) {
+  const Image image = read_map_image(path);
   const int index = pick_channel(image, path, channel);
   HeightMap map{image.width, image.height, {}, image.channels[index]};
   map.heights.resize(std::size_t(image.width) * image.height);

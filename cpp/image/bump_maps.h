@@ -5,11 +5,13 @@
 // interrupted build never leaves one that looks complete.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "core/bump_pyramid.h"
 #include "core/height.h"
+#include "core/surface_map.h"
 #include "image/image.h"
 
 namespace penumbra {
@@ -24,6 +26,23 @@ struct HeightMap {
   std::string channel;         // the channel read
 };
 HeightMap read_height_map(const std::string& path, const std::string& channel = "");
+
+// A height map (one channel, chosen as read_height_map chooses it) or a
+// tangent-space normal map (channels R, G, B, or the only three) as a
+// SurfaceMap with its digest; tiling and edge are left at their defaults.
+// The same refusals as read_height_map, plus a normal map without three
+// colour channels. Maps already read in this process are shared while the
+// file's size and modification time stay the same.
+std::shared_ptr<const SurfaceMap> load_surface_map(const std::string& path, MapKind kind,
+                                                   const std::string& channel = "");
+
+// A shape's analytic height function baked over its map parameters (u, v)
+// (core/surface_map.h) into a width x height image: kHeight gives channel
+// "Y" = amplitude * h at each texel's centre (scene units: load it with
+// amplitude 1); kNormal gives "R", "G", "B" = 0.5 n + 0.5, n the exact
+// displaced normal in the tangent frame (dP/du, dP/dv, N).
+Image bake_surface_map(const Shape& shape, const HeightFunction& f, double amplitude, int width,
+                       int height, MapKind kind);
 
 // An analytic height function baked into a size x size single-channel
 // ("Y") height map of the plane z = 0 over [0, extent)^2: texel (x, y) holds

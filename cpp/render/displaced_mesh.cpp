@@ -22,15 +22,16 @@ struct DisplacedMesh::Impl {
   Shape shape;
   double amplitude = 0.0;
   HeightFunction height;
+  std::shared_ptr<const SurfaceMap> map;
   unsigned nu = 0, nv = 0;
   unsigned side_primitives = 0;
 
-  double u_at(unsigned i) const { return grid_u({nu, nv}, i); }
+  double u_at(unsigned i) const { return grid_u(shape, {nu, nv}, i); }
   double v_at(unsigned j) const { return grid_v(shape, {nu, nv}, j); }
 
   // (u, v) of the three corners of a side primitive, in Embree's vertex order.
   void corners(unsigned prim, double u[3], double v[3]) const {
-    if (shape.type == ShapeType::kCylinder) {
+    if (shape.type != ShapeType::kSphere) {  // cylinder side and plane: the same quads
       const unsigned quad = prim / 2, i = quad % nu, j = quad / nu;
       const double u0 = u_at(i), u1 = u_at(i + 1), v0 = v_at(j), v1 = v_at(j + 1);
       if (prim % 2 == 0) {
@@ -68,16 +69,18 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
   m.shape = scene.shape;
   m.amplitude = scene.height.amplitude;
   m.height = scene.height.function;
+  if (scene.height.height_map()) m.map = scene.height.map;
   const double e = scene.displacement.edge_length;
-  const double reach = m.amplitude * max_abs_height(m.height);
+  const HeightBounds bounds = height_bounds(m.height, m.map.get(), m.shape);
+  const double reach = m.amplitude * bounds.max_abs;
   const GridResolution resolution = grid_resolution(m.shape, e, reach);
   m.nu = resolution.nu, m.nv = resolution.nv;
-  const TriangleMesh mesh = make_grid_mesh(m.shape, m.height, m.amplitude, resolution);
+  const TriangleMesh mesh = make_grid_mesh(m.shape, m.height, m.amplitude, resolution, m.map.get());
   m.side_primitives = static_cast<unsigned>(mesh.side_triangles);
   vertices_ = mesh.vertex_count();
   triangles_ = mesh.triangle_count();
   const double kappa =
-      1.0 / std::max(m.shape.radius - reach, 1e-12) + m.amplitude * max_hessian_norm(m.height);
+      1.0 / std::max(m.shape.radius - reach, 1e-12) + m.amplitude * bounds.max_hessian;
   shadow_offset_ = e * e * kappa / 8.0 + 1e-9 * m.shape.radius;
 
   m.bvh = std::make_unique<EmbreeMesh>(mesh);
@@ -124,6 +127,9 @@ std::string displaced_mesh_key(const Scene& scene) {
                   scene.height.amplitude, static_cast<int>(scene.height.function.combine));
   for (const SineTerm& t : scene.height.function.terms)
     key += fmt::format(" {:a} {:a} {:a} {:a} {:a}", t.k.x, t.k.y, t.k.z, t.phase, t.weight);
+  if (const SurfaceMap* map = scene.height.height_map())
+    key += fmt::format(" | map {} {:a} {:a} {}", map->digest, map->tiles_u, map->tiles_v,
+                       static_cast<int>(map->edge));
   return key;
 }
 

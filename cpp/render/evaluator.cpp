@@ -103,7 +103,11 @@ class BaseTracer {
 class MeshTracer {
  public:
   MeshTracer(const Scene& scene, const DisplacedMesh& mesh)
-      : mesh_(mesh), amplitude_(scene.height.amplitude), height_(scene.height.function) {}
+      : mesh_(mesh),
+        amplitude_(scene.height.amplitude),
+        height_(scene.height.function),
+        map_(scene.height.height_map()),
+        shape_(scene.shape) {}
 
   bool primary(const Ray& ray, SurfaceHit* out) const {
     const auto hit = mesh_.intersect(ray);
@@ -112,8 +116,8 @@ class MeshTracer {
     out->geometry = hit->geometry;
     out->ng = out->ni = hit->geometry.n;
     if (hit->geometry.displaceable)
-      out->shading_point =
-          displaced_point(hit->geometry, amplitude_, evaluate_height(height_, hit->geometry.p));
+      out->shading_point = displaced_point(hit->geometry, amplitude_,
+                                           height_at(height_, map_, shape_, hit->geometry));
     else
       out->shading_point = hit->geometry.p;
     return true;
@@ -129,6 +133,8 @@ class MeshTracer {
   const DisplacedMesh& mesh_;
   double amplitude_;
   const HeightFunction& height_;
+  const SurfaceMap* map_;
+  const Shape& shape_;
 };
 
 // A low-poly tessellation: the camera and the shadow rays see flat
@@ -205,6 +211,58 @@ class Props {
   const std::vector<Shape>& props_;
 };
 
+// How the surface point under a camera sample moves per pixel step, on the
+// tangent plane at the hit (ray differentials, Igehy 1999), scaled by
+// max(1/8, 1/sqrt(spp)) as pbrt-v4 scales camera differentials
+// (CameraBase::Approximate_dp_dxy): the samples of a pixel share its
+// footprint, so each filters only its share.
+struct PixelDifferentials {
+  Vec3 dpdx, dpdy;
+};
+
+PixelDifferentials pixel_differentials(const Camera& c, const Ray& ray, double t, const Vec3& n) {
+  const double scale = std::max(0.125, 1.0 / std::sqrt(double(c.spp)));
+  const Vec3 step_x = c.right / double(c.width), step_y = c.up / double(c.height);
+  double cos_n = dot(ray.direction, n);
+  if (std::abs(cos_n) < 1e-9) cos_n = std::copysign(1e-9, cos_n);
+  const auto on_plane = [&](const Vec3& step) {
+    Vec3 moved = step;  // orthographic: the origin moves, the direction does not
+    if (c.projection == Projection::kPerspective) {
+      // The unnormalised direction D = direction + x0 right + y0 up has
+      // |D| = |direction|^2 / <d, direction> when right and up are
+      // orthogonal to direction; the unit direction turns by
+      // (step - d <d, step>) / |D|, and the point at distance t with it.
+      const double length_d = length_squared(c.direction) / dot(ray.direction, c.direction);
+      moved = (step - ray.direction * dot(ray.direction, step)) * (t / length_d);
+    }
+    return (moved - ray.direction * (dot(moved, n) / cos_n)) * scale;
+  };
+  return {on_plane(step_x), on_plane(step_y)};
+}
+
+// The bump normal of a sample: the analytic or image height's exact
+// normal, a normal map's, or a filtered map's mean normal, which also sets
+// the sample's filtered specular lobe in *material.
+struct BumpNormals {
+  const Scene& scene;
+  const SurfaceMap* height_map;
+  const SurfaceMap* normal_map;
+  const FilteredMap* filtered;
+
+  Vec3 at(const SurfaceGeometry& g, const Ray& ray, double t, Material* material) const {
+    if (filtered) {
+      const PixelDifferentials d = pixel_differentials(scene.camera, ray, t, g.n);
+      const FilteredSample f =
+          filtered_sample(*filtered, scene.shape, g, d.dpdx, d.dpdy, material->specular_roughness);
+      material->filtered = {true, f.lobe.distribution, f.lobe.alpha2, f.tangent};
+      return f.ns;
+    }
+    if (normal_map) return normal_map_normal(*normal_map, scene.shape, g);
+    return displaced_normal(g, scene.height.amplitude,
+                            height_at(scene.height.function, height_map, scene.shape, g));
+  }
+};
+
 struct PixelSums {
   double radiance = 0.0, hits = 0.0, theta = 0.0, deviation = 0.0, g = 0.0, g_count = 0.0,
          view = 0.0;
@@ -225,6 +283,11 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   const bool is_ground_truth = scene.representation == Representation::kDisplacement;
   const double amplitude = scene.height.amplitude;
   const HeightFunction& height_function = scene.height.function;
+  // A filter shades bump samples only: the truth is the unfiltered surface.
+  const BumpNormals bump{
+      scene, scene.height.height_map(), scene.height.normal_map(),
+      scene.representation == Representation::kBump ? scene.height.filtered.get() : nullptr};
+  const bool perturbed = amplitude != 0.0 || bump.normal_map;
   const TerminatorSettings& terminator = scene.terminator;
   const bool needs_visibility =
       !is_ground_truth && method_info(terminator.method.method).needs_visibility;
@@ -246,6 +309,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
         // included) took 9% of a bump render. Every tracer sets all the
         // fields it uses; `on_prop` is the one field only props set.
         SurfaceHit hit;
+        Material material = scene.material;  // a filtered map sets its lobe per sample
         for (int sy = 0; sy < ny; ++sy) {
           for (int sx = 0; sx < nx; ++sx) {
             const double a = (sx + (camera.jitter ? rng.next_double() : 0.5)) / nx;
@@ -260,6 +324,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
               ray = {camera.position + camera.right * x0 + camera.up * y0, orthographic_direction};
             }
             hit.on_prop = false;
+            material.filtered.active = false;
             const bool found = tracer.primary(ray, &hit);
             if (!(props.nearer(ray, found, &hit) || found)) continue;
             const SurfaceGeometry& g = hit.geometry;
@@ -267,11 +332,10 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
             Vec3 n = g.n;
             FacingNormals facing{hit.ng, hit.ni, false};
             Vec3 ni = hit.ni;
-            if (displaced_shading && g.displaceable && amplitude != 0.0) {
+            if (displaced_shading && g.displaceable && perturbed) {
               // The bump perturbs the analytic normal; on a mesh it is carried
               // over to Ni, so that Ns relates to Ni as it would to N.
-              const Vec3 bumped =
-                  displaced_normal(g, amplitude, evaluate_height(height_function, g.p));
+              const Vec3 bumped = bump.at(g, ray, hit.t, &material);
               facing.ns = hit.ni == g.n ? bumped : normalize(rotate_between(g.n, hit.ni, bumped));
             }
             // Two-sided: the inside of an open cylinder is seen from inside.
@@ -293,7 +357,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
             if (needs_visibility && displaced_shading && g.displaceable && amplitude != 0.0)
               point.visibility = height_field_visibility(
                   height_function, facing.backfacing ? -amplitude : amplitude, g.p, n);
-            const Shaded shaded = shade(terminator, scene.material, point, &rng);
+            const Shaded shaded = shade(terminator, material, point, &rng);
             sums.hits += 1.0;
             // Within 1.2e-6 degrees: below what the float channels resolve.
             sums.theta += degrees(acos_approx(dot(n, light.wi)));

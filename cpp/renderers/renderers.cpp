@@ -455,7 +455,9 @@ ResourceEstimate estimate_resources(RendererKind renderer, const Scene& scene) {
     mesh_pointer = "/shape/tessellation";
   } else if (scene.representation == Representation::kDisplacement ||
              renderer == RendererKind::kBlender) {
-    const double reach = scene.height.amplitude * max_abs_height(scene.height.function);
+    const double reach =
+        scene.height.amplitude *
+        height_bounds(scene.height.function, scene.height.height_map(), scene.shape).max_abs;
     const GridResolution r = grid_resolution(scene.shape, scene.displacement.edge_length, reach);
     triangles = 2.0 * double(r.nu) * double(r.nv);
     mesh_pointer = "/displacement/edge_length";

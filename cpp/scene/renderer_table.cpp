@@ -24,6 +24,10 @@ const std::vector<RendererInfo>& renderer_table() {
        /*props=*/true,
        "",
        /*specular=*/true,
+       "",
+       /*image_maps=*/true,
+       "",
+       /*plane=*/true,
        ""},
       {RendererKind::kPovray,
        "povray",
@@ -45,7 +49,12 @@ const std::vector<RendererInfo>& renderer_table() {
        "props (extra spheres) are evaluator-only",
        false,
        "the GGX lobe is evaluator-only: the POV-Ray export is Lambertian (its specular and "
-       "phong highlights are other models)"},
+       "phong highlights are other models)",
+       false,
+       "image height and normal maps are not exported to POV-Ray yet (its bump_map and "
+       "isosurface forms are not written)",
+       false,
+       "the plane shape is not exported to POV-Ray yet"},
       {RendererKind::kBlender,
        "blender",
        "Blender 3.4 Cycles",
@@ -70,7 +79,12 @@ const std::vector<RendererInfo>& renderer_table() {
        "props (extra spheres) are evaluator-only",
        false,
        "the GGX lobe is evaluator-only: the Blender export is Lambertian (Cycles' Glossy BSDF "
-       "uses Fresnel and multiple-scattering options the evaluator does not model)"},
+       "uses Fresnel and multiple-scattering options the evaluator does not model)",
+       false,
+       "image height and normal maps are not exported to Blender yet (its Image Texture, Bump, "
+       "Normal Map and displacement nodes are not written)",
+       false,
+       "the plane shape is not exported to Blender yet"},
   };
   return table;
 }

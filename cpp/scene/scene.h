@@ -5,16 +5,19 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "core/bsdf.h"
 #include "core/enum_names.h"
+#include "core/filtered_map.h"
 #include "core/height.h"
 #include "core/shading.h"
 #include "core/shadow_origin.h"
 #include "core/shape.h"
+#include "core/surface_map.h"
 #include "core/terminator.h"
 #include "core/tessellation.h"
 #include "core/vec.h"
@@ -88,16 +91,37 @@ inline constexpr EnumName<Representation> kRepresentationNames[] = {
     {"bump", Representation::kBump},
     {"displacement", Representation::kDisplacement}};
 
-enum class HeightFamily { kNone, kGrating, kWeave, kNoise };
-inline constexpr EnumName<HeightFamily> kHeightFamilyNames[] = {{"none", HeightFamily::kNone},
-                                                                {"grating", HeightFamily::kGrating},
-                                                                {"weave", HeightFamily::kWeave},
-                                                                {"noise", HeightFamily::kNoise}};
+// The analytic families, and image maps over the shape's (u, v)
+// (core/surface_map.h): a height map (bump and displacement) or a
+// tangent-space normal map (bump only: it has no surface to displace).
+enum class HeightFamily { kNone, kGrating, kWeave, kNoise, kHeightMap, kNormalMap };
+inline constexpr EnumName<HeightFamily> kHeightFamilyNames[] = {
+    {"none", HeightFamily::kNone},
+    {"grating", HeightFamily::kGrating},
+    {"weave", HeightFamily::kWeave},
+    {"noise", HeightFamily::kNoise},
+    {"height-map", HeightFamily::kHeightMap},
+    {"normal-map", HeightFamily::kNormalMap}};
 
 struct HeightSpec {
   HeightFamily family = HeightFamily::kNone;
-  double amplitude = 0.0;  // A, scene units, >= 0, A max|h| < radius
-  HeightFunction function;
+  // A, scene units, >= 0, A max|h| < radius. A height map's texel values are
+  // h; a normal map has no amplitude (0 here).
+  double amplitude = 0.0;
+  HeightFunction function;  // analytic families; no terms for image maps
+  // Image maps: the texels read from /height/file (shared between the copies
+  // of a scene a study makes).
+  std::shared_ptr<const SurfaceMap> map;
+  // /height/filter: the map's pyramids and the roughness filter that shade
+  // each bump sample for its footprint (absent: the map unfiltered).
+  std::shared_ptr<const FilteredMap> filtered;
+
+  const SurfaceMap* height_map() const {
+    return map && map->kind == MapKind::kHeight ? map.get() : nullptr;
+  }
+  const SurfaceMap* normal_map() const {
+    return map && map->kind == MapKind::kNormal ? map.get() : nullptr;
+  }
 };
 
 struct DisplacementSettings {

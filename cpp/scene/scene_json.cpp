@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
@@ -12,6 +13,8 @@
 #include <utility>
 
 #include <fmt/format.h>
+
+#include "image/bump_maps.h"
 
 namespace penumbra {
 
@@ -149,6 +152,14 @@ class Reader {
   std::set<std::string> known_;
 };
 
+// "a, b, c": the ids of a registry table, for "unknown id" errors.
+template <typename Table>
+std::string id_list(const Table& table) {
+  std::string ids;
+  for (const auto& info : table) ids += (ids.empty() ? "" : ", ") + std::string(info.id);
+  return ids;
+}
+
 bool non_negative(double x) {
   return x >= 0.0;
 }
@@ -202,6 +213,10 @@ Light read_light(Reader r) {
 }
 
 Tessellation read_tessellation(Reader r, const Shape& shape) {
+  if (shape.type == ShapeType::kPlane)
+    r.fail("",
+           "expected null for a plane (a plane is its own flat mesh: there is no smooth "
+           "surface for a tessellation to approximate)");
   Tessellation t;
   t.scheme =
       r.choice<TessellationScheme>("scheme", kTessellationSchemeNames, TessellationScheme::kUv);
@@ -224,9 +239,7 @@ OffsetSettings read_offset(Reader r) {
   const std::string id = r.string("method");
   const auto method = offset_method_from_id(id);
   if (!method) {
-    std::string ids;
-    for (const OffsetMethodInfo& info : all_offset_methods())
-      ids += (ids.empty() ? "" : ", ") + std::string(info.id);
+    const std::string ids = id_list(all_offset_methods());
     r.fail("method", fmt::format("unknown offset method \"{}\" (valid: {})", id, ids));
   }
   o.method = *method;
@@ -249,7 +262,13 @@ Shape read_shape(Reader r, std::optional<Tessellation>* tessellation = nullptr) 
   s.type = r.choice<ShapeType>("type", kShapeTypeNames);
   s.center = r.vec3_or("center", {0, 0, 0});
   s.axis = r.has("axis") ? r.direction("axis") : Vec3{0, 1, 0};
-  s.radius = r.number("radius", length_scale, "in [1e-6, 1e6] (scene units)");
+  if (s.type == ShapeType::kPlane) {
+    s.width = r.number("width", length_scale, "in [1e-6, 1e6] (scene units)");
+    s.height = r.number("height", length_scale, "in [1e-6, 1e6] (scene units)");
+    s.radius = 0.5 * std::max(s.width, s.height);
+  } else {
+    s.radius = r.number("radius", length_scale, "in [1e-6, 1e6] (scene units)");
+  }
   if (s.type == ShapeType::kCylinder) {
     s.height = r.number("height", length_scale, "in [1e-6, 1e6] (scene units)");
     s.caps = r.boolean_or("caps", false);
@@ -276,11 +295,101 @@ Material read_material(Reader r) {
   return m;
 }
 
+// /height/file and its placement. A relative path is taken from the working
+// directory here; load_scene and studies make it relative to the scene file
+// first (resolve_map_files).
+void read_map(Reader& r, HeightSpec* h) {
+  const MapKind kind = h->family == HeightFamily::kHeightMap ? MapKind::kHeight : MapKind::kNormal;
+  const std::string file = r.string("file");
+  if (file.empty()) r.fail("file", "expected the path of an image file, got \"\"");
+  const std::string channel =
+      kind == MapKind::kHeight && r.has("channel") ? r.string("channel") : "";
+  std::shared_ptr<const SurfaceMap> loaded;
+  try {
+    loaded = load_surface_map(file, kind, channel);
+  } catch (const InputError& e) {
+    r.fail("file", e.what());
+  }
+  SurfaceMap map = *loaded;
+  if (r.has("tiles")) {
+    const json& t = r.at("tiles");
+    const auto valid = [](const json& x) {
+      return x.is_number() && std::isfinite(x.get<double>()) && x.get<double>() > 0.0 &&
+             x.get<double>() <= 1e6;
+    };
+    if (!t.is_array() || t.size() != 2 || !valid(t[0]) || !valid(t[1]))
+      r.fail("tiles",
+             "expected [tiles_u, tiles_v], two numbers in (0, 1e6] (repeats of the map "
+             "over the shape's u and v), got " +
+                 describe(t));
+    map.tiles_u = t[0].get<double>();
+    map.tiles_v = t[1].get<double>();
+  }
+  map.edge = r.choice<MapEdge>("edge", kMapEdgeNames, MapEdge::kWrap);
+  h->map = std::make_shared<const SurfaceMap>(std::move(map));
+}
+
+// /height/filter: a roughness filter id, its parameters and an optional
+// fixed pyramid level.
+struct FilterChoice {
+  FilterSettings settings;
+  double level = -1.0;
+};
+
+FilterChoice read_filter(Reader r) {
+  FilterChoice c;
+  const std::string id = r.string("method");
+  const auto filter = roughness_filter_from_id(id);
+  if (!filter) {
+    const std::string ids = id_list(all_roughness_filters());
+    r.fail("method", fmt::format("unknown roughness filter \"{}\" (valid: {})", id, ids));
+  }
+  const RoughnessFilterInfo& info = roughness_filter_info(*filter);
+  if (info.distribution == FilteredDistribution::kSchillingBlinnPhong)
+    r.fail("method", fmt::format("\"{}\" shades with Schilling's modified Blinn-Phong, which has "
+                                 "no normalised form to render with (penumbra filtering compares "
+                                 "it instead)",
+                                 id));
+  c.settings.filter = *filter;
+  if (r.has("parameters")) {
+    Reader p = r.object("parameters");
+    for (const FilterParameter& parameter : info.parameters) {
+      const std::string name(parameter.name);
+      const double value = p.number_or(
+          name, parameter.default_value,
+          [&](double x) { return x >= parameter.min_value && x <= parameter.max_value; },
+          fmt::format("in [{}, {}] ({})", parameter.min_value, parameter.max_value, parameter.unit)
+              .c_str());
+      if (name == "gain") c.settings.gain = value;
+      if (name == "kernel_variance") c.settings.kernel_variance = value;
+      if (name == "kernel_clamp") c.settings.kernel_clamp = value;
+    }
+    p.finish();
+  }
+  if (r.has("level"))
+    c.level = r.number(
+        "level", [](double x) { return x >= 0.0 && x <= 24.0; },
+        "in [0, 24] (pyramid level: footprints of 2^level texels; absent: from the footprint)");
+  r.finish();
+  return c;
+}
+
 HeightSpec read_height(Reader r, const Shape& shape) {
   HeightSpec h;
   h.family = r.choice<HeightFamily>("type", kHeightFamilyNames);
   if (h.family == HeightFamily::kNone) {
     r.finish();
+    return h;
+  }
+  const bool image = h.family == HeightFamily::kHeightMap || h.family == HeightFamily::kNormalMap;
+  if (image) read_map(r, &h);
+  std::optional<FilterChoice> filter;
+  if (image && r.has("filter")) filter = read_filter(r.object("filter"));
+  if (h.family == HeightFamily::kNormalMap) {
+    r.finish();
+    if (filter)
+      h.filtered = std::make_shared<const FilteredMap>(
+          make_filtered_map(*h.map, 0.0, shape, filter->settings, filter->level));
     return h;
   }
   h.amplitude = r.number("amplitude", non_negative, ">= 0 (scene units)");
@@ -325,16 +434,22 @@ HeightSpec read_height(Reader r, const Shape& shape) {
       break;
     }
     case HeightFamily::kNone:
+    case HeightFamily::kHeightMap:
+    case HeightFamily::kNormalMap:
       break;
   }
   r.finish();
   // The displaced surface must not reach the axis (cylinder) or the centre
   // (sphere): past that the displacement folds the surface through itself.
-  const double reach = h.amplitude * max_abs_height(h.function);
+  const double max_h = height_bounds(h.function, h.height_map(), shape).max_abs;
+  const double reach = h.amplitude * max_h;
   if (reach >= shape.radius)
     r.fail("amplitude", fmt::format("expected amplitude * max|h| < radius ({} scene units), got "
                                     "{} * {} = {}",
-                                    shape.radius, h.amplitude, max_abs_height(h.function), reach));
+                                    shape.radius, h.amplitude, max_h, reach));
+  if (filter)
+    h.filtered = std::make_shared<const FilteredMap>(
+        make_filtered_map(*h.map, h.amplitude, shape, filter->settings, filter->level));
   return h;
 }
 
@@ -344,9 +459,7 @@ TerminatorSettings read_terminator(Reader r) {
     const std::string id = r.string("method");
     const auto method = method_from_id(id);
     if (!method) {
-      std::string ids;
-      for (const MethodInfo& info : all_methods())
-        ids += (ids.empty() ? "" : ", ") + std::string(info.id);
+      const std::string ids = id_list(all_methods());
       r.fail("method", fmt::format("unknown method \"{}\" (valid: {})", id, ids));
     }
     t.method.method = *method;
@@ -368,9 +481,7 @@ TerminatorSettings read_terminator(Reader r) {
     const std::string id = r.string("normal_adjustment");
     const auto adjustment = normal_adjustment_from_id(id);
     if (!adjustment) {
-      std::string ids;
-      for (const NormalAdjustmentInfo& a : all_normal_adjustments())
-        ids += (ids.empty() ? "" : ", ") + std::string(a.id);
+      const std::string ids = id_list(all_normal_adjustments());
       r.fail("normal_adjustment",
              fmt::format("unknown normal adjustment \"{}\" (valid: {})", id, ids));
     }
@@ -394,12 +505,41 @@ constexpr double kMaxDisplacementTriangles = 4.0e7;
 
 double estimated_triangles(const Shape& shape, double reach, double edge) {
   const double r = shape.radius + reach;
+  if (shape.type == ShapeType::kPlane)
+    return 2.0 * std::ceil(shape.width / edge) * std::ceil(shape.height / edge);
   if (shape.type == ShapeType::kSphere)
     return 2.0 * std::ceil(2.0 * kPi * r / edge) * std::ceil(kPi * r / edge);
   return 2.0 * std::ceil(2.0 * kPi * r / edge) * std::ceil(shape.height / edge);
 }
 
+// What image maps cannot do yet, or cannot do at all.
+void check_maps(const Scene& s, const std::string& origin) {
+  if (!s.height.map) return;
+  if (s.height.normal_map() && s.representation == Representation::kDisplacement)
+    throw InputError(origin, "/representation",
+                     "expected \"bump\" or \"smooth\" with a normal map (a normal map has no "
+                     "heights, so no displaced surface; use a height map for a ground truth)");
+  if (s.representation != Representation::kSmooth &&
+      method_info(s.terminator.method.method).needs_visibility)
+    throw InputError(origin, "/terminator/method",
+                     fmt::format("\"{}\" searches the analytic height function for its "
+                                 "horizons, which an image map does not have yet",
+                                 method_info(s.terminator.method.method).id));
+}
+
 }  // namespace
+
+void resolve_map_files(json& document, const std::string& scene_path) {
+  const json::json_pointer file("/height/file");
+  if (!document.is_object() || !document.contains(file) || !document[file].is_string()) return;
+  const std::filesystem::path path(document[file].get<std::string>());
+  if (path.empty() || path.is_absolute()) return;
+  // A bare file name has no parent: its folder is the working directory.
+  const std::filesystem::path folder = std::filesystem::path(scene_path).parent_path();
+  const std::filesystem::path base =
+      folder.empty() ? std::filesystem::current_path() : std::filesystem::absolute(folder);
+  document[file] = (base / path).lexically_normal().string();
+}
 
 Override parse_override(const std::string& text) {
   const auto eq = text.find('=');
@@ -535,7 +675,9 @@ Scene scene_from_json(const json& document, const std::string& origin) {
     d.finish();
   }
   r.finish();
-  const double reach = s.height.amplitude * max_abs_height(s.height.function);
+  check_maps(s, origin);
+  const double reach =
+      s.height.amplitude * height_bounds(s.height.function, s.height.height_map(), s.shape).max_abs;
   const double triangles = estimated_triangles(s.shape, reach, s.displacement.edge_length);
   if (s.representation == Representation::kDisplacement && triangles > kMaxDisplacementTriangles)
     throw InputError(
@@ -548,6 +690,7 @@ Scene scene_from_json(const json& document, const std::string& origin) {
 
 Scene load_scene(const std::string& path, const std::vector<Override>& overrides) {
   json document = read_json_file(path);
+  resolve_map_files(document, path);
   const std::string origin = overrides.empty() ? path : path + " (after --set)";
   apply_overrides(document, overrides, origin);
   return scene_from_json(document, origin);

@@ -85,8 +85,16 @@ void assign_keys(std::vector<Job>& jobs,
   for (Job& job : jobs) {
     const auto it = std::find_if(ids.begin(), ids.end(),
                                  [&](const auto& entry) { return entry.first == job.renderer; });
-    job.key =
-        render_key(job.scene_json, job.renderer, it != ids.end() ? it->second : RendererIdentity{});
+    const RendererIdentity identity = it != ids.end() ? it->second : RendererIdentity{};
+    if (!job.scene.height.map) {
+      job.key = render_key(job.scene_json, job.renderer, identity);
+      continue;
+    }
+    // An image map enters the key by its content, not by where it lies: a
+    // map edited in place re-renders, a moved one does not.
+    nlohmann::json keyed = job.scene_json;
+    keyed["height"]["file"] = "content:" + job.scene.height.map->digest;
+    job.key = render_key(keyed, job.renderer, identity);
   }
 }
 

@@ -147,7 +147,8 @@ std::vector<Spec> calibration_specs(const CalibrationOptions& options) {
   for (const char* shape : {"cylinder", "sphere"}) {
     const std::string file =
         (fs::path(options.scenes_dir) / (std::string(shape) + ".json")).string();
-    const json base = read_json_file(file);
+    json base = read_json_file(file);
+    resolve_map_files(base, file);
     for (const auto& p : plan) {
       json document = base;
       std::vector<Override> all = overrides;

@@ -100,6 +100,12 @@ std::string job_label(SectionKind kind, const Variant& v, const Job& job) {
 std::string cannot_render(RendererKind r, const json& scene) {
   const RendererInfo& info = renderer_info(r);
   if (!info.props && scene.contains("props") && !scene["props"].empty()) return info.props_why_not;
+  const json::json_pointer type("/height/type");
+  if (!info.image_maps && scene.contains(type) && scene[type].is_string() &&
+      (scene[type] == "height-map" || scene[type] == "normal-map"))
+    return info.image_maps_why_not;
+  const json::json_pointer shape("/shape/type");
+  if (!info.plane && scene.contains(shape) && scene[shape] == "plane") return info.plane_why_not;
   return "";
 }
 
@@ -174,7 +180,8 @@ void add_section(const Study& study, const Section& section, Plan& plan) {
   for (const StudyAxis& a : section.axes) combinations *= a.values.size();
   std::size_t count = 0;
   for (const std::string& scene_file : section.scenes) {
-    const json base = read_json_file(scene_file);
+    json base = read_json_file(scene_file);
+    resolve_map_files(base, scene_file);
     const std::string scene_name = fs::path(scene_file).stem().string();
     for (std::size_t c = 0; c < combinations; ++c) {
       Variant v;

@@ -57,7 +57,7 @@ TEST(Ggx, MaskingIsOneAtNormalIncidenceSymmetricAndBounded) {
 // Reciprocity, and a specular lobe that never creates energy (F = 1, so its
 // directional albedo is 1 minus the multiple scattering it leaves out).
 double specular_albedo(double alpha, double theta_o) {
-  const Material m{0.8, 1.0, alpha};
+  const Material m{0.8, 1.0, alpha, {}};
   const Vec3 n{0, 0, 1}, wo = direction(theta_o, 0.0);
   return hemisphere_integral(
       [&](const Vec3& wi) { return evaluate_lobes(m, n, wi, wo).specular * wi.z; }, 1000, 256);
@@ -66,7 +66,7 @@ double specular_albedo(double alpha, double theta_o) {
 TEST(Ggx, LobeIsReciprocalAndConservesEnergy) {
   const Vec3 n{0, 0, 1};
   for (double alpha : {0.2, 0.5, 1.0}) {
-    const Material m{0.8, 1.0, alpha};
+    const Material m{0.8, 1.0, alpha, {}};
     const Vec3 a = direction(0.4, 0.3), b = direction(1.1, 2.0);
     EXPECT_NEAR(evaluate_lobes(m, n, a, b).specular, evaluate_lobes(m, n, b, a).specular,
                 1e-12 * evaluate_lobes(m, n, a, b).specular);
@@ -87,7 +87,7 @@ TEST(Ggx, RoughestLobeAtNormalIncidenceHasAlbedoOneMinusLnTwo) {
 
 TEST(Lobes, DiffuseIsAlbedoOverPiScaledByTheSpecularWeightAndZeroBelow) {
   const Vec3 n{0, 0, 1}, wo = direction(0.3, 0.0);
-  const Material m{0.8, 0.25, 0.3};
+  const Material m{0.8, 0.25, 0.3, {}};
   EXPECT_NEAR(evaluate_lobes(m, n, direction(0.7, 1.0), wo).diffuse, 0.8 * 0.75 / kPi, 1e-15);
   const LobeValues below = evaluate_lobes(m, n, direction(2.0, 1.0), wo);
   EXPECT_EQ(below.diffuse, 0.0);
