@@ -24,7 +24,9 @@ JOB.json ("penumbra-blender-job" version 2, see SCHEMA) gives a camera, a sun,
 a triangle mesh in three raw little-endian files beside it (float32 positions,
 float32 unit vertex normals, uint32 triangles) with smooth faces (shaded with
 those normals) or flat faces (shaded with the triangle's normal), a Diffuse
-albedo, a sum or product of sines h(P), a shading mode: "smooth",
+albedo, a sum or product of sines h(P) or an image map beside the job (a
+height map or a tangent-space normal map, sampled at per-corner UVs from a
+fourth raw file, float32 u v per triangle corner), a shading mode: "smooth",
 "bump-displacement", "bump-node" or "mesh", and the object's shading and
 geometry ("shadow terminator") offsets.
 
@@ -104,13 +106,16 @@ SCHEMA = {
     "mesh": {"positions": ("file",), "normals": ("file",),
              "triangles": ("file",), "vertex_count": ("int", 3, INT32),
              "triangle_count": ("int", 1, INT32 // 3),
-             "faces": ("enum", "smooth", "flat")},
+             "faces": ("enum", "smooth", "flat"), "uvs?": ("file",)},
     "material": {"albedo": UNIT},
     "height": {"amplitude": ("num", 0.0, None),
                "combine": ("enum", "sum", "product"),
                "terms": ("list", MAX_TERMS,
                          {"k": ("vec", 3), "phase": ("num",),
-                          "weight": ("num",)})},
+                          "weight": ("num",)}),
+               "image?": {"file": ("file",),
+                          "kind": ("enum", "height", "normal"),
+                          "extension": ("enum", "REPEAT", "EXTEND")}},
     "shading": {"mode": ("enum", "smooth", "bump-displacement",
                          "bump-node", "mesh"),
                 "shading_offset": UNIT, "geometry_offset": UNIT},
@@ -260,6 +265,14 @@ def build_mesh(job, folder):
     me.update(calc_edges=True)
     if len(me.vertices) != n or len(me.polygons) != m:
         raise JobError("/mesh: Blender changed the mesh while building it")
+    if "uvs" in jm:
+        # Per corner, so that a seam needs no split vertices; the exporter
+        # has already multiplied in the map's tiling.
+        uvs = read_raw(folder, jm["uvs"], "<f4", 6 * m, "/mesh/uvs")
+        if not np.isfinite(uvs).all():
+            raise JobError("/mesh/uvs: NaN or infinity")
+        layer = me.uv_layers.new(name="penumbra_uv")
+        layer.data.foreach_set("uv", uvs)
     if smooth:
         # Custom split normals: Cycles then shades with these vertex normals.
         # Up to 4.0 they count only with auto smooth on (an angle of pi marks
@@ -318,7 +331,37 @@ def height_socket(nt, hgt):
     return acc
 
 
-def build_material(job, ob):
+def image_node(nt, job, folder):
+    """The job's image map at the mesh's UVs, with Cycles' "Cubic"
+    interpolation: the uniform cubic B-spline the evaluator samples."""
+    im = job["height"]["image"]
+    if "uvs" not in job["mesh"]:
+        raise JobError("/mesh/uvs: an image map needs the mesh's UVs")
+    path = os.path.join(folder, im["file"])
+    try:
+        img = bpy.data.images.load(path, check_existing=False)
+    except RuntimeError as e:
+        raise JobError(f"/height/image/file: Blender cannot read it ({e})")
+    img.colorspace_settings.name = "Non-Color"
+    tex = nt.nodes.new("ShaderNodeTexImage")
+    tex.image = img
+    configure(tex, "ShaderNodeTexImage", interpolation="Cubic",
+              extension=im["extension"])
+    uv = nt.nodes.new("ShaderNodeUVMap")
+    uv.uv_map = "penumbra_uv"
+    nt.links.new(uv.outputs["UV"], tex.inputs["Vector"])
+    return tex
+
+
+def map_height_socket(nt, job, folder):
+    """h from a height map: its first channel (a one-channel EXR reads as
+    grey, every channel the same)."""
+    sep = nt.nodes.new("ShaderNodeSeparateColor")
+    nt.links.new(image_node(nt, job, folder).outputs["Color"], sep.inputs[0])
+    return sep.outputs[0]
+
+
+def build_material(job, ob, folder):
     mat = bpy.data.materials.new("penumbra_material")
     mat.use_nodes = True
     nt = mat.node_tree
@@ -338,10 +381,29 @@ def build_material(job, ob):
     else:
         configure(mat, "Material", displacement_method="BUMP")
     mode, amp = job["shading"]["mode"], job["height"]["amplitude"]
+    image = job["height"].get("image")
+    if image and image["kind"] == "normal":
+        if mode != "bump-node":
+            raise JobError("/shading/mode: a normal map shades through the "
+                           "Normal Map node (\"bump-node\")")
+        nmap = nt.nodes.new("ShaderNodeNormalMap")
+        configure(nmap, "ShaderNodeNormalMap", space="TANGENT",
+                  uv_map="penumbra_uv")
+        nmap.inputs["Strength"].default_value = 1.0
+        nt.links.new(image_node(nt, job, folder).outputs["Color"],
+                     nmap.inputs["Color"])
+        nt.links.new(nmap.outputs["Normal"], bsdf.inputs["Normal"])
+        ob.data.materials.append(mat)
+        return
+
+    def height():
+        return (map_height_socket(nt, job, folder) if image
+                else height_socket(nt, job["height"]))
+
     if mode == "bump-displacement":
         disp = nt.nodes.new("ShaderNodeDisplacement")
         disp.space = "OBJECT"  # the object transform is the identity
-        nt.links.new(height_socket(nt, job["height"]), disp.inputs["Height"])
+        nt.links.new(height(), disp.inputs["Height"])
         disp.inputs["Midlevel"].default_value = 0.0
         disp.inputs["Scale"].default_value = amp
         nt.links.new(disp.outputs["Displacement"],
@@ -351,7 +413,7 @@ def build_material(job, ob):
         bump.invert = False
         bump.inputs["Strength"].default_value = 1.0
         bump.inputs["Distance"].default_value = amp
-        nt.links.new(height_socket(nt, job["height"]), bump.inputs["Height"])
+        nt.links.new(height(), bump.inputs["Height"])
         nt.links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
     ob.data.materials.append(mat)
 
@@ -446,7 +508,7 @@ def build_scene(job, folder, threads):
 
     lo = build_sun(job["light"])
     ob = build_mesh(job, folder)
-    build_material(job, ob)
+    build_material(job, ob, folder)
     for o in (co, lo, ob):
         scene.collection.objects.link(o)
     return ob

@@ -522,13 +522,7 @@ int command_export(const ExportArgs& a, std::ostream& out) {
   const BlenderExport job = export_blender(scene);
   const fs::path dir(a.output);
   const TriangleMesh& m = job.mesh;
-  write_binary_file((dir / kBlenderPositionsFile).string(), m.positions.data(),
-                    m.positions.size() * sizeof(float));
-  write_binary_file((dir / kBlenderNormalsFile).string(), m.normals.data(),
-                    m.normals.size() * sizeof(float));
-  write_binary_file((dir / kBlenderTrianglesFile).string(), m.triangles.data(),
-                    m.triangles.size() * sizeof(unsigned));
-  write_text_file((dir / kBlenderJobFile).string(), job.job_json);
+  write_blender_files(job, dir.string());
   out << fmt::format(
       "wrote {} and its mesh ({} vertices, {} triangles); render with\n  blender -b "
       "--factory-startup -noaudio --python-exit-code 1 --python {} -- "

@@ -3,8 +3,11 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
+
 #include "core/tessellation.h"
 #include "export/export.h"
+#include "image/image_io.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {
@@ -81,6 +84,15 @@ void check_blender_scene(const Scene& scene) {
   if (!scene.props.empty())
     throw ExportError("Blender export: props are evaluator-only (remove /props)");
   refuse_unoffered(scene, RendererKind::kBlender, "Blender");
+  // Cycles 3.4 applies its terminator term to any closure normal other than
+  // the shading normal: a Normal Map node always gets it, and a normal map
+  // cannot reach the Displacement socket that raw bump goes through.
+  if (scene.height.normal_map() && scene.representation == Representation::kBump &&
+      method != TerminatorMethod::kChiang2019 && method != TerminatorMethod::kCycles34)
+    throw ExportError(fmt::format(
+        "Blender export: a normal map shades through Cycles' Normal Map node, which always "
+        "carries Cycles' terminator term: use chiang2019 or cycles34, not `{}`",
+        method_info(method).id));
   // Cycles' object "Geometry Offset" is its only shadow-ray offset; 0 turns
   // it off, which is `none`.
   if (!offers(RendererKind::kBlender, scene.offset.method))
@@ -137,7 +149,9 @@ const char* mode_name(BlenderShading shading) {
 TriangleMesh blender_mesh(const Scene& scene, bool displaced) {
   const HeightFunction& hf = scene.height.function;
   const double amplitude = scene.height.amplitude;
-  const double reach = displaced ? amplitude * max_abs_height(hf) : 0.0;
+  const SurfaceMap* height_map = scene.height.height_map();
+  const double reach =
+      displaced ? amplitude * height_bounds(hf, height_map, scene.shape).max_abs : 0.0;
   // The ground truth needs the fine grid; the base surface of smooth and bump
   // renders does not: 512 segments around keep the chord within
   // (2 pi / 512)^2 / 8 = 1.9e-5 R of the circle (0.001 px at 128 px), and a
@@ -145,12 +159,16 @@ TriangleMesh blender_mesh(const Scene& scene, bool displaced) {
   // triangles instead of 1M: a 128 px, 32 spp sphere bump job falls from
   // 13.3 s to 4.6 s (mean over the default study's 36).
   GridResolution res = grid_resolution(scene.shape, scene.displacement.edge_length, reach);
-  if (!displaced) res = {512, scene.shape.type == ShapeType::kCylinder ? 1u : 256u};
+  if (!displaced)
+    res = scene.shape.type == ShapeType::kPlane
+              ? GridResolution{1, 1}
+              : GridResolution{512, scene.shape.type == ShapeType::kCylinder ? 1u : 256u};
   // A tessellated shape is sent as the evaluator's own triangles (its normals
   // are the exact ones at the vertices), through the same coordinate change.
-  TriangleMesh mesh = scene.tessellation
-                          ? tessellate(scene.shape, *scene.tessellation)
-                          : make_grid_mesh(scene.shape, hf, displaced ? amplitude : 0.0, res);
+  TriangleMesh mesh =
+      scene.tessellation
+          ? tessellate(scene.shape, *scene.tessellation)
+          : make_grid_mesh(scene.shape, hf, displaced ? amplitude : 0.0, res, height_map);
   // Swap y and z (a mirror), then restore outward winding: Cycles flips the
   // shading normal on back faces, so a reversed triangle would shade dark.
   for (std::size_t i = 0; i < mesh.positions.size(); i += 3) {
@@ -169,6 +187,49 @@ TriangleMesh blender_mesh(const Scene& scene, bool displaced) {
     if (dot(ng, normal(tri[0]) + normal(tri[1]) + normal(tri[2])) < 0.0) std::swap(tri[1], tri[2]);
   }
   return mesh;
+}
+
+// The map's (u, v) times its tiling at every corner of the Blender mesh's
+// triangles, unwrapped where a triangle straddles the u seam and, at a
+// sphere's pole (where u is undefined), given the other corners' mean u.
+std::vector<float> corner_uvs(const Scene& scene, const TriangleMesh& mesh) {
+  const SurfaceMap& map = *scene.height.map;
+  std::vector<float> uvs(mesh.triangles.size() * 2);
+  for (std::size_t t = 0; t < mesh.triangles.size(); t += 3) {
+    double u[3], v[3];
+    bool pole[3];
+    for (int k = 0; k < 3; ++k) {
+      const float* q = &mesh.positions[3 * std::size_t(mesh.triangles[t + k])];
+      const SurfaceParameters p =
+          surface_parameters(scene.shape, to_blender(Vec3(q[0], q[1], q[2])));
+      u[k] = p.u, v[k] = p.v;
+      pole[k] = !(length(p.dp_du) > 1e-9 * scene.shape.radius);
+    }
+    const double lo = std::min({u[0], u[1], u[2]}), hi = std::max({u[0], u[1], u[2]});
+    if (hi - lo > 0.5)
+      for (double& x : u)
+        if (x < 0.5) x += 1.0;
+    double sum = 0.0;
+    int count = 0;
+    for (int k = 0; k < 3; ++k)
+      if (!pole[k]) sum += u[k], ++count;
+    for (int k = 0; k < 3; ++k) {
+      if (pole[k] && count > 0) u[k] = sum / count;
+      uvs[2 * (t + k)] = float(u[k] * map.tiles_u);
+      uvs[2 * (t + k) + 1] = float(v[k] * map.tiles_v);
+    }
+  }
+  return uvs;
+}
+
+// The map's texels as the image Blender loads (row 0 the top, as in the file).
+Image map_image(const SurfaceMap& map) {
+  Image image;
+  image.width = map.width, image.height = map.height;
+  image.channels = map.kind == MapKind::kHeight ? std::vector<std::string>{"Y"}
+                                                : std::vector<std::string>{"R", "G", "B"};
+  image.pixels = map.texels;
+  return image;
 }
 
 json job_json(const Scene& scene, const BlenderExport& out, bool has_height) {
@@ -211,12 +272,41 @@ json job_json(const Scene& scene, const BlenderExport& out, bool has_height) {
 
 BlenderExport export_blender(const Scene& scene) {
   check_blender_scene(scene);
-  const bool has_height = scene.height.amplitude > 0.0 && !scene.height.function.terms.empty();
+  const bool has_height = scene.height.normal_map() ||
+                          (scene.height.amplitude > 0.0 &&
+                           (scene.height.height_map() || !scene.height.function.terms.empty()));
   BlenderExport out;
   out.shading = blender_shading(scene, has_height);
   out.mesh = blender_mesh(scene, out.shading == BlenderShading::kMesh && has_height);
-  out.job_json = job_json(scene, out, has_height).dump(2) + "\n";
+  json job = job_json(scene, out, has_height);
+  if (scene.height.map && out.shading != BlenderShading::kMesh &&
+      out.shading != BlenderShading::kSmooth) {
+    out.uvs = corner_uvs(scene, out.mesh);
+    out.map = map_image(*scene.height.map);
+    job["mesh"]["uvs"] = kBlenderUvsFile;
+    job["height"]["image"] = {
+        {"file", kBlenderMapFile},
+        {"kind", scene.height.normal_map() ? "normal" : "height"},
+        {"extension", scene.height.map->edge == MapEdge::kWrap ? "REPEAT" : "EXTEND"}};
+  }
+  out.job_json = job.dump(2) + "\n";
   return out;
+}
+
+void write_blender_files(const BlenderExport& job, const std::string& folder) {
+  const std::filesystem::path dir(folder);
+  const TriangleMesh& m = job.mesh;
+  write_binary_file((dir / kBlenderPositionsFile).string(), m.positions.data(),
+                    m.positions.size() * sizeof(float));
+  write_binary_file((dir / kBlenderNormalsFile).string(), m.normals.data(),
+                    m.normals.size() * sizeof(float));
+  write_binary_file((dir / kBlenderTrianglesFile).string(), m.triangles.data(),
+                    m.triangles.size() * sizeof(unsigned));
+  if (!job.uvs.empty())
+    write_binary_file((dir / kBlenderUvsFile).string(), job.uvs.data(),
+                      job.uvs.size() * sizeof(float));
+  if (!job.map.pixels.empty()) write_exr(job.map, (dir / kBlenderMapFile).string());
+  write_text_file((dir / kBlenderJobFile).string(), job.job_json);
 }
 
 }  // namespace penumbra

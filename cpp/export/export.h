@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/grid_mesh.h"
+#include "image/image.h"
 #include "scene/renderer_table.h"
 #include "scene/scene.h"
 
@@ -68,6 +69,10 @@ struct BlenderExport {
   std::string job_json;  // the job file's text
   TriangleMesh mesh;     // in Blender coordinates, written beside the job
   BlenderShading shading = BlenderShading::kSmooth;
+  // Image maps: the map's (u, v) times its tiling at each triangle corner
+  // (kBlenderUvsFile, 2 floats a corner) and the map itself (kBlenderMapFile).
+  std::vector<float> uvs;
+  Image map;  // empty without a map
 };
 
 // Methods Blender provides for each representation: smooth and displacement
@@ -86,6 +91,12 @@ inline constexpr const char* kBlenderJobFile = "job.json";
 inline constexpr const char* kBlenderPositionsFile = "positions.f32";
 inline constexpr const char* kBlenderNormalsFile = "normals.f32";
 inline constexpr const char* kBlenderTrianglesFile = "triangles.u32";
+inline constexpr const char* kBlenderUvsFile = "uvs.f32";
+inline constexpr const char* kBlenderMapFile = "map.exr";
+
+// Writes an export's files into `folder` (which must exist): the job, the
+// mesh, and for image maps the UVs and the map.
+void write_blender_files(const BlenderExport& job, const std::string& folder);
 
 // POV-Ray/Penumbra coordinates (left-handed, y up) to Blender's
 // (right-handed, z up): swap y and z.

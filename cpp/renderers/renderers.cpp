@@ -381,11 +381,11 @@ RendererRun render_blender(const Scene& scene, const RenderSettings& settings) {
   const std::string exe = executable_for(RendererKind::kBlender, settings);
   const std::string script = blender_script(settings);
   WorkDir work(settings.log_path, RendererKind::kBlender);
-  write_file(work.path / kBlenderJobFile, job.job_json.data(), job.job_json.size());
-  const TriangleMesh& m = job.mesh;
-  write_file(work.path / kBlenderPositionsFile, m.positions.data(), m.positions.size() * 4);
-  write_file(work.path / kBlenderNormalsFile, m.normals.data(), m.normals.size() * 4);
-  write_file(work.path / kBlenderTrianglesFile, m.triangles.data(), m.triangles.size() * 4);
+  try {
+    write_blender_files(job, work.path.string());
+  } catch (const std::exception& e) {  // the work folder, not the user's output
+    throw RendererError(fmt::format("cannot write the Blender job: {}", e.what()));
+  }
   SessionLease lease{settings.blender_sessions, nullptr};
   if (lease.pool) {
     lease.session = lease.pool->acquire(exe, script);

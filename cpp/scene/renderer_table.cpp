@@ -80,11 +80,10 @@ const std::vector<RendererInfo>& renderer_table() {
        false,
        "the GGX lobe is evaluator-only: the Blender export is Lambertian (Cycles' Glossy BSDF "
        "uses Fresnel and multiple-scattering options the evaluator does not model)",
-       false,
-       "image height and normal maps are not exported to Blender yet (its Image Texture, Bump, "
-       "Normal Map and displacement nodes are not written)",
-       false,
-       "the plane shape is not exported to Blender yet"},
+       /*image_maps=*/true,
+       "",
+       /*plane=*/true,
+       ""},
   };
   return table;
 }
