@@ -10,7 +10,9 @@ Plain dicts the templates (templates/macros.html.j2) know how to draw:
           empty cell)
 Every str is plain text: the template escapes it.
 """
-from penumbra_data import data_uri, fmt
+import math
+
+from penumbra_data import data_uri, fmt, num
 
 
 def cell(c):
@@ -42,3 +44,26 @@ def figure_file(path, alt, caption):
 
 def grid_cell(fig=None, na=None):
     return {'figure': fig, 'na': na}
+
+
+def interval_text(ci, scale=1.0, digits=2):
+    """'[lo, hi]' of a report.json interval pair (n/a when undefined)."""
+    if not isinstance(ci, list) or len(ci) != 2 or None in ci:
+        return 'n/a'
+    lo, hi = (float(v) * scale for v in ci)
+    return f'[{lo:.{digits}f}, {hi:.{digits}f}]'
+
+
+def ci_cell(value, ci, scale=100.0, digits=1):
+    """A right-aligned 'value [lo, hi]' cell, scaled (100: percent), with
+    at least `digits` decimals and more when the numbers are small, so that
+    the largest shows two significant digits (0.0012, not 0.00)."""
+    v = num(value)
+    if not math.isfinite(v):
+        return {'text': 'n/a', 'cls': 'n na'}
+    ends = [num(t) for t in ci] if isinstance(ci, list) else []
+    big = max(abs(t * scale) for t in [v] + ends if math.isfinite(t))
+    if big > 0:
+        digits = min(max(digits, 1 - math.floor(math.log10(big))), 5)
+    return {'text': f'{v * scale:.{digits}f} {interval_text(ci, scale, digits)}',
+            'cls': 'n'}

@@ -249,6 +249,7 @@ class Report:
                             self.uris[r[key]] = data_uri(path, src, ctx)
         lp = doc.get('lowpoly')
         self.lowpoly = None if lp is None else LowPoly(lp, out, src)
+        self.filtering = filtering_entries(doc.get('filtering'), out, src)
         self.units = obj(doc.get('units'))
         self.terminator = region(self.units.get('terminator_region_deg'),
                                  [60.0, 100.0])
@@ -260,6 +261,26 @@ class Report:
         return [('overall', objs(rk.get('overall')))] + [
             (f'scene {s.get("scene")}', objs(s.get('methods')))
             for s in objs(rk.get('per_scene'))]
+
+
+def filtering_entries(entries, out, src):
+    """report['filtering'] checked: [] for null, else each entry with its
+    filtering.json loaded into entry['doc'] and its path in entry['path']."""
+    if entries is None:
+        return []
+    if not isinstance(entries, list):
+        raise BadInput(src, '"filtering" must be an array or null')
+    checked = []
+    for i, e in enumerate(entries):
+        e = obj(e)
+        ctx = f'filtering[{i}]'
+        for key in ('map', 'run'):
+            if not isinstance(e.get(key), str):
+                raise BadInput(src, f'{ctx}: expected a string "{key}"')
+        path = inside(out, e.get('json'), src, f'{ctx}: json')
+        checked.append(dict(e, path=path,
+                            doc=load_json(path, 'penumbra-filtering')))
+    return checked
 
 
 class LowPoly:

@@ -15,6 +15,7 @@ from matplotlib.ticker import LogFormatter, MaxNLocator
 from penumbra_data import (
     FRACTION, GROUND_TRUTH, METRICS, REF, BadInput, axis_index, axis_labels, column, farray, fmt,
     get_metric, metric_label, num, obj, objs, stem)
+from penumbra_filtering import filtering_figures
 from penumbra_grid_figure import grid_figure
 from penumbra_lowpoly_figures import lowpoly_figures
 from penumbra_plot import (
@@ -432,7 +433,8 @@ def report_figures(report):
     section. Returns {'ranking': PNG or None, 'profiles': [PNG per
     shown variant (report.shown)], 'grids': [[PNG, PDF] or [] per shown
     variant], 'sweeps': [sweep_figures()], 'lowpoly': lowpoly_figures() or
-    None, 'written': [every path]}."""
+    None, 'filtering': [paths per report.filtering entry, PNG, SVG, PDF
+    per metric], 'written': [every path]}."""
     figdir = os.path.join(report.out, 'figures')
     os.makedirs(figdir, exist_ok=True)
     colors = report_colors(report)
@@ -467,5 +469,13 @@ def report_figures(report):
         progress('low-poly section')
         figs['lowpoly'] = lowpoly_figures(report.lowpoly, figdir)
         written += figs['lowpoly']['written']
+    figs['filtering'] = []
+    for k, e in enumerate(report.filtering):
+        progress(f'filtering {e["map"]}/{e["run"]} '
+                 f'({k + 1}/{len(report.filtering)})')
+        paths = filtering_figures(e['path'], figdir,
+                                  f'filtering-{e["map"]}-{e["run"]}')
+        figs['filtering'].append(paths)
+        written += paths
     figs['written'] = written
     return figs

@@ -4,7 +4,7 @@ Reads filtering.json ("format": "penumbra-filtering", "version": 1:
 options{alphas[]}, cells[{filter, alpha, level, texels_per_pixel,
 energy_ratio, width_ratio, profile_error}], each metric {mean,
 interval[low, high], n}; null where undefined) and writes into OUTDIR
-filtering-<metric>.* for profile_error, width_ratio and energy_ratio: one
+filtering-<metric>.* (or PREFIX-<metric>.* in a study report) for profile_error, width_ratio and energy_ratio: one
 panel per base roughness, the metric against texels per pixel, one line
 per filter with its 95 % interval as error bars. PNG, SVG and PDF.
 """
@@ -39,7 +39,8 @@ def load_filtering(path):
     return alphas, filters, series
 
 
-def metric_figure(alphas, filters, series, metric, label, ideal, outdir):
+def metric_figure(alphas, filters, series, metric, label, ideal, outdir,
+                  prefix='filtering'):
     colors = method_colors(filters)
     cols = min(3, alphas.size)
     rows_n = (alphas.size + cols - 1) // cols
@@ -56,7 +57,10 @@ def metric_figure(alphas, filters, series, metric, label, ideal, outdir):
                   for x in m]
             low = mean - farray([v[0] for v in iv])
             high = farray([v[1] for v in iv]) - mean
-            err = np.nan_to_num(np.vstack([low, high]), nan=0.0)
+            # Clipped at 0: where every footprint gives the same value the
+            # summed mean can lie an ulp outside its [x, x] interval.
+            err = np.clip(np.nan_to_num(np.vstack([low, high]), nan=0.0),
+                          0.0, None)
             ax.errorbar(t, mean, yerr=err, label=f, color=colors[f], marker='o',
                         markersize=3, linewidth=1, capsize=2)
         ax.axhline(ideal, color='k', linewidth=0.5)
@@ -68,13 +72,15 @@ def metric_figure(alphas, filters, series, metric, label, ideal, outdir):
         axes[k // cols][k % cols].axis('off')
     axes[0][0].legend(loc='best')
     fig.suptitle(f'{label}: mean over footprints, 95 % bootstrap interval')
-    return save(fig, outdir, f'filtering-{metric}')
+    return save(fig, outdir, f'{prefix}-{metric}')
 
 
-def filtering_figures(path, outdir):
+def filtering_figures(path, outdir, prefix='filtering'):
+    """Writes OUTDIR/PREFIX-<metric>.{png,svg,pdf}; returns the paths, PNG
+    first for each metric."""
     alphas, filters, series = load_filtering(path)
     written = []
     for metric, label, ideal in METRICS:
         written += metric_figure(alphas, filters, series, metric, label, ideal,
-                                 outdir)
+                                 outdir, prefix)
     return written

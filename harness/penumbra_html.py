@@ -15,7 +15,9 @@ import os
 
 import jinja2
 
-from penumbra_context import figure, figure_file, grid_cell, table
+from penumbra_context import (
+    ci_cell, figure, figure_file, grid_cell, table)
+from penumbra_filtering_html import filtering_context
 from penumbra_data import (
     FRACTION, GROUND_TRUTH, METRICS, column, get_metric, metric_label, num,
     obj, objs, stem)
@@ -109,29 +111,6 @@ def ranking_context(report):
          i + 1 if math.isfinite(num(e.get('mean'))) else None,
          e.get('count')] for i, e in enumerate(entries)])}
         for group, entries in report.ranking_groups() if entries]
-
-
-def interval_text(ci, scale=1.0, digits=2):
-    """'[lo, hi]' of a report.json interval pair (n/a when undefined)."""
-    if not isinstance(ci, list) or len(ci) != 2 or None in ci:
-        return 'n/a'
-    lo, hi = (float(v) * scale for v in ci)
-    return f'[{lo:.{digits}f}, {hi:.{digits}f}]'
-
-
-def ci_cell(value, ci, scale=100.0, digits=1):
-    """A right-aligned 'value [lo, hi]' cell, scaled (100: percent), with
-    at least `digits` decimals and more when the numbers are small, so that
-    the largest shows two significant digits (0.0012, not 0.00)."""
-    v = num(value)
-    if not math.isfinite(v):
-        return {'text': 'n/a', 'cls': 'n na'}
-    ends = [num(t) for t in ci] if isinstance(ci, list) else []
-    big = max(abs(t * scale) for t in [v] + ends if math.isfinite(t))
-    if big > 0:
-        digits = min(max(digits, 1 - math.floor(math.log10(big))), 5)
-    return {'text': f'{v * scale:.{digits}f} {interval_text(ci, scale, digits)}',
-            'cls': 'n'}
 
 
 def verdict(m):
@@ -335,6 +314,7 @@ def report_context(report, figs):
         'lowpoly': lowpoly_context(report.lowpoly, figs['lowpoly'],
                                    report.out, report.src)
         if report.lowpoly else None,
+        'filtering': filtering_context(report, figs),
         'terminator': [f'{t:g}' for t in report.terminator],
         'lit': [f'{t:g}' for t in report.lit],
         'image_unit': str(report.units.get('image', 'W m^-2 sr^-1'))}

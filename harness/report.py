@@ -43,14 +43,18 @@ comparisons[{variant,scene,axis_values[],renderer,offset,reference
 ("<renderer>:analytic"),shadow{darkened_fraction,max_darkening,
 lost_shadow_fraction,shadow_shift_px,shadowed_pixels,...},profile{},
 image{}}], ranking{metric,reference,renderer,per_scene[{scene,offsets[{offset,
-darkened_fraction,rmse_terminator,count}]}],overall[...]}, units{}). image
-and difference are PNG paths relative to OUT.
+darkened_fraction,rmse_terminator,count}]}],overall[...]}, units{}),
+filtering (null, or [{map,run,source,json,csv,findings[]}]: each json a
+filtering.json, see below). image, difference, json and csv are paths
+relative to OUT.
 
 The low-poly section (after the bump one) draws figures/lowpoly-convergence-
 <group>.* (evaluator offsets vs evaluator:analytic over the convergence axis),
 lowpoly-external-<group>.* (other renderers vs their own analytic render) and
 lowpoly-shadow-<group>.* (cast-shadow loss and shift, scenes with a cast
-shadow); a group is a scene plus the values of any other axes.
+shadow); a group is a scene plus the values of any other axes. The
+filtering section (last) draws figures/filtering-<map>-<run>-<metric>.* per
+entry (penumbra_filtering.py) and a table of its summary with intervals.
 
   /usr/bin/python3 harness/report.py filtering FILTERING.json OUTDIR
       writes OUTDIR/filtering-{profile_error,width_ratio,energy_ratio}.*

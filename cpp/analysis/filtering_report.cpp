@@ -33,6 +33,30 @@ const char* verdict(const PairedComparison& c) {
   return "tie";
 }
 
+// The perceived roughness is the highlight's width: which filter keeps it
+// closest to the reference's (|log width ratio|), and which keep it within
+// their interval (the interval contains 1).
+std::string perceived_roughness_finding(const std::vector<FilterSummary>& summary) {
+  const FilterSummary* closest = nullptr;
+  std::string within;
+  for (const FilterSummary& s : summary) {
+    const MeanWithInterval& w = s.width_ratio;
+    if (!(w.mean > 0.0)) continue;
+    if (!closest || std::abs(std::log(w.mean)) < std::abs(std::log(closest->width_ratio.mean)))
+      closest = &s;
+    if (w.interval.low <= 1.0 && w.interval.high >= 1.0)
+      within += (within.empty() ? "" : ", ") + id(s.filter);
+  }
+  if (!closest) return "No filter has a defined highlight width.";
+  const MeanWithInterval& w = closest->width_ratio;
+  return fmt::format(
+      "Perceived roughness (highlight width): closest to the reference's is {} ({:.3f} [{:.3f}, "
+      "{:.3f}]); {}.",
+      id(closest->filter), w.mean, w.interval.low, w.interval.high,
+      within.empty() ? "no filter's interval contains 1 (every one changes the width)"
+                     : "width ratio interval containing 1 (width kept): " + within);
+}
+
 }  // namespace
 
 std::vector<std::string> filtering_findings(const FilteringResult& r) {
@@ -56,6 +80,7 @@ std::vector<std::string> filtering_findings(const FilteringResult& r) {
                     "preserved).",
                     id(best.filter), best.width_ratio.mean, best.width_ratio.interval.low,
                     best.width_ratio.interval.high));
+    out.push_back(perceived_roughness_finding(r.summary));
   }
   std::size_t ggx_better = 0, beckmann_better = 0, ties = 0;
   // Per base roughness: which mapping wins in how many of its levels.

@@ -24,11 +24,14 @@ class ExportError : public std::runtime_error {
 };
 
 // Refuses, with the renderer table's reason, the scene features the table
-// says renderer `r` (exported as `name`) cannot render: image maps, the plane.
+// says renderer `r` (exported as `name`) cannot render: height or normal
+// maps, the plane.
 inline void refuse_unoffered(const Scene& scene, RendererKind r, const char* name) {
   const RendererInfo& info = renderer_info(r);
-  if (scene.height.map && !info.image_maps)
-    throw ExportError(std::string(name) + " export: " + info.image_maps_why_not);
+  if (scene.height.height_map() && !info.height_maps)
+    throw ExportError(std::string(name) + " export: " + info.height_maps_why_not);
+  if (scene.height.normal_map() && !info.normal_maps)
+    throw ExportError(std::string(name) + " export: " + info.normal_maps_why_not);
   if (scene.shape.type == ShapeType::kPlane && !info.plane)
     throw ExportError(std::string(name) + " export: " + info.plane_why_not);
 }
@@ -43,6 +46,9 @@ struct PovrayExport {
   int width = 0, height = 0;  // final image, pixels
   int supersample_x = 1, supersample_y = 1;
   bool single_thread = false;  // isosurfaces: +WT1 keeps them deterministic
+  // An image height map in bump: its texels rescaled to [0, 1] (R = G = B),
+  // which the SDL reads back as kPovrayMapFile beside it; empty otherwise.
+  Image map;
   // Arguments after the executable, for input and output file names that the
   // caller chose (plain names, POV-Ray runs in their folder).
   std::vector<std::string> arguments(const std::string& input, const std::string& output,
@@ -53,7 +59,16 @@ struct PovrayExport {
 // shadow-ray offset: only offset `none`. A tessellated shape becomes a mesh2
 // (normal_vectors for smooth shading). Distant lights only: POV-Ray's
 // fade_power 2 is 2/(1+(d/D)^2), not 1/d^2. No props (evaluator-only).
+// Image height maps in bump: the evaluator's cubic B-spline of the texels as
+// SDL functions over nearest-texel lookups of kPovrayMapFile; displaced
+// image maps and displaced planes: the evaluator's displaced grid as a mesh2
+// with its exact vertex normals. Normal maps are refused (renderer table).
 PovrayExport export_povray(const Scene& scene);
+// The image file the SDL of a height-mapped scene reads (a fixed name).
+inline constexpr const char* kPovrayMapFile = "map.exr";
+// Writes scene.pov (and kPovrayMapFile where the export has a map) into
+// `folder`, which must exist.
+void write_povray_files(const PovrayExport& job, const std::string& folder);
 
 // ---- Blender 3.4 Cycles ---------------------------------------------------
 

@@ -3,8 +3,12 @@
 
 #include <fmt/format.h>
 
+#include <filesystem>
+
+#include "core/surface_map.h"
 #include "core/tessellation.h"
 #include "export/export.h"
+#include "image/image_io.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {
@@ -127,22 +131,25 @@ struct SdlContext {
   double amplitude, max_h, reach, r, half;
   bool has_height, cylinder;
   std::string texture;
+  const SurfaceMap* map;  // an image height map, or null
 };
 
 SdlContext sdl_context(const Scene& scene) {
   const Shape& shape = scene.shape;
   const HeightFunction& hf = scene.height.function;
+  const SurfaceMap* map = scene.height.height_map();
   SdlContext c{scene,
                placement(shape),
                scene.height.amplitude,
-               max_abs_height(hf),
+               map ? height_bounds(hf, map, shape).max_abs : max_abs_height(hf),
                0.0,
                shape.radius,
                0.5 * shape.height,
                false,
                shape.type == ShapeType::kCylinder,
-               ""};
-  c.has_height = c.amplitude > 0.0 && c.max_h > 0.0 && !hf.terms.empty();
+               "",
+               map};
+  c.has_height = c.amplitude > 0.0 && c.max_h > 0.0 && (map || !hf.terms.empty());
   c.reach = c.has_height ? c.amplitude * c.max_h : 0.0;
   c.texture = fmt::format(
       "  pigment {{ rgb {} }}\n"
@@ -185,6 +192,24 @@ std::string sdl_header(const Scene& scene, const PovrayExport& out) {
   return s;
 }
 
+// A triangle mesh in scene coordinates as a mesh2: with `normals`, one per
+// vertex, indexed like the vertices (POV-Ray interpolates them
+// barycentrically); without, POV-Ray shades with Ng.
+std::string mesh2_sdl(const TriangleMesh& mesh, bool normals, const std::string& texture) {
+  std::string faces;
+  for (std::size_t t = 0; t < mesh.triangles.size(); t += 3)
+    faces += fmt::format(",\n    <{}, {}, {}>", mesh.triangles[t], mesh.triangles[t + 1],
+                         mesh.triangles[t + 2]);
+  std::string s = fmt::format("mesh2 {{\n  vertex_vectors {{\n    {}{}\n  }}\n",
+                              mesh.vertex_count(), mesh_vectors(mesh.positions));
+  if (normals)
+    s += fmt::format("  normal_vectors {{\n    {}{}\n  }}\n", mesh.vertex_count(),
+                     mesh_vectors(mesh.normals));
+  s += fmt::format("  face_indices {{\n    {}{}\n  }}\n{}}}\n", mesh.triangle_count(), faces,
+                   texture);
+  return s;
+}
+
 // A tessellated shape: the evaluator's very triangles as a mesh2.
 std::string mesh_sdl(const SdlContext& c) {
   const Scene& scene = c.scene;
@@ -195,27 +220,30 @@ std::string mesh_sdl(const SdlContext& c) {
     throw ExportError(
         "POV-Ray export: bump on a tessellated shape is evaluator-only (use the smooth "
         "representation, or no /shape/tessellation)");
-  // In scene coordinates. Smooth shading: one normal per vertex, indexed like
-  // the vertices (POV-Ray interpolates them barycentrically); flat: no
-  // normals, POV-Ray shades with Ng.
   const TriangleMesh mesh = tessellate(scene.shape, *scene.tessellation);
-  std::string faces;
-  for (std::size_t t = 0; t < mesh.triangles.size(); t += 3)
-    faces += fmt::format(",\n    <{}, {}, {}>", mesh.triangles[t], mesh.triangles[t + 1],
-                         mesh.triangles[t + 2]);
   const bool smooth = scene.tessellation->shading == NormalShading::kSmooth;
-  std::string s = fmt::format(
-      "// Low-poly {} mesh: {} vertices, {} triangles. POV-Ray starts shadow rays\n"
-      "// on the flat triangle (offset `none`).\n"
-      "mesh2 {{\n  vertex_vectors {{\n    {}{}\n  }}\n",
-      smooth ? "smooth-shaded" : "flat-shaded", mesh.vertex_count(), mesh.triangle_count(),
-      mesh.vertex_count(), mesh_vectors(mesh.positions));
-  if (smooth)
-    s += fmt::format("  normal_vectors {{\n    {}{}\n  }}\n", mesh.vertex_count(),
-                     mesh_vectors(mesh.normals));
-  s += fmt::format("  face_indices {{\n    {}{}\n  }}\n{}}}\n", mesh.triangle_count(), faces,
-                   c.texture);
-  return s;
+  return fmt::format(
+             "// Low-poly {} mesh: {} vertices, {} triangles. POV-Ray starts shadow rays\n"
+             "// on the flat triangle (offset `none`).\n",
+             smooth ? "smooth-shaded" : "flat-shaded", mesh.vertex_count(), mesh.triangle_count()) +
+         mesh2_sdl(mesh, smooth, c.texture);
+}
+
+// The displaced surface as the evaluator's own grid (make_grid_mesh at the
+// scene's edge length), its vertex normals the exact displaced normals: the
+// ground truth of image height maps and of the plane, which have no closed
+// form for an isosurface.
+std::string displaced_grid_sdl(const SdlContext& c) {
+  const Scene& scene = c.scene;
+  const double reach = c.amplitude * c.max_h;
+  const GridResolution res = grid_resolution(scene.shape, scene.displacement.edge_length, reach);
+  const TriangleMesh mesh =
+      make_grid_mesh(scene.shape, scene.height.function, c.amplitude, res, c.map);
+  return fmt::format(
+             "// True displacement: the evaluator's displaced grid ({} x {} segments, {} "
+             "triangles),\n// with the exact displaced normal at each vertex.\n",
+             res.nu, res.nv, mesh.triangle_count()) +
+         mesh2_sdl(mesh, /*normals=*/true, c.texture);
 }
 
 // |q| of the point q, kept away from 0: the radial distance of the base surface.
@@ -228,6 +256,7 @@ std::string rho_sdl(const SdlContext& c) {
 // constant along the normal, so POV-Ray's 3D pattern gradient is the
 // surface gradient the evaluator uses, and the isosurface is P + A h N.
 std::string projected_h_sdl(const SdlContext& c) {
+  if (c.scene.shape.type == ShapeType::kPlane) return "Penumbra_H(x, 0, z)";
   const std::string rho = rho_sdl(c);
   return c.cylinder ? fmt::format("Penumbra_H({0} * x / {1}, y, {0} * z / {1})", num(c.r), rho)
                     : fmt::format("Penumbra_H({0} * x / {1}, {0} * y / {1}, {0} * z / {1})",
@@ -265,6 +294,21 @@ std::string isosurface_sdl(const SdlContext& c) {
       c.cylinder && !c.scene.shape.caps ? "  open\n" : "", c.texture, matrix(c.place));
 }
 
+// The plane's corners in canonical coordinates (y along its normal), closed:
+// the rectangle of half sides width/2 along frame.s and height/2 along frame.t.
+std::string plane_corners(const SdlContext& c) {
+  const Shape& shape = c.scene.shape;
+  std::string out;
+  const double signs[5][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}, {-1, -1}};
+  for (const auto& [a, b] : signs) {
+    const Vec3 d =
+        shape.frame.s * (0.5 * a * shape.width) + shape.frame.t * (0.5 * b * shape.height);
+    out += (out.empty() ? "" : ", ") +
+           vec(Vec3{dot(d, c.place.x), dot(d, c.place.y), dot(d, c.place.z)});
+  }
+  return out;
+}
+
 // The analytic primitive, with POV-Ray's bump for the bump representation.
 std::string primitive_sdl(const SdlContext& c) {
   std::string normal;
@@ -278,12 +322,118 @@ std::string primitive_sdl(const SdlContext& c) {
         "    bump_size {}\n    accuracy 1e-4\n  }}\n",
         num(k), projected_h_sdl(c), num(7.5 * c.amplitude / k));
   }
+  if (c.scene.shape.type == ShapeType::kPlane)
+    return fmt::format("polygon {{\n  5, {}\n{}{}  {}\n}}\n", plane_corners(c), c.texture, normal,
+                       matrix(c.place));
   if (c.cylinder)
     return fmt::format("cylinder {{\n  <0, {}, 0>, <0, {}, 0>, {}\n{}{}{}  {}\n}}\n", num(-c.half),
                        num(c.half), num(c.r), c.scene.shape.caps ? "" : "  open\n", c.texture,
                        normal, matrix(c.place));
   return fmt::format("sphere {{\n  <0, 0, 0>, {}\n{}{}  {}\n}}\n", num(c.r), c.texture, normal,
                      matrix(c.place));
+}
+
+// ---- image height maps ------------------------------------------------------
+
+// The map's texels rescaled to [0, 1] as R = G = B (POV-Ray reads colours;
+// a constant map stays 0): the SDL maps them back with `low` + `range` x.
+struct MapTexels {
+  Image image;
+  double low = 0.0, range = 0.0;
+};
+
+MapTexels map_texels(const SurfaceMap& m) {
+  MapTexels out;
+  const auto [lo, hi] = std::minmax_element(m.texels.begin(), m.texels.end());
+  out.low = *lo, out.range = double(*hi) - double(*lo);
+  out.image.width = m.width, out.image.height = m.height;
+  out.image.channels = {"R", "G", "B"};
+  out.image.pixels.reserve(m.texels.size() * 3);
+  for (float t : m.texels) {
+    const float v = out.range > 0.0 ? float((double(t) - out.low) / out.range) : 0.0f;
+    out.image.pixels.insert(out.image.pixels.end(), {v, v, v});
+  }
+  return out;
+}
+
+// The coordinate of canonical q along the world direction `d`: dot(M q, d).
+std::string along_sdl(const Placement& p, const Vec3& d) {
+  return fmt::format("{} * x + {} * y + {} * z", num(dot(p.x, d)), num(dot(p.y, d)),
+                     num(dot(p.z, d)));
+}
+
+// The shape's (u, v) of canonical q (surface_parameters, core/surface_map.h):
+// Penumbra_U and Penumbra_V, over the local axes Penumbra_Ls, _Lt, _Ln.
+std::string map_parameters_sdl(const SdlContext& c) {
+  const Shape& shape = c.scene.shape;
+  std::string s = fmt::format(
+      "#declare Penumbra_Ls = function {{ {} }}\n#declare Penumbra_Lt = function {{ {} }}\n"
+      "#declare Penumbra_Ln = function {{ {} }}\n",
+      along_sdl(c.place, shape.frame.s), along_sdl(c.place, shape.frame.t),
+      along_sdl(c.place, shape.frame.n));
+  if (shape.type == ShapeType::kPlane)
+    return s + fmt::format(
+                   "#declare Penumbra_U = function {{ Penumbra_Ls(x, y, z) / {} + 0.5 }}\n"
+                   "#declare Penumbra_V = function {{ Penumbra_Lt(x, y, z) / {} + 0.5 }}\n",
+                   num(shape.width), num(shape.height));
+  // The azimuth in [0, 2 pi) as the evaluator measures it, over 2 pi.
+  s += fmt::format(
+      "#declare Penumbra_Az = function(Ca, Cb) {{ select(atan2(Cb, Ca), atan2(Cb, Ca) + {0}, "
+      "atan2(Cb, Ca)) / {0} }}\n"
+      "#declare Penumbra_U = function {{ Penumbra_Az(Penumbra_Ls(x, y, z), Penumbra_Lt(x, y, "
+      "z)) }}\n",
+      num(2.0 * kPi));
+  if (c.cylinder)
+    return s +
+           fmt::format("#declare Penumbra_V = function {{ (Penumbra_Ln(x, y, z) + {}) / {} }}\n",
+                       num(c.half), num(shape.height));
+  return s + fmt::format(
+                 "#declare Penumbra_V = function {{ 1 - acos(max(-1, min(1, Penumbra_Ln(x, y, z) / "
+                 "max(sqrt(x * x + y * y + z * z), {})))) / {} }}\n",
+                 num(1e-12 * c.r), num(kPi));
+}
+
+// Penumbra_H: the uniform cubic B-spline of the texels at the shape's (u, v)
+// (sample_map: Cycles' Cubic, -0.5 texel offset), from 16 nearest-texel
+// lookups of the image: column i at x = (i + 0.5) / W, row j (0 the top) at
+// y = 1 - (j + 0.5) / H of the unit square POV-Ray lays the image on.
+std::string map_functions_sdl(const SdlContext& c, const MapTexels& t) {
+  const SurfaceMap& m = *c.map;
+  const auto index = [&](const char* name, int size) {
+    return m.edge == MapEdge::kWrap
+               ? fmt::format("#declare {0} = function(Ci) {{ mod(mod(Ci, {1}) + {1}, {1}) }}\n",
+                             name, size)
+               : fmt::format("#declare {} = function(Ci) {{ min(max(Ci, 0), {}) }}\n", name,
+                             size - 1);
+  };
+  std::string s = fmt::format(
+      "// The image height map: texels rescaled to [0, 1] in {}; h = {} + {} x texel.\n"
+      "#declare Penumbra_Img = function {{ pigment {{ image_map {{ exr \"{}\" }} }} }}\n",
+      kPovrayMapFile, num(t.low), num(t.range), kPovrayMapFile);
+  s += index("Penumbra_I", m.width) + index("Penumbra_J", m.height);
+  s += fmt::format(
+      "#declare Penumbra_Tex = function(Ci, Cj) {{ Penumbra_Img((Penumbra_I(Ci) + 0.5) / {}, 1 - "
+      "(Penumbra_J(Cj) + 0.5) / {}, 0).red }}\n",
+      m.width, m.height);
+  s +=
+      "#declare Penumbra_W0 = function(Ff) { (1 - Ff) * (1 - Ff) * (1 - Ff) / 6 }\n"
+      "#declare Penumbra_W1 = function(Ff) { (3 * Ff * Ff * Ff - 6 * Ff * Ff + 4) / 6 }\n"
+      "#declare Penumbra_W2 = function(Ff) { (-3 * Ff * Ff * Ff + 3 * Ff * Ff + 3 * Ff + 1) / 6 }\n"
+      "#declare Penumbra_W3 = function(Ff) { Ff * Ff * Ff / 6 }\n"
+      "#declare Penumbra_Row = function(Ci, Cj, Ff) { Penumbra_W0(Ff) * Penumbra_Tex(Ci - 1, Cj) "
+      "+ Penumbra_W1(Ff) * Penumbra_Tex(Ci, Cj) + Penumbra_W2(Ff) * Penumbra_Tex(Ci + 1, Cj) + "
+      "Penumbra_W3(Ff) * Penumbra_Tex(Ci + 2, Cj) }\n"
+      "#declare Penumbra_S4 = function(Ci, Ff, Cj, Gg) { Penumbra_W0(Gg) * Penumbra_Row(Ci, Cj - "
+      "1, Ff) + Penumbra_W1(Gg) * Penumbra_Row(Ci, Cj, Ff) + Penumbra_W2(Gg) * Penumbra_Row(Ci, Cj "
+      "+ 1, Ff) + Penumbra_W3(Gg) * Penumbra_Row(Ci, Cj + 2, Ff) }\n"
+      "#declare Penumbra_S2 = function(Xs, Ys) { Penumbra_S4(floor(Xs), Xs - floor(Xs), "
+      "floor(Ys), Ys - floor(Ys)) }\n";
+  s += map_parameters_sdl(c);
+  s += fmt::format(
+      "#declare Penumbra_H = function {{ {} + {} * Penumbra_S2({} * Penumbra_U(x, y, z) - 0.5, "
+      "(1 - {} * Penumbra_V(x, y, z)) * {} - 0.5) }}\n\n",
+      num(t.low), num(t.range), num(m.tiles_u * m.width), num(m.tiles_v), m.height);
+  return s;
 }
 
 }  // namespace
@@ -294,18 +444,34 @@ PovrayExport export_povray(const Scene& scene) {
   out.width = scene.camera.width, out.height = scene.camera.height;
   strata(scene.camera.spp, &out.supersample_x, &out.supersample_y);
   const SdlContext c = sdl_context(scene);
-  const bool isosurface = scene.representation == Representation::kDisplacement && c.has_height;
-  out.single_thread = isosurface;
+  const bool displaced = scene.representation == Representation::kDisplacement && c.has_height;
+  const bool grid = displaced && (c.map || scene.shape.type == ShapeType::kPlane);
+  out.single_thread = displaced && !grid;  // the isosurface
   out.sdl = sdl_header(scene, out);
   if (scene.tessellation) {
     out.sdl += mesh_sdl(c);
     return out;
   }
-  if (c.has_height)
+  if (grid) {
+    out.sdl += displaced_grid_sdl(c);
+    return out;
+  }
+  if (c.has_height && c.map) {
+    MapTexels texels = map_texels(*c.map);
+    out.sdl += map_functions_sdl(c, texels);
+    out.map = std::move(texels.image);
+  } else if (c.has_height) {
     out.sdl += fmt::format("#declare Penumbra_H = function(x, y, z) {{\n    {}\n}}\n\n",
                            height_function(scene.height.function, c.place));
-  out.sdl += isosurface ? isosurface_sdl(c) : primitive_sdl(c);
+  }
+  out.sdl += displaced ? isosurface_sdl(c) : primitive_sdl(c);
   return out;
+}
+
+void write_povray_files(const PovrayExport& job, const std::string& folder) {
+  const std::filesystem::path dir(folder);
+  if (!job.map.pixels.empty()) write_exr(job.map, (dir / kPovrayMapFile).string());
+  write_text_file((dir / "scene.pov").string(), job.sdl);
 }
 
 }  // namespace penumbra

@@ -6,7 +6,9 @@
 //              entry holds the evaluator's analysis channels, so all depend on it;
 //   povray     the POV-Ray exporter (POV-Ray entries only);
 //   blender    the Blender exporter (Blender entries only; the script itself
-//              is hashed when it is used, see pixel_code_digest).
+//              is hashed when it is used, see pixel_code_digest);
+//   filtering  the bump-filtering experiment and the math it reads (the
+//              filtering section of a study, study/filtering_study.h).
 #pragma once
 
 namespace penumbra {
@@ -15,6 +17,7 @@ struct CodeDigests {
   const char* evaluator;
   const char* povray;
   const char* blender;
+  const char* filtering;
 };
 
 const CodeDigests& build_code_digests();

@@ -77,12 +77,6 @@ struct WorkDir {
   }
 };
 
-void write_file(const fs::path& path, const void* data, std::size_t bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
-  if (!out) throw RendererError(fmt::format("cannot write {}", path.string()));
-}
-
 void check_process(RendererKind r, const ProcessResult& p, const RenderSettings& s, WorkDir& work) {
   if (p.ok()) return;
   if (p.cancelled) {
@@ -181,7 +175,11 @@ RendererRun render_povray(const Scene& scene, const RenderSettings& settings) {
   const PovrayExport job = export_povray(scene);
   const std::string exe = executable_for(RendererKind::kPovray, settings);
   WorkDir work(settings.log_path, RendererKind::kPovray);
-  write_file(work.path / "scene.pov", job.sdl.data(), job.sdl.size());
+  try {  // a full disk is this render's failure, not the study's
+    write_povray_files(job, work.path.string());
+  } catch (const std::exception& e) {
+    throw RendererError(fmt::format("cannot write the POV-Ray job: {}", e.what()));
+  }
   std::vector<std::string> argv{exe};
   for (std::string& a : job.arguments("scene.pov", "scene.exr", thread_count(settings)))
     argv.push_back(std::move(a));
@@ -442,11 +440,11 @@ ResourceEstimate estimate_resources(RendererKind renderer, const Scene& scene) {
   const double pixels = double(scene.camera.width) * double(scene.camera.height);
   double image_bytes = pixels * kBytesPerPixel;
   if (renderer == RendererKind::kPovray) {
-    try {  // the supersampled RGBA image POV-Ray writes and Penumbra reads back
-      const PovrayExport job = export_povray(scene);
-      image_bytes += pixels * job.supersample_x * job.supersample_y * 4 * 4 * 2;
-    } catch (const std::exception&) {  // not expressible: render_with says why
-    }
+    // The supersampled RGBA image POV-Ray writes and Penumbra reads back (the
+    // export's strata, without building its SDL: a displaced grid is large).
+    int sx = 1, sy = 1;
+    strata(scene.camera.spp, &sx, &sy);
+    image_bytes += pixels * sx * sy * 4 * 4 * 2;
   }
   double triangles = 0.0;
   std::string mesh_pointer;

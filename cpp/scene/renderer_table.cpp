@@ -25,7 +25,9 @@ const std::vector<RendererInfo>& renderer_table() {
        "",
        /*specular=*/true,
        "",
-       /*image_maps=*/true,
+       /*height_maps=*/true,
+       "",
+       /*normal_maps=*/true,
        "",
        /*plane=*/true,
        ""},
@@ -36,7 +38,9 @@ const std::vector<RendererInfo>& renderer_table() {
        "povray",
        "PENUMBRA_POVRAY",
        "POV-Ray 3",
-       "POV-Ray 3.7: bump via normal{function}, ground truth via isosurface",
+       "POV-Ray 3.7: bump via normal{function} (image height maps: the same cubic B-spline as "
+       "SDL functions over nearest-texel lookups), ground truth via isosurface (image maps and "
+       "the plane: the evaluator's displaced grid as a mesh2)",
        false,
        {TerminatorMethod::kNone},
        {TerminatorMethod::kNone},
@@ -50,11 +54,13 @@ const std::vector<RendererInfo>& renderer_table() {
        false,
        "the GGX lobe is evaluator-only: the POV-Ray export is Lambertian (its specular and "
        "phong highlights are other models)",
-       false,
-       "image height and normal maps are not exported to POV-Ray yet (its bump_map and "
-       "isosurface forms are not written)",
-       false,
-       "the plane shape is not exported to POV-Ray yet"},
+       /*height_maps=*/true,
+       "",
+       /*normal_maps=*/false,
+       "POV-Ray 3.7 has no tangent-space normal-map input: its normal patterns perturb the "
+       "normal by the gradient of a scalar function, which a normal map does not give",
+       /*plane=*/true,
+       ""},
       {RendererKind::kBlender,
        "blender",
        "Blender 3.4 Cycles",
@@ -80,7 +86,9 @@ const std::vector<RendererInfo>& renderer_table() {
        false,
        "the GGX lobe is evaluator-only: the Blender export is Lambertian (Cycles' Glossy BSDF "
        "uses Fresnel and multiple-scattering options the evaluator does not model)",
-       /*image_maps=*/true,
+       /*height_maps=*/true,
+       "",
+       /*normal_maps=*/true,
        "",
        /*plane=*/true,
        ""},

@@ -42,14 +42,16 @@ struct RendererInfo {
   bool all_offsets;
   std::vector<OffsetMethod> offsets;
   const char* offsets_why_not;
-  bool props;                      // extra spheres in the scene (/props)
-  const char* props_why_not;       // "" when props are offered
-  bool specular;                   // the GGX lobe (/material/specular_weight > 0)
-  const char* specular_why_not;    // "" when it is offered
-  bool image_maps;                 // /height/type "height-map" and "normal-map"
-  const char* image_maps_why_not;  // "" when they are offered
-  bool plane;                      // /shape/type "plane"
-  const char* plane_why_not;       // "" when it is offered
+  bool props;                       // extra spheres in the scene (/props)
+  const char* props_why_not;        // "" when props are offered
+  bool specular;                    // the GGX lobe (/material/specular_weight > 0)
+  const char* specular_why_not;     // "" when it is offered
+  bool height_maps;                 // /height/type "height-map"
+  const char* height_maps_why_not;  // "" when they are offered
+  bool normal_maps;                 // /height/type "normal-map"
+  const char* normal_maps_why_not;  // "" when they are offered
+  bool plane;                       // /shape/type "plane"
+  const char* plane_why_not;        // "" when it is offered
 };
 
 // Every renderer, in the order reports list them.

@@ -101,9 +101,10 @@ std::string cannot_render(RendererKind r, const json& scene) {
   const RendererInfo& info = renderer_info(r);
   if (!info.props && scene.contains("props") && !scene["props"].empty()) return info.props_why_not;
   const json::json_pointer type("/height/type");
-  if (!info.image_maps && scene.contains(type) && scene[type].is_string() &&
-      (scene[type] == "height-map" || scene[type] == "normal-map"))
-    return info.image_maps_why_not;
+  if (!info.height_maps && scene.contains(type) && scene[type] == "height-map")
+    return info.height_maps_why_not;
+  if (!info.normal_maps && scene.contains(type) && scene[type] == "normal-map")
+    return info.normal_maps_why_not;
   const json::json_pointer shape("/shape/type");
   if (!info.plane && scene.contains(shape) && scene[shape] == "plane") return info.plane_why_not;
   return "";

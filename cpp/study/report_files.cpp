@@ -801,7 +801,8 @@ json report_json(const ReportInputs& in) {
           {"failures", failures},
           {"nonfinite_pixels", in.comparisons.nonfinite},
           {"plots", plots},
-          {"lowpoly", in.study.lowpoly ? lowpoly_json(in) : json()}};
+          {"lowpoly", in.study.lowpoly ? lowpoly_json(in) : json()},
+          {"filtering", filtering_report_json(in.filtering, in.study.filtering.has_value())}};
 }
 
 }  // namespace

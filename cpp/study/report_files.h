@@ -12,6 +12,7 @@
 
 #include "study/compare.h"
 #include "study/convergence.h"
+#include "study/filtering_study.h"
 #include "study/plan.h"
 #include "study/study_file.h"
 
@@ -28,6 +29,7 @@ struct ReportInputs {
   const std::vector<std::string>& errors;               // per job; "" when done
   const std::vector<char>& done;                        // per job
   const std::vector<VariantConvergence>& convergence;   // bump variants with an evaluator truth
+  const std::vector<FilteringEntry>& filtering;         // the filtering section's entries
 };
 
 // Writes report.json, metrics.csv and (with a low-poly section) lowpoly.csv

@@ -17,6 +17,7 @@
 #include "study/convergence.h"
 #include "study/execute.h"
 #include "study/figures.h"
+#include "study/filtering_study.h"
 #include "study/plan.h"
 #include "study/rendering.h"
 #include "study/report_files.h"
@@ -360,9 +361,13 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   if (stats.not_started > 0) return stats;  // interrupted: no report from a partial study
 
   const Comparisons comparisons = compare_study(plan, r.images, out.string(), options.jobs);
-  write_report_files(
-      {study, plan, comparisons, renderers.versions, r.errors, r.images.done, convergence},
-      out.string());
+  const std::vector<FilteringEntry> filtering =
+      study.filtering
+          ? run_filtering_section(*study.filtering, out.string(), options.jobs, options.log)
+          : std::vector<FilteringEntry>{};
+  write_report_files({study, plan, comparisons, renderers.versions, r.errors, r.images.done,
+                      convergence, filtering},
+                     out.string());
   if (options.figures) {
     if (options.log)
       options.log(

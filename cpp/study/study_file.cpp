@@ -8,6 +8,8 @@
 #include <fmt/format.h>
 
 #include "scene/scene_json.h"
+#include "study/filtering_study.h"
+#include "study/json_fields.h"
 #include "study/names.h"
 #include "util/strict_json.h"
 
@@ -16,43 +18,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-std::string child(const std::string& pointer, const std::string& key) {
-  return pointer + "/" + key;
-}
-
-void reject_unknown(const json& object, std::initializer_list<const char*> known,
-                    const std::string& file, const std::string& pointer) {
-  for (const auto& [key, value] : object.items()) {
-    bool ok = false;
-    for (const char* k : known) ok = ok || key == k;
-    if (!ok) {
-      std::string names;
-      for (const char* k : known) names += (names.empty() ? "" : ", ") + std::string(k);
-      throw InputError(file, child(pointer, key), "unknown key (expected one of: " + names + ")");
-    }
-  }
-}
-
-const json& require(const json& object, const char* key, const std::string& file,
-                    const std::string& pointer) {
-  if (!object.contains(key)) throw InputError(file, child(pointer, key), "missing required key");
-  return object.at(key);
-}
-
-// The value of an integer in [lo, hi], or -1 when `v` is not one (no
-// truncation: 4294967297 is not 1).
-long long strict_integer(const json& v, long long lo, long long hi) {
-  if (v.is_number_unsigned()) {
-    const auto u = v.get<std::uint64_t>();
-    return u >= static_cast<std::uint64_t>(lo) && u <= static_cast<std::uint64_t>(hi)
-               ? static_cast<long long>(u)
-               : -1;
-  }
-  if (!v.is_number_integer()) return -1;
-  const auto i = v.get<std::int64_t>();
-  return i >= lo && i <= hi ? i : -1;
-}
 
 std::string method_label(const std::string& id, const json& parameters) {
   if (!parameters.is_object() || parameters.empty()) return id;
@@ -358,7 +323,7 @@ Study load_study(const std::string& path) {
   if (!doc.is_object()) throw InputError(f, "", "expected a JSON object");
   reject_unknown(doc,
                  {"version", "name", "scenes", "set", "axes", "methods", "renderers", "blender_spp",
-                  "ground_truth", "plots", "lowpoly"},
+                  "ground_truth", "plots", "lowpoly", "filtering"},
                  f, "");
   const json& version = require(doc, "version", f, "");
   if (strict_integer(version, 1, 1000) != kStudyFormatVersion)
@@ -382,8 +347,11 @@ Study load_study(const std::string& path) {
   }
   const fs::path base = fs::path(path).parent_path();
   if (doc.contains("lowpoly")) s.lowpoly = read_lowpoly(doc["lowpoly"], f, base);
-  // A study is a bump study, a low-poly study, or both.
-  if (doc.contains("scenes") || !s.lowpoly) read_scenes(doc, f, "", base, &s.bump.scenes);
+  if (doc.contains("filtering"))
+    s.filtering = read_filtering_section(doc["filtering"], f, base.string());
+  // A study is a bump study, a low-poly study, a filtering study, or several.
+  if (doc.contains("scenes") || (!s.lowpoly && !s.filtering))
+    read_scenes(doc, f, "", base, &s.bump.scenes);
   s.bump.set = read_set(doc, f, "");
   s.bump.axes = read_axes(doc, f, "");
   s.bump.methods = read_method_list(doc, "methods", f, "", terminator_ids(), "method");

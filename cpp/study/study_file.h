@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "analysis/filtering.h"
 #include "scene/renderer_table.h"
 
 namespace penumbra {
@@ -77,11 +78,41 @@ struct GroundTruthSettings {
   int max_spp_refinements = 3;
 };
 
+// The bump-map filtering experiment (analysis/filtering.h) as a study
+// section: each map x each run. JSON: "filtering": {"maps": [...], "runs":
+// [...], "alphas", "filters", "max_level", "footprints", "view_deg",
+// "sweep_step_deg", "seed"}; README, "The filtering study".
+struct FilteringMapSpec {
+  std::string name;  // plain name: the report's label and the output folder
+  // Either an analytic scene's /height baked over the plane [0, extent)^2
+  // at size x size texels (image/bump_maps.h bake_height_map; heights in
+  // scene units), or a height map file with its channel and scales.
+  std::string bake_scene;  // resolved against the study file's folder
+  int size = 1024;
+  double extent = 1.0;  // scene units
+  std::string file, channel;
+  double texel_size = 0.0;  // scene units per texel; 0: 1 / width (file) or extent / size (bake)
+  double height_scale = 1.0;
+  MapEdge edge = MapEdge::kClamp;  // default: clamp for a bake, wrap for a file
+};
+struct FilteringRunSpec {
+  std::string name;  // plain name
+  FilteringOptions::Lookup lookup = FilteringOptions::Lookup::kBox;
+  double shift = 0.0;  // pixels, [0, 1)
+  bool random_shift = false;
+};
+struct FilteringSection {
+  std::vector<FilteringMapSpec> maps;
+  std::vector<FilteringRunSpec> runs;  // default: one "box" run, aligned
+  FilteringOptions options;            // lookup, shift and jobs set per run
+};
+
 struct Study {
   std::string name;
   std::string file;
-  Section bump;  // no scenes: a low-poly-only study
+  Section bump;  // no scenes: a low-poly-only or filtering-only study
   std::optional<Section> lowpoly;
+  std::optional<FilteringSection> filtering;
   int blender_spp = 32;
   GroundTruthSettings ground_truth;
   std::vector<StudyPlot> plots;

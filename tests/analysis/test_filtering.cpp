@@ -94,7 +94,7 @@ TEST(Filtering, MipMappingAloneNarrowsTheHighlightAndTheVarianceRestoresIt) {
   ASSERT_FALSE(r.claim.empty());
   ASSERT_EQ(r.summary.size(), measurable_filters().size());
   EXPECT_LE(r.summary[0].profile_error.mean, r.summary[1].profile_error.mean);
-  EXPECT_EQ(filtering_findings(r).size(), 3u);
+  EXPECT_EQ(filtering_findings(r).size(), 4u);
 }
 
 // "A number must not move when the camera moves half a pixel": with the

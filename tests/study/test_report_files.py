@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""A small study's report.json, metrics.csv and lowpoly.csv against their docs.
+"""A small study's report.json, metrics.csv and lowpoly.csv against their docs
+(its filtering section's files: that they exist).
 
 Usage: test_report_files.py PENUMBRA_BINARY SOURCE_DIR
 
@@ -62,7 +63,12 @@ def tiny_study(with_povray):
             'axes': [{'pointer': '/shape/tessellation/segments', 'values': [8, 16]}],
             'convergence': '/shape/tessellation/segments',
             'offsets': ['none', {'id': 'epsilon', 'parameters': {'distance': 0.01}}],
-            'renderers': ['evaluator']}}
+            'renderers': ['evaluator']},
+        'filtering': {
+            'maps': [{'name': 'noise', 'bake': os.path.join(scene, 'cylinder-noise.json'),
+                      'size': 32}],
+            'alphas': [0.2], 'filters': ['pixar2014', 'mip-only'], 'max_level': 2,
+            'footprints': 4, 'sweep_step_deg': 4}}
 
 
 def snake(pointer):
@@ -219,6 +225,10 @@ def main():
         lowpoly = report['lowpoly']
         check_csv(os.path.join(out, 'lowpoly.csv'), docs['files']['lowpoly.csv'],
                   lowpoly['axes'], lowpoly['comparisons'], 'offset')
+        for e in report['filtering']:
+            check(os.path.isfile(os.path.join(out, e['json'])), f'no file {e["json"]}')
+            check(os.path.isfile(os.path.join(out, e['csv'])), f'no file {e["csv"]}')
+        check(len(report['filtering']) == 1, 'one filtering entry')
         if table:
             check_light(table)
             for r in table:
