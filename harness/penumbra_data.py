@@ -250,6 +250,12 @@ class Report:
         lp = doc.get('lowpoly')
         self.lowpoly = None if lp is None else LowPoly(lp, out, src)
         self.filtering = filtering_entries(doc.get('filtering'), out, src)
+        ip = doc.get('interplay')
+        if ip is not None and not (isinstance(ip, dict) and
+                                   isinstance(ip.get('rows'), list)):
+            raise BadInput(src, '"interplay" must be null or an object with '
+                           '"rows"')
+        self.interplay = ip
         self.units = obj(doc.get('units'))
         self.terminator = region(self.units.get('terminator_region_deg'),
                                  [60.0, 100.0])

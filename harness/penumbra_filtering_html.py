@@ -1,8 +1,12 @@
-"""The bump-map filtering section of report.html (templates/filtering.html.j2):
-per (map, run) entry of report.json's "filtering", the summary table of
-every roughness filter over levels >= 1 with its 95 % intervals, the
-findings in sentences, the chapter's claim per base roughness and the three
-metric figures (penumbra_filtering.py)."""
+"""The bump-map filtering sections of report.html:
+  filtering (templates/filtering.html.j2): per (map, run) entry of
+    report.json's "filtering", the summary table of every roughness filter
+    over levels >= 1 with its 95 % intervals, the findings in sentences, the
+    chapter's claim per base roughness and the three metric figures
+    (penumbra_filtering.py);
+  interplay (templates/interplay.html.j2): the terminator RMSE of each
+    method at each filter level against the map's displacement, with
+    intervals, the truth's convergence check and the findings."""
 from penumbra_context import ci_cell, figure_file, table
 from penumbra_data import num, obj, objs
 from penumbra_filtering import METRICS
@@ -81,3 +85,38 @@ def filtering_context(report, figs):
         return None
     return [entry_context(e, p)
             for e, p in zip(report.filtering, figs.get('filtering', []))]
+
+
+def level_name(level):
+    return 'unfiltered' if level is None else f'level {level}'
+
+
+def interplay_context(report):
+    """The interplay section's context, or None when the study has none."""
+    ip = report.interplay
+    if ip is None:
+        return None
+    methods = [str(m) for m in ip.get('methods', [])]
+    cells = {(r.get('level'), r.get('method')): r for r in objs(ip.get('rows'))}
+    rows = []
+    for level in ip.get('levels', []):
+        row = [level_name(level)]
+        for m in methods:
+            r = obj(cells.get((level, m)))
+            row.append(ci_cell(r.get('rmse_terminator'), r.get('rmse_terminator_ci'),
+                               scale=100.0, digits=2))
+        rows.append(row)
+    check = obj(ip.get('truth_check'))
+    mp = obj(ip.get('map'))
+    size = mp.get('size') if isinstance(mp.get('size'), list) else ['?', '?']
+    return {'table': table(['filter level'] + [f'{m}: terminator RMSE (%)'
+                                              for m in methods], rows),
+            'scene': str(ip.get('scene', '')),
+            'map': f'{mp.get("file")} ({size[0]}×{size[1]} texels)',
+            'filter': str(ip.get('filter', '')),
+            'compared_against': str(ip.get('compared_against', '')),
+            'truth_check': ci_cell(check.get('rmse_terminator'),
+                                   check.get('rmse_terminator_ci'),
+                                   scale=100.0, digits=3)['text'],
+            'finer_edge': f'{num(check.get("edge_length")):g}',
+            'findings': [str(f) for f in ip.get('findings', [])]}

@@ -17,7 +17,7 @@ import jinja2
 
 from penumbra_context import (
     ci_cell, figure, figure_file, grid_cell, table)
-from penumbra_filtering_html import filtering_context
+from penumbra_filtering_html import filtering_context, interplay_context
 from penumbra_data import (
     FRACTION, GROUND_TRUTH, METRICS, column, get_metric, metric_label, num,
     obj, objs, stem)
@@ -315,6 +315,7 @@ def report_context(report, figs):
                                    report.out, report.src)
         if report.lowpoly else None,
         'filtering': filtering_context(report, figs),
+        'interplay': interplay_context(report),
         'terminator': [f'{t:g}' for t in report.terminator],
         'lit': [f'{t:g}' for t in report.lit],
         'image_unit': str(report.units.get('image', 'W m^-2 sr^-1'))}

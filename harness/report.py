@@ -45,8 +45,11 @@ lost_shadow_fraction,shadow_shift_px,shadowed_pixels,...},profile{},
 image{}}], ranking{metric,reference,renderer,per_scene[{scene,offsets[{offset,
 darkened_fraction,rmse_terminator,count}]}],overall[...]}, units{}),
 filtering (null, or [{map,run,source,json,csv,findings[]}]: each json a
-filtering.json, see below). image, difference, json and csv are paths
-relative to OUT.
+filtering.json, see below), interplay (null, or {scene,map{file,size,digest},
+filter,levels[],methods[],compared_against,truth,truth_check{},units,
+rows[{level,method,rmse_terminator,rmse_terminator_ci,rmse_overall,
+position_error_deg,image}],findings[]}). image, difference, json and csv are
+paths relative to OUT.
 
 The low-poly section (after the bump one) draws figures/lowpoly-convergence-
 <group>.* (evaluator offsets vs evaluator:analytic over the convergence axis),

@@ -1080,6 +1080,14 @@ int print_dry_run(const Study& study, const StudyRunStats& stats, const std::str
         f.maps.size(), f.runs.size(), f.options.footprints, f.options.max_level,
         f.options.filters.size(), f.options.alphas.size(), dir);
   }
+  if (study.interplay) {
+    const InterplaySection& ip = *study.interplay;
+    out << fmt::format(
+        "interplay: {} baked at {} texels around, {} bump renders ({} levels x {} methods) and 2 "
+        "displacement truths (the evaluator, after the renders; cached in {}/cache)\n",
+        ip.scene, ip.size, ip.levels.size() * ip.methods.size(), ip.levels.size(),
+        ip.methods.size(), dir);
+  }
   return kExitOk;
 }
 

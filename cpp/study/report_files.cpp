@@ -802,7 +802,9 @@ json report_json(const ReportInputs& in) {
           {"nonfinite_pixels", in.comparisons.nonfinite},
           {"plots", plots},
           {"lowpoly", in.study.lowpoly ? lowpoly_json(in) : json()},
-          {"filtering", filtering_report_json(in.filtering, in.study.filtering.has_value())}};
+          {"filtering", filtering_report_json(in.filtering, in.study.filtering.has_value())},
+          {"interplay", interplay_report_json(in.study.interplay ? &*in.study.interplay : nullptr,
+                                              in.interplay)}};
 }
 
 }  // namespace

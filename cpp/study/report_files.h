@@ -13,6 +13,7 @@
 #include "study/compare.h"
 #include "study/convergence.h"
 #include "study/filtering_study.h"
+#include "study/interplay.h"
 #include "study/plan.h"
 #include "study/study_file.h"
 
@@ -30,6 +31,7 @@ struct ReportInputs {
   const std::vector<char>& done;                        // per job
   const std::vector<VariantConvergence>& convergence;   // bump variants with an evaluator truth
   const std::vector<FilteringEntry>& filtering;         // the filtering section's entries
+  const InterplayResult* interplay;                     // null without an interplay section
 };
 
 // Writes report.json, metrics.csv and (with a low-poly section) lowpoly.csv

@@ -18,6 +18,7 @@
 #include "study/execute.h"
 #include "study/figures.h"
 #include "study/filtering_study.h"
+#include "study/interplay.h"
 #include "study/plan.h"
 #include "study/rendering.h"
 #include "study/report_files.h"
@@ -365,8 +366,12 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
       study.filtering
           ? run_filtering_section(*study.filtering, out.string(), options.jobs, options.log)
           : std::vector<FilteringEntry>{};
+  std::optional<InterplayResult> interplay;
+  if (study.interplay)
+    interplay = run_interplay_section(*study.interplay, out.string(), cache, renderers.identities,
+                                      options.jobs, options.log);
   write_report_files({study, plan, comparisons, renderers.versions, r.errors, r.images.done,
-                      convergence, filtering},
+                      convergence, filtering, interplay ? &*interplay : nullptr},
                      out.string());
   if (options.figures) {
     if (options.log)

@@ -9,6 +9,7 @@
 
 #include "scene/scene_json.h"
 #include "study/filtering_study.h"
+#include "study/interplay.h"
 #include "study/json_fields.h"
 #include "study/names.h"
 #include "util/strict_json.h"
@@ -323,7 +324,7 @@ Study load_study(const std::string& path) {
   if (!doc.is_object()) throw InputError(f, "", "expected a JSON object");
   reject_unknown(doc,
                  {"version", "name", "scenes", "set", "axes", "methods", "renderers", "blender_spp",
-                  "ground_truth", "plots", "lowpoly", "filtering"},
+                  "ground_truth", "plots", "lowpoly", "filtering", "interplay"},
                  f, "");
   const json& version = require(doc, "version", f, "");
   if (strict_integer(version, 1, 1000) != kStudyFormatVersion)
@@ -349,8 +350,10 @@ Study load_study(const std::string& path) {
   if (doc.contains("lowpoly")) s.lowpoly = read_lowpoly(doc["lowpoly"], f, base);
   if (doc.contains("filtering"))
     s.filtering = read_filtering_section(doc["filtering"], f, base.string());
-  // A study is a bump study, a low-poly study, a filtering study, or several.
-  if (doc.contains("scenes") || (!s.lowpoly && !s.filtering))
+  if (doc.contains("interplay"))
+    s.interplay = read_interplay_section(doc["interplay"], f, base.string());
+  // A study is a bump, low-poly, filtering or interplay study, or several.
+  if (doc.contains("scenes") || (!s.lowpoly && !s.filtering && !s.interplay))
     read_scenes(doc, f, "", base, &s.bump.scenes);
   s.bump.set = read_set(doc, f, "");
   s.bump.axes = read_axes(doc, f, "");

@@ -107,12 +107,25 @@ struct FilteringSection {
   FilteringOptions options;            // lookup, shift and jobs set per run
 };
 
+// The terminator-interplay section (study/interplay.h): a scene's analytic
+// heights baked into a map, rendered in bump through a roughness filter at
+// fixed levels with each method, against the map's displacement.
+struct InterplaySection {
+  std::string scene;                 // resolved against the study file's folder; analytic /height
+  int size = 1024;                   // texels around the shape (penumbra bake --on shape --size)
+  std::string filter = "pixar2014";  // roughness filter id
+  std::vector<std::optional<int>> levels;         // nullopt: unfiltered; else a fixed level
+  std::vector<std::string> methods;               // terminator method ids
+  nlohmann::json set = nlohmann::json::object();  // pointer -> value, applied to the scene
+};
+
 struct Study {
   std::string name;
   std::string file;
   Section bump;  // no scenes: a low-poly-only or filtering-only study
   std::optional<Section> lowpoly;
   std::optional<FilteringSection> filtering;
+  std::optional<InterplaySection> interplay;
   int blender_spp = 32;
   GroundTruthSettings ground_truth;
   std::vector<StudyPlot> plots;

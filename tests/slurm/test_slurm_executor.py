@@ -83,9 +83,12 @@ def batches(folder):
 
 
 def cache_entries(folder):
+    """Finished entries: KEY.exr. A hidden ".KEY.penumbra-tmp.HOST.PID.N.exr"
+    is a render being written (or left by the task scancel killed, which the
+    next run removes): not an entry."""
     d = os.path.join(folder, "cache")
     return {n[:-4]: os.stat(os.path.join(d, n)).st_mtime_ns
-            for n in os.listdir(d) if n.endswith(".exr")}
+            for n in os.listdir(d) if n.endswith(".exr") and not n.startswith(".")}
 
 
 def task_keys(folder, task_id):

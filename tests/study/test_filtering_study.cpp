@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "malformed_study.h"
 #include "temp_dir_test.h"
 
 #include "image/bump_maps.h"
@@ -153,11 +154,7 @@ TEST_F(FilteringStudy, EntriesAreReusedUntilTheirInputsChange) {
 
 TEST_F(FilteringStudy, MalformedSectionsNameFileAndPointer) {
   write_map(1.0);
-  struct Case {
-    std::function<void(json&)> edit;
-    std::string pointer, words;
-  };
-  const std::vector<Case> cases = {
+  const std::vector<MalformedCase> cases = {
       {[](json& f) { f["colour"] = 1; }, "/filtering/colour", "unknown key"},
       {[](json& f) { f.erase("maps"); }, "/filtering/maps", "missing"},
       {[](json& f) { f["maps"] = json::array(); }, "/filtering/maps", "non-empty"},
@@ -177,19 +174,7 @@ TEST_F(FilteringStudy, MalformedSectionsNameFileAndPointer) {
       {[](json& f) { f["max_level"] = 15; }, "/filtering/max_level", "[0, 14]"},
       {[](json& f) { f["sweep_step_deg"] = 0; }, "/filtering/sweep_step_deg", "(0, 10]"},
   };
-  for (const Case& c : cases) {
-    json j = study();
-    c.edit(j["filtering"]);
-    const std::string file = write("bad.json", j);
-    try {
-      load_study(file);
-      ADD_FAILURE() << "accepted: " << j.dump();
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.file(), file);
-      EXPECT_EQ(e.pointer(), c.pointer) << e.what();
-      EXPECT_NE(std::string(e.what()).find(c.words), std::string::npos) << e.what();
-    }
-  }
+  expect_refused(study(), "filtering", cases, [&](const json& j) { return write("bad.json", j); });
 }
 
 // The page of a filtering-only study: the section, one part per entry with

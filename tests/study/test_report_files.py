@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """A small study's report.json, metrics.csv and lowpoly.csv against their docs
-(its filtering section's files: that they exist).
+(its filtering and interplay sections' files: that they exist).
 
 Usage: test_report_files.py PENUMBRA_BINARY SOURCE_DIR
 
@@ -68,7 +68,11 @@ def tiny_study(with_povray):
             'maps': [{'name': 'noise', 'bake': os.path.join(scene, 'cylinder-noise.json'),
                       'size': 32}],
             'alphas': [0.2], 'filters': ['pixar2014', 'mip-only'], 'max_level': 2,
-            'footprints': 4, 'sweep_step_deg': 4}}
+            'footprints': 4, 'sweep_step_deg': 4},
+        'interplay': {
+            'scene': os.path.join(scene, 'cylinder-grating.json'), 'size': 32,
+            'levels': [None, 2], 'methods': ['none'],
+            'set': dict(small, **{'/displacement/edge_length': 0.03})}}
 
 
 def snake(pointer):
@@ -229,6 +233,9 @@ def main():
             check(os.path.isfile(os.path.join(out, e['json'])), f'no file {e["json"]}')
             check(os.path.isfile(os.path.join(out, e['csv'])), f'no file {e["csv"]}')
         check(len(report['filtering']) == 1, 'one filtering entry')
+        check(len(report['interplay']['rows']) == 2, 'two interplay rows')
+        for r in report['interplay']['rows']:
+            check(os.path.isfile(os.path.join(out, r['image'])), f'no file {r["image"]}')
         if table:
             check_light(table)
             for r in table:

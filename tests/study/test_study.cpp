@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "malformed_study.h"
 #include "temp_dir_test.h"
 
 #include <cmath>
@@ -199,11 +200,7 @@ TEST_F(Study, ReportIsWrittenAsDumpedAndCsvHasOneRowPerComparison) {
 }
 
 TEST_F(Study, MalformedStudiesNameFileAndPointer) {
-  struct Case {
-    std::function<void(json&)> edit;
-    std::string pointer, words;
-  };
-  const std::vector<Case> cases = {
+  const std::vector<MalformedCase> cases = {
       {[](json& j) { j["colour"] = 1; }, "/colour", "unknown key"},
       {[](json& j) { j["version"] = 7; }, "/version", "expected 1"},
       {[](json& j) { j.erase("scenes"); }, "/scenes", "missing"},
@@ -241,19 +238,7 @@ TEST_F(Study, MalformedStudiesNameFileAndPointer) {
        },
        "/plots/0/x", "axes"},
   };
-  for (const Case& c : cases) {
-    json j = tiny();
-    c.edit(j);
-    const std::string file = write("bad.json", j);
-    try {
-      load_study(file);
-      ADD_FAILURE() << "accepted: " << j.dump();
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.file(), file);
-      EXPECT_EQ(e.pointer(), c.pointer) << e.what();
-      EXPECT_NE(std::string(e.what()).find(c.words), std::string::npos) << e.what();
-    }
-  }
+  expect_refused(tiny(), "", cases, [&](const json& j) { return write("bad.json", j); });
   // A pointer that names no scene value fails when the study expands, with
   // the scene file in the message.
   json j = tiny();
