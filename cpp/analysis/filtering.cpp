@@ -292,10 +292,14 @@ void check_options(const std::vector<PyramidLevel>& pyramid, const FilteringOpti
 
 }  // namespace
 
+bool is_measurable(RoughnessFilter filter) {
+  return roughness_filter_info(filter).distribution != FilteredDistribution::kSchillingBlinnPhong;
+}
+
 std::vector<RoughnessFilter> measurable_filters() {
   std::vector<RoughnessFilter> filters;
   for (const RoughnessFilterInfo& f : all_roughness_filters())
-    if (f.distribution != FilteredDistribution::kSchillingBlinnPhong) filters.push_back(f.filter);
+    if (is_measurable(f.filter)) filters.push_back(f.filter);
   return filters;
 }
 

@@ -119,7 +119,10 @@ std::string filtering_csv(const FilteringResult& result);
 // best and whether the chapter's claim reproduces.
 std::vector<std::string> filtering_findings(const FilteringResult& result);
 
-// Filters that have a BRDF to measure (all but Schilling's Blinn-Phong).
+// Whether a filter has a normalised BRDF to measure and render with (all but
+// Schilling's Blinn-Phong, whose paper gives none).
+bool is_measurable(RoughnessFilter filter);
+// Filters that have a BRDF to measure (is_measurable), in table order.
 std::vector<RoughnessFilter> measurable_filters();
 
 // `progress` (may be empty) is called with (done, total) footprint-levels.

@@ -1435,7 +1435,7 @@ FilteringOptions filtering_options(const FilteringArgs& a) {
     if (!f)
       throw UsageError(
           fmt::format("--filter: unknown roughness filter \"{}\" (see penumbra methods)", id));
-    if (roughness_filter_info(*f).distribution == FilteredDistribution::kSchillingBlinnPhong)
+    if (!is_measurable(*f))
       throw UsageError(fmt::format(
           "--filter: {} has no normalised BRDF in its source, so it cannot be measured", id));
     o.filters.push_back(*f);
@@ -1514,9 +1514,7 @@ namespace {
 // parameterisation allows (on the sphere, at the equator).
 int bake_on_shape(const BakeArgs& a, const Scene& scene, std::ostream& out) {
   const Shape& s = scene.shape;
-  const MapLengths lengths = map_lengths(s);
-  const int rows =
-      std::clamp(static_cast<int>(std::lround(a.size * lengths.v / lengths.u)), 1, kMaxImageSize);
+  const int rows = shape_map_rows(s, a.size, kMaxImageSize);
   const MapKind kind = a.kind == "normal" ? MapKind::kNormal : MapKind::kHeight;
   const Image map =
       bake_surface_map(s, scene.height.function, scene.height.amplitude, a.size, rows, kind);

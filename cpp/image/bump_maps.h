@@ -5,6 +5,8 @@
 // interrupted build never leaves one that looks complete.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -43,6 +45,13 @@ std::shared_ptr<const SurfaceMap> load_surface_map(const std::string& path, MapK
 // displaced normal in the tangent frame (dP/du, dP/dv, N).
 Image bake_surface_map(const Shape& shape, const HeightFunction& f, double amplitude, int width,
                        int height, MapKind kind);
+// Rows of a map `columns` texels around the shape whose texels are as square
+// as its (u, v) allows (on the sphere, at the equator): what `penumbra bake
+// --on shape` and a study's interplay section bake; at most `max_rows`.
+inline int shape_map_rows(const Shape& shape, int columns, int max_rows) {
+  const MapLengths lengths = map_lengths(shape);
+  return std::clamp(static_cast<int>(std::lround(columns * lengths.v / lengths.u)), 1, max_rows);
+}
 
 // An analytic height function baked into a size x size single-channel
 // ("Y") height map of the plane z = 0 over [0, extent)^2: texel (x, y) holds

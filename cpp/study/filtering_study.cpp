@@ -152,7 +152,7 @@ std::vector<RoughnessFilter> read_filters(const json& list, const std::string& f
     if (!filter)
       throw InputError(
           f, q, "expected a roughness filter id (penumbra methods), got " + describe_json(list[i]));
-    if (roughness_filter_info(*filter).distribution == FilteredDistribution::kSchillingBlinnPhong)
+    if (!is_measurable(*filter))
       throw InputError(f, q,
                        fmt::format("{} has no normalised BRDF in its source, so it cannot be "
                                    "measured",

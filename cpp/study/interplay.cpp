@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "analysis/filtering.h"
 #include "core/roughness_filter.h"
 #include "core/surface_map.h"
 #include "core/terminator.h"
@@ -84,8 +85,7 @@ InterplaySection read_interplay_section(const json& s, const std::string& f,
     const json& id = s["filter"];
     const auto filter =
         id.is_string() ? roughness_filter_from_id(id.get<std::string>()) : std::nullopt;
-    if (!filter ||
-        roughness_filter_info(*filter).distribution == FilteredDistribution::kSchillingBlinnPhong)
+    if (!filter || !is_measurable(*filter))
       throw InputError(f, p + "/filter",
                        "expected a roughness filter id with a BRDF (penumbra methods), got " +
                            describe_json(id));
@@ -223,9 +223,7 @@ std::string bake_map(const json& base, const InterplaySection& s, const fs::path
   const Scene scene = scene_from_json(base, s.scene + " (study /interplay)");
   if (scene.height.family == HeightFamily::kNone || scene.height.map)
     throw InputError(s.scene, "/height", "expected an analytic height function to bake");
-  const MapLengths lengths = map_lengths(scene.shape);
-  const int rows =
-      std::clamp(static_cast<int>(std::lround(s.size * lengths.v / lengths.u)), 1, kMaxImageSize);
+  const int rows = shape_map_rows(scene.shape, s.size, kMaxImageSize);
   const Image map = bake_surface_map(scene.shape, scene.height.function, scene.height.amplitude,
                                      s.size, rows, MapKind::kHeight);
   fs::create_directories(folder);
