@@ -8,7 +8,9 @@
 //   blender    the Blender exporter (Blender entries only; the script itself
 //              is hashed when it is used, see pixel_code_digest);
 //   filtering  the bump-filtering experiment and the math it reads (the
-//              filtering section of a study, study/filtering_study.h).
+//              filtering section of a study, study/filtering_study.h);
+//   comparison the metrics of one comparison of two images (kept between a
+//              study's runs, study/comparison_store.h).
 #pragma once
 
 namespace penumbra {
@@ -18,6 +20,7 @@ struct CodeDigests {
   const char* povray;
   const char* blender;
   const char* filtering;
+  const char* comparison;
 };
 
 const CodeDigests& build_code_digests();

@@ -64,8 +64,36 @@ RenderRow render_row(const Plan& plan, const RenderedImages& r, std::size_t i,
   return row;
 }
 
+// Each done job's pixel digest, the comparisons' keys in the store.
+std::vector<std::uint64_t> pixel_digests(const RenderedImages& r, int jobs) {
+  std::vector<std::uint64_t> digests(r.images.size());
+  run_parallel(jobs, digests.size(), [&](std::size_t i) {
+    if (r.done[i]) digests[i] = pixel_digest(r.images[i]);
+  });
+  return digests;
+}
+
+// Where the images of the rows come from, and where their metrics are kept.
+struct Measurer {
+  const RenderedImages& renders;
+  const std::vector<std::uint64_t>& digests;  // empty without a store
+  ComparisonStore* store;
+
+  ComparisonMetrics operator()(std::size_t test, std::size_t reference, double scale,
+                               ComparisonExtent extent) const {
+    if (!store)
+      return measure_comparison(renders.images[test], renders.images[reference], scale, extent);
+    const std::uint64_t key = comparison_key(digests[test], digests[reference], scale, extent);
+    if (std::optional<ComparisonMetrics> kept = store->find(key)) return *kept;
+    ComparisonMetrics m =
+        measure_comparison(renders.images[test], renders.images[reference], scale, extent);
+    store->insert(key, m);
+    return m;
+  }
+};
+
 // The test job against the same renderer's truth, and the evaluator's.
-void add_comparisons(const Plan& plan, const RenderedImages& r, std::size_t i, Comparisons& c) {
+void add_comparisons(const Plan& plan, const Measurer& measure, std::size_t i, Comparisons& c) {
   const Job& job = plan.jobs[i];
   const SectionKind kind = plan.variants[job.variant].section;
   std::vector<std::pair<RendererKind, long>> refs{
@@ -73,28 +101,28 @@ void add_comparisons(const Plan& plan, const RenderedImages& r, std::size_t i, C
   if (job.renderer != RendererKind::kEvaluator)
     refs.push_back({RendererKind::kEvaluator, plan.truth(job.variant, RendererKind::kEvaluator)});
   const double scale = radiance_scale(job.scene);
-  const ProfileOptions po;
+  const ComparisonExtent extent =
+      kind == SectionKind::kLowPoly ? ComparisonExtent::kFullShadows : ComparisonExtent::kFull;
   for (const auto& [ref_renderer, ref] : refs) {
-    if (ref < 0 || !r.done[ref]) continue;
+    if (ref < 0 || !measure.renders.done[ref]) continue;
+    ComparisonMetrics m = measure(i, static_cast<std::size_t>(ref), scale, extent);
     ComparisonRow row;
     row.variant = job.variant, row.job = i, row.reference_job = static_cast<std::size_t>(ref);
     row.renderer = job.renderer, row.reference_renderer = ref_renderer;
     row.method = job.method;
     row.reference = std::string(to_string(ref_renderer)) + ":" + truth_name(kind);
-    row.profile = compare_profiles(terminator_profile(r.images[i], scale, po),
-                                   terminator_profile(r.images[ref], scale, po), po);
-    row.image = compare_images(r.images[i], r.images[ref]);
-    row.view = view_metrics(view_error_profile(r.images[i], r.images[ref], scale));
-    row.intervals = comparison_intervals(r.images[i], r.images[ref], scale, po);
-    if (kind == SectionKind::kLowPoly)
-      row.shadow = compare_shadows(r.images[i], r.images[ref], scale);
+    row.profile = m.profile;
+    row.image = m.image;
+    row.view = m.view;
+    row.intervals = m.intervals;
+    row.shadow = m.shadow;
     c.nonfinite += row.image.nonfinite;
     c.rows.push_back(std::move(row));
   }
 }
 
 // An external renderer's render against the evaluator's same render.
-void add_agreement(const Plan& plan, const RenderedImages& r, std::size_t i, Comparisons& c) {
+void add_agreement(const Plan& plan, const Measurer& measure, std::size_t i, Comparisons& c) {
   const Job& job = plan.jobs[i];
   if (job.renderer == RendererKind::kEvaluator ||
       plan.variants[job.variant].section != SectionKind::kBump)
@@ -104,16 +132,15 @@ void add_agreement(const Plan& plan, const RenderedImages& r, std::size_t i, Com
     if (plan.jobs[k].renderer == RendererKind::kEvaluator && plan.jobs[k].truth == job.truth &&
         plan.jobs[k].method == job.method)
       ref = static_cast<long>(k);
-  if (ref < 0 || !r.done[ref]) return;
-  const double scale = radiance_scale(job.scene);
-  const ProfileOptions po;
+  if (ref < 0 || !measure.renders.done[ref]) return;
+  const ComparisonMetrics m = measure(i, static_cast<std::size_t>(ref), radiance_scale(job.scene),
+                                      ComparisonExtent::kProfileOnly);
   AgreementRow row;
   row.variant = job.variant, row.job = i, row.reference_job = static_cast<std::size_t>(ref);
   row.renderer = job.renderer;
   row.what = job.truth ? "ground truth" : job.method;
-  row.profile = compare_profiles(terminator_profile(r.images[i], scale, po),
-                                 terminator_profile(r.images[ref], scale, po), po);
-  row.intervals = comparison_intervals(r.images[i], r.images[ref], scale, po);
+  row.profile = m.profile;
+  row.intervals = m.intervals;
   c.agreement.push_back(std::move(row));
 }
 
@@ -151,7 +178,7 @@ std::vector<RankEntry> rank_rows(const Plan& plan, const std::vector<ComparisonR
 }  // namespace
 
 Comparisons compare_study(const Plan& plan, const RenderedImages& renders,
-                          const std::string& study_folder, int jobs) {
+                          const std::string& study_folder, int jobs, ComparisonStore* store) {
   const fs::path out(study_folder);
   // Each job's rows in its own slot, joined in job order afterwards: the
   // report is the same for any number of threads (every bootstrap has its
@@ -165,11 +192,14 @@ Comparisons compare_study(const Plan& plan, const RenderedImages& renders,
     for (std::size_t i : v.jobs)
       if (renders.done[i]) order.push_back(i);
   std::vector<JobRows> slots(order.size());
+  const std::vector<std::uint64_t> digests =
+      store ? pixel_digests(renders, jobs) : std::vector<std::uint64_t>{};
+  const Measurer measure{renders, digests, store};
   run_parallel(jobs, order.size(), [&](std::size_t k) {
     const std::size_t i = order[k];
     slots[k].render = render_row(plan, renders, i, out);
-    if (!plan.jobs[i].truth) add_comparisons(plan, renders, i, slots[k].rows);
-    add_agreement(plan, renders, i, slots[k].rows);
+    if (!plan.jobs[i].truth) add_comparisons(plan, measure, i, slots[k].rows);
+    add_agreement(plan, measure, i, slots[k].rows);
   });
   Comparisons c;
   c.renders.resize(plan.variants.size());

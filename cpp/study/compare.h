@@ -11,6 +11,7 @@
 #include "analysis/intervals.h"
 #include "analysis/metrics.h"
 #include "image/image.h"
+#include "study/comparison_store.h"
 #include "study/plan.h"
 
 namespace penumbra {
@@ -63,9 +64,11 @@ struct Comparisons {
 
 // Compares every done test job with its truths and writes the preview and
 // difference PNGs into `study_folder`/images, `jobs` jobs at a time (the
-// result does not depend on it).
+// result does not depend on it). With a store, a comparison of two images
+// it holds is taken from it, and every new one is added.
 Comparisons compare_study(const Plan& plan, const RenderedImages& renders,
-                          const std::string& study_folder, int jobs);
+                          const std::string& study_folder, int jobs,
+                          ComparisonStore* store = nullptr);
 
 // One method's mean over the rows a ranking selects.
 struct RankEntry {

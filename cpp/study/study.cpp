@@ -322,6 +322,22 @@ void count_planned(const Plan& plan, const RenderCache& cache, StudyRunStats& st
   stats.cost = estimate_cost(plan, cache, to_render);
 }
 
+// Every comparison, those of images compared before taken from the store.
+Comparisons compare_renders(const Plan& plan, const RenderedImages& images, const fs::path& out,
+                            const StudyOptions& options, StudyRunStats& stats) {
+  std::string warning;
+  ComparisonStore store((out / "cache" / "comparisons.bin").string(), &warning);
+  if (!warning.empty()) warn(options, stats, warning);
+  Comparisons c = compare_study(plan, images, out.string(), options.jobs, &store);
+  store.save();
+  stats.comparisons_measured = store.inserted();
+  stats.comparisons_kept = store.found();
+  if (options.log)
+    options.log(fmt::format("comparisons: {} measured, {} kept from earlier runs", store.inserted(),
+                            store.found()));
+  return c;
+}
+
 }  // namespace
 
 StudyRunStats run_study(const Study& study, const StudyOptions& options) {
@@ -361,7 +377,7 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   stats.seconds = seconds_since(start);
   if (stats.not_started > 0) return stats;  // interrupted: no report from a partial study
 
-  const Comparisons comparisons = compare_study(plan, r.images, out.string(), options.jobs);
+  const Comparisons comparisons = compare_renders(plan, r.images, out, options, stats);
   const std::vector<FilteringEntry> filtering =
       study.filtering
           ? run_filtering_section(*study.filtering, out.string(), options.jobs, options.log)

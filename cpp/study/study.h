@@ -67,6 +67,9 @@ struct StudyRunStats {
   double planned_output_bytes = 0.0, planned_peak_memory_bytes = 0.0;
   std::vector<std::string> warnings;  // damaged cache entries, stale files removed
   std::size_t stale_removed = 0;
+  // Comparisons measured by this run, and those taken from the study's
+  // comparison store (study/comparison_store.h).
+  std::size_t comparisons_measured = 0, comparisons_kept = 0;
   int blender_processes = 0;             // Blender processes started; each serves many renders
   std::optional<SlurmSubmission> slurm;  // what a Slurm run submitted
   CostEstimate cost;                     // dry run: of the renders to do

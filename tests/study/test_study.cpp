@@ -22,6 +22,7 @@
 #include "analysis/metrics.h"
 #include "image/image_io.h"
 #include "scene/scene_json.h"
+#include "study/cache.h"
 #include "study/figures.h"
 #include "study/report_files.h"
 #include "study/study.h"
@@ -122,6 +123,62 @@ TEST_F(Study, InterruptedAndResumedEqualsCleanWithNoRenderDoneTwice) {
   EXPECT_FALSE(report["ground_truth"]["variants"][0]["converged"].get<bool>());
   EXPECT_NE(report["ground_truth"]["headline"].get<std::string>().find("0 of 2"),
             std::string::npos);
+}
+
+// A rerun takes every comparison from the study's comparison store and
+// writes the same report; a damaged store is measured again, with a warning,
+// to the same report; a render that changes is compared again, alone.
+TEST_F(Study, ComparisonsAreKeptBetweenRunsAndGiveTheSameReport) {
+  json j = tiny();
+  j["renderers"] = {"evaluator"};
+  const ::penumbra::Study study = load_study(write("tiny.json", j));
+  StudyOptions o;
+  o.output_dir = path("out");
+  o.jobs = 2;
+  o.figures = false;
+  const StudyRunStats first = run_study(study, o);
+  ASSERT_TRUE(first.complete());
+  EXPECT_EQ(first.comparisons_kept, 0u);
+  EXPECT_EQ(first.comparisons_measured, 2u * 3);  // 3 methods x 2 variants
+  const std::string report = read_text(path("out/report.json"));
+  const std::string csv = read_text(path("out/metrics.csv"));
+  const StudyRunStats second = run_study(study, o);
+  EXPECT_EQ(second.comparisons_measured, 0u);
+  EXPECT_EQ(second.comparisons_kept, first.comparisons_measured);
+  EXPECT_EQ(read_text(path("out/report.json")), report);
+  EXPECT_EQ(read_text(path("out/metrics.csv")), csv);
+
+  const std::string store = path("out/cache/comparisons.bin");
+  const std::string kept = read_text(store);
+  std::ofstream(store, std::ios::binary | std::ios::trunc) << kept.substr(0, kept.size() - 1);
+  const StudyRunStats damaged = run_study(study, o);
+  EXPECT_EQ(damaged.comparisons_measured, first.comparisons_measured);
+  ASSERT_EQ(damaged.warnings.size(), 1u);
+  EXPECT_NE(damaged.warnings[0].find(store), std::string::npos) << damaged.warnings[0];
+  EXPECT_EQ(read_text(path("out/report.json")), report);
+  EXPECT_EQ(read_text(store), kept);  // rewritten whole
+
+  // One render replaced by another image under its key (as a renderer that
+  // is not deterministic would re-render it): only its comparison is new.
+  std::string exr;  // "cache/KEY.exr"
+  const json parsed = json::parse(report);
+  for (const json& render : parsed["variants"][0]["renders"])
+    if (render["method"] == "chiang2019") exr = render["exr"].get<std::string>();
+  ASSERT_EQ(exr.rfind("cache/", 0), 0u) << exr;
+  const std::string key = fs::path(exr).stem().string();
+  const RenderCache cache(path("out/cache"));
+  std::string reason;
+  std::optional<Image> image = cache.lookup(key, &reason);
+  ASSERT_TRUE(image) << reason;
+  image->pixels[image->pixels.size() / 2] += 0.25f;
+  std::vector<std::pair<std::string, std::string>> metadata;
+  for (const auto& [name, value] : read_image_attributes(path("out/" + exr)))
+    if (name.rfind("penumbra:", 0) == 0 && name != "penumbra:key" && name != "penumbra:checksum")
+      metadata.push_back({name, value});
+  cache.store(key, *image, metadata);
+  const StudyRunStats changed = run_study(study, o);
+  EXPECT_EQ(changed.comparisons_measured, 1u);
+  EXPECT_EQ(changed.comparisons_kept, first.comparisons_measured - 1);
 }
 
 // A compound axis sets several pointers per value; a renderer that cannot
