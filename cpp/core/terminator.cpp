@@ -226,7 +226,10 @@ constexpr std::array<MethodInfo, 20> kMethods{{
      FactorLobes::kAll,
      false,
      true,
-     ""},
+     "",
+     {},
+     false,
+     true},
     {TerminatorMethod::kMicroshadowChan2018,
      "microshadow-chan2018",
      "Chan 2018, 'Material Advances in Call of Duty: WWII', SIGGRAPH course, as "

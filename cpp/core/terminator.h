@@ -87,6 +87,10 @@ struct MethodInfo {
   // The factor needs the height field's ambient visibility (micro-shadowing);
   // the evaluator computes it only for these methods.
   bool needs_visibility = false;
+  // Shading draws random numbers from the pixel's stream (a stochastic
+  // model): its samples cannot be shared with other methods' renders
+  // (render/evaluator.h, render_methods).
+  bool draws_random = false;
 };
 
 std::span<const MethodInfo> all_methods();

@@ -6,9 +6,12 @@
 #include <cmath>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+
+#include <fmt/format.h>
 
 #include "core/random.h"
 #include "core/shading.h"
@@ -268,12 +271,34 @@ struct PixelSums {
          view = 0.0;
 };
 
+// The parts of a sample every method sees alike, in the channels' units.
+struct SampleAngles {
+  double theta = 0.0, deviation = 0.0, view = 0.0;  // degrees
+};
+
+void write_pixel(const PixelSums& sums, double inv_spp, float* out) {
+  const float radiance = static_cast<float>(sums.radiance * inv_spp);
+  out[0] = out[1] = out[2] = radiance;
+  out[3] = static_cast<float>(sums.hits * inv_spp);
+  if (sums.hits > 0.0) {
+    out[4] = static_cast<float>(sums.theta / sums.hits);
+    out[5] = static_cast<float>(sums.deviation / sums.hits);
+    // 0 where no sample had a factor: a method that is not a plain
+    // factor, wherever raw bump receives no light (README, channels).
+    out[6] = sums.g_count > 0.0 ? static_cast<float>(sums.g / sums.g_count) : 0.0f;
+    out[7] = static_cast<float>(sums.view / sums.hits);
+  }
+}
+
+// Renders with each of `passes` (one per image); see render_methods.
 template <typename Tracer>
 void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions& options,
-                  Image* image, RenderStats* stats) {
+                  const std::vector<TerminatorSettings>& passes, std::vector<Image>* images,
+                  RenderStats* stats) {
   const Camera& camera = scene.camera;
   const int width = camera.width, height = camera.height;
-  const std::size_t channel_count = image->channels.size();
+  const std::size_t channel_count = evaluator_channels().size();
+  const std::size_t pass_count = passes.size();
   int nx, ny;
   strata(camera.spp, &nx, &ny);
   const double inv_spp = 1.0 / camera.spp;
@@ -288,9 +313,10 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
       scene, scene.height.height_map(), scene.height.normal_map(),
       scene.representation == Representation::kBump ? scene.height.filtered.get() : nullptr};
   const bool perturbed = amplitude != 0.0 || bump.normal_map;
-  const TerminatorSettings& terminator = scene.terminator;
-  const bool needs_visibility =
-      !is_ground_truth && method_info(terminator.method.method).needs_visibility;
+  bool needs_visibility = false;  // the same visibility serves every method that reads it
+  for (const TerminatorSettings& t : passes)
+    needs_visibility =
+        needs_visibility || (!is_ground_truth && method_info(t.method.method).needs_visibility);
   const Props props(scene);
 
   std::atomic<int> rows_done{0};
@@ -300,11 +326,12 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
 
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
     std::uint64_t local_shadow_rays = 0;
+    std::vector<PixelSums> sums(pass_count);
     for (int j = rows.begin(); j != rows.end(); ++j) {
       for (int i = 0; i < width; ++i) {
         const std::uint64_t pixel = std::uint64_t(j) * width + i;
         Pcg32 rng(mix64(camera.seed ^ mix64(pixel)));
-        PixelSums sums;
+        std::fill(sums.begin(), sums.end(), PixelSums{});
         // One per pixel, not per sample: value-initialising it (a mesh hit
         // included) took 9% of a bump render. Every tracer sets all the
         // fields it uses; `on_prop` is the one field only props set.
@@ -357,38 +384,36 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
             if (needs_visibility && displaced_shading && g.displaceable && amplitude != 0.0)
               point.visibility = height_field_visibility(
                   height_function, facing.backfacing ? -amplitude : amplitude, g.p, n);
-            const Shaded shaded = shade(terminator, material, point, &rng);
-            sums.hits += 1.0;
             // Within 1.2e-6 degrees: below what the float channels resolve.
-            sums.theta += degrees(acos_approx(dot(n, light.wi)));
-            sums.deviation += degrees(acos_approx(dot(ns, n)));
-            if (shaded.factor_defined) {
-              sums.g += shaded.factor;
-              sums.g_count += 1.0;
+            const SampleAngles angles{degrees(acos_approx(dot(n, light.wi))),
+                                      degrees(acos_approx(dot(ns, n))),
+                                      degrees(acos_approx(dot(n, wo)))};
+            int blocked = -1;  // the shadow ray, traced for the first method that needs it
+            for (std::size_t k = 0; k < pass_count; ++k) {
+              const Shaded shaded = shade(passes[k], material, point, &rng);
+              PixelSums& s = sums[k];
+              s.hits += 1.0;
+              s.theta += angles.theta;
+              s.deviation += angles.deviation;
+              if (shaded.factor_defined) {
+                s.g += shaded.factor;
+                s.g_count += 1.0;
+              }
+              s.view += angles.view;
+              if (!(shaded.value > 0.0) || light.irradiance == 0.0) continue;
+              if (blocked < 0) {
+                ++local_shadow_rays;
+                const ShadowRay shadow = hit.on_prop ? ShadowRay{hit.shading_point}
+                                                     : tracer.shadow_ray(hit, facing, light.wi);
+                blocked = tracer.occluded(shadow, light.wi, light.distance) ||
+                          props.occluded(shadow.origin, light.wi, light.distance);
+              }
+              if (blocked == 0) s.radiance += shaded.value * light.irradiance;
             }
-            sums.view += degrees(acos_approx(dot(n, wo)));
-            if (!(shaded.value > 0.0) || light.irradiance == 0.0) continue;
-            ++local_shadow_rays;
-            const ShadowRay shadow = hit.on_prop ? ShadowRay{hit.shading_point}
-                                                 : tracer.shadow_ray(hit, facing, light.wi);
-            if (tracer.occluded(shadow, light.wi, light.distance) ||
-                props.occluded(shadow.origin, light.wi, light.distance))
-              continue;
-            sums.radiance += shaded.value * light.irradiance;
           }
         }
-        float* out = &image->pixels[pixel * channel_count];
-        const float radiance = static_cast<float>(sums.radiance * inv_spp);
-        out[0] = out[1] = out[2] = radiance;
-        out[3] = static_cast<float>(sums.hits * inv_spp);
-        if (sums.hits > 0.0) {
-          out[4] = static_cast<float>(sums.theta / sums.hits);
-          out[5] = static_cast<float>(sums.deviation / sums.hits);
-          // 0 where no sample had a factor: a method that is not a plain
-          // factor, wherever raw bump receives no light (README, channels).
-          out[6] = sums.g_count > 0.0 ? static_cast<float>(sums.g / sums.g_count) : 0.0f;
-          out[7] = static_cast<float>(sums.view / sums.hits);
-        }
+        for (std::size_t k = 0; k < pass_count; ++k)
+          write_pixel(sums[k], inv_spp, &(*images)[k].pixels[pixel * channel_count]);
       }
       const int done = ++rows_done;
       if (options.progress) {
@@ -410,32 +435,51 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
 
 }  // namespace
 
-Image render(const Scene& scene, const RenderOptions& options, RenderStats* stats) {
+bool shares_samples(const TerminatorSettings& terminator) {
+  return !method_info(terminator.method.method).draws_random;
+}
+
+std::vector<Image> render_methods(const Scene& scene,
+                                  const std::vector<TerminatorSettings>& methods,
+                                  const RenderOptions& options, RenderStats* stats) {
+  if (methods.empty()) throw std::invalid_argument("render_methods: no method");
+  if (methods.size() > 1)
+    for (const TerminatorSettings& t : methods)
+      if (!shares_samples(t))
+        throw std::invalid_argument(
+            fmt::format("render_methods: {} draws random numbers while shading; render it alone",
+                        method_info(t.method.method).id));
   const auto start = Clock::now();
   RenderStats local;
-  Image image;
-  image.width = scene.camera.width;
-  image.height = scene.camera.height;
-  image.channels = evaluator_channels();
-  image.pixels.assign(std::size_t(image.width) * image.height * image.channels.size(), 0.0f);
+  std::vector<Image> images(methods.size());
+  for (Image& image : images) {
+    image.width = scene.camera.width;
+    image.height = scene.camera.height;
+    image.channels = evaluator_channels();
+    image.pixels.assign(std::size_t(image.width) * image.height * image.channels.size(), 0.0f);
+  }
   if (scene.representation == Representation::kDisplacement) {
     const std::shared_ptr<const DisplacedMesh> mesh =
         options.share_meshes ? shared_displaced_mesh(scene, &local.mesh_reused)
                              : std::make_shared<const DisplacedMesh>(scene);
     local.triangles = mesh->triangle_count();
     local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    render_image(scene, MeshTracer(scene, *mesh), options, &image, &local);
+    render_image(scene, MeshTracer(scene, *mesh), options, methods, &images, &local);
   } else if (scene.tessellation) {
     const LowPolyMesh mesh(scene.shape, *scene.tessellation);
     local.triangles = mesh.triangle_count();
     local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    render_image(scene, LowPolyTracer(scene, mesh), options, &image, &local);
+    render_image(scene, LowPolyTracer(scene, mesh), options, methods, &images, &local);
   } else {
-    render_image(scene, BaseTracer(scene), options, &image, &local);
+    render_image(scene, BaseTracer(scene), options, methods, &images, &local);
   }
   local.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   if (stats) *stats = local;
-  return image;
+  return images;
+}
+
+Image render(const Scene& scene, const RenderOptions& options, RenderStats* stats) {
+  return std::move(render_methods(scene, {scene.terminator}, options, stats).front());
 }
 
 }  // namespace penumbra

@@ -47,4 +47,20 @@ struct RenderOptions {
 
 Image render(const Scene& scene, const RenderOptions& options = {}, RenderStats* stats = nullptr);
 
+// Whether a method's render can share its samples with other methods' in
+// render_methods: it draws no random numbers while shading (those would move
+// the next sample's jitter; MethodInfo::draws_random).
+bool shares_samples(const TerminatorSettings& terminator);
+
+// `scene` rendered with each of `methods` in place of scene.terminator, in
+// one pass: image k has the bits that render() gives for methods[k]. Camera
+// rays, hits, bump normals, the height field's visibility and shadow rays
+// are traced once per sample for all of them, so a study's 20 methods of one
+// variant cost a few renders rather than 20. std::invalid_argument when a
+// method does not share its samples (shares_samples) or `methods` is empty.
+// stats->shadow_rays counts each shared shadow ray once.
+std::vector<Image> render_methods(const Scene& scene,
+                                  const std::vector<TerminatorSettings>& methods,
+                                  const RenderOptions& options = {}, RenderStats* stats = nullptr);
+
 }  // namespace penumbra

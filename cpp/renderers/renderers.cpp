@@ -420,6 +420,25 @@ RendererRun render_with(RendererKind renderer, const Scene& scene, const RenderS
   return run;
 }
 
+MethodsRun render_evaluator_methods(const Scene& scene,
+                                    const std::vector<TerminatorSettings>& methods,
+                                    const RenderSettings& settings) {
+  if (processes_cancelled()) throw RenderCancelled("not started (interrupted)");
+  MethodsRun run;
+  RenderStats stats;
+  run.images = render_methods(scene, methods, settings.progress, &stats);
+  run.seconds = stats.seconds;
+  run.errors.resize(run.images.size());
+  for (std::size_t k = 0; k < run.images.size(); ++k) {
+    try {
+      check_output(RendererKind::kEvaluator, run.images[k], scene);
+    } catch (const RendererError& e) {
+      run.errors[k] = e.what();
+    }
+  }
+  return run;
+}
+
 namespace {
 
 // Bytes per pixel of an evaluator image (7 float channels) held while it is

@@ -96,6 +96,19 @@ struct RendererRun {
 // image of the wrong size, without R G B A, or with NaN or Inf values).
 RendererRun render_with(RendererKind renderer, const Scene& scene, const RenderSettings& settings);
 
+// The evaluator's renders of `scene` with each of `methods` in one pass
+// (render_methods, render/evaluator.h): images[k] has the bits render_with
+// gives for methods[k]; errors[k] says why it cannot be used (NaN or Inf
+// values, as render_with would throw), "" when it can.
+struct MethodsRun {
+  std::vector<Image> images;
+  std::vector<std::string> errors;
+  double seconds = 0.0;  // wall time of the whole pass
+};
+MethodsRun render_evaluator_methods(const Scene& scene,
+                                    const std::vector<TerminatorSettings>& methods,
+                                    const RenderSettings& settings);
+
 // A digest of the code and scripts that produce `renderer`'s pixels (see
 // renderers/code_digest.h); part of cache keys. For Blender it covers the
 // script that settings (or PENUMBRA_BLENDER_SCRIPT) select.

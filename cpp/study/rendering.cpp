@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <future>
+#include <mutex>
+#include <set>
 #include <thread>
 
 #include <fmt/format.h>
@@ -75,8 +78,80 @@ Renderers probe_renderers(const std::vector<RendererKind>& kinds, double timeout
   return out;
 }
 
+struct MethodBatches::Batch {
+  std::vector<std::size_t> jobs;  // indices into jobs_
+  std::mutex mutex;
+  bool started = false;
+  std::shared_future<MethodsRun> run;
+  std::size_t taken = 0;
+};
+
+MethodBatches::MethodBatches(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo)
+    : jobs_(jobs) {
+  std::map<std::string, std::vector<std::size_t>> groups;  // scene without its terminator
+  std::set<std::string> keys;
+  for (std::size_t i : todo) {
+    const Job& job = jobs[i];
+    if (job.renderer != RendererKind::kEvaluator || job.representation != Representation::kBump ||
+        !shares_samples(job.scene.terminator) || !keys.insert(job.key).second)
+      continue;
+    nlohmann::json scene = job.scene_json;
+    scene.erase("terminator");
+    groups[scene.dump()].push_back(i);
+  }
+  for (auto& [scene, members] : groups) {
+    if (members.size() < 2) continue;
+    auto batch = std::make_unique<Batch>();
+    batch->jobs = members;
+    for (std::size_t slot = 0; slot < members.size(); ++slot)
+      member_[jobs[members[slot]].key] = {batches_.size(), slot};
+    batches_.push_back(std::move(batch));
+  }
+}
+
+MethodBatches::~MethodBatches() = default;
+
+std::optional<RendererRun> MethodBatches::take(const Job& job, const RenderSettings& settings) {
+  const auto found = member_.find(job.key);
+  if (found == member_.end()) return std::nullopt;
+  Batch& batch = *batches_[found->second.first];
+  const std::size_t slot = found->second.second;
+  std::promise<MethodsRun> promise;
+  bool owner = false;
+  std::shared_future<MethodsRun> run;
+  {
+    const std::lock_guard<std::mutex> lock(batch.mutex);
+    if (!batch.started) {
+      batch.started = owner = true;
+      batch.run = promise.get_future().share();
+    }
+    run = batch.run;
+  }
+  if (owner) {
+    try {
+      std::vector<TerminatorSettings> methods;
+      for (std::size_t i : batch.jobs) methods.push_back(jobs_[i].scene.terminator);
+      promise.set_value(
+          render_evaluator_methods(jobs_[batch.jobs.front()].scene, methods, settings));
+    } catch (...) {
+      promise.set_exception(std::current_exception());
+    }
+  }
+  const MethodsRun& pass = run.get();  // rethrows the pass's error
+  if (!pass.errors[slot].empty()) throw RendererError(pass.errors[slot]);
+  RendererRun out;
+  out.image = pass.images[slot];
+  out.seconds = pass.seconds / double(batch.jobs.size());
+  {
+    // The last member frees the pass's images.
+    const std::lock_guard<std::mutex> lock(batch.mutex);
+    if (++batch.taken == batch.jobs.size()) batch.run = {};
+  }
+  return out;
+}
+
 Image render_into_cache(const Job& job, const RenderCache& cache, double timeout_s, int threads,
-                        const Renderers& renderers) {
+                        const Renderers& renderers, MethodBatches* batches) {
   if (const auto missing = renderers.unavailable.find(job.renderer);
       missing != renderers.unavailable.end())
     throw RendererError(missing->second);
@@ -89,19 +164,24 @@ Image render_into_cache(const Job& job, const RenderCache& cache, double timeout
   fs::remove(settings.log_path, ignored);
   RendererRun run;
   const auto start = std::chrono::steady_clock::now();
+  std::optional<RendererRun> shared;
   try {
-    run = render_with(job.renderer, job.scene, settings);
+    shared = batches ? batches->take(job, settings) : std::nullopt;
+    run = shared ? std::move(*shared) : render_with(job.renderer, job.scene, settings);
   } catch (const RenderCancelled&) {
     throw TaskCancelled{};
   }
+  // A batch member's cost is its share of the pass (for the cost estimates).
   const double wall_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      shared ? run.seconds
+             : std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   cache.store(
       job.key, run.image,
       {{"penumbra:version", kPenumbraVersion},
        {kCostWallAttribute, fmt::format("{:.3f}", wall_seconds)},
        {kCostThreadsAttribute,
-        std::to_string(threads > 0 ? threads : std::max(1u, std::thread::hardware_concurrency()))},
+        std::to_string(threads > 0 && !shared ? threads
+                                              : std::max(1u, std::thread::hardware_concurrency()))},
        {"penumbra:host", host_tag()},
        {"penumbra:renderer", to_string(job.renderer)},
        {"penumbra:renderer_version", renderers.versions.at(job.renderer)},

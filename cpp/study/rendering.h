@@ -3,6 +3,8 @@
 #pragma once
 
 #include <map>
+#include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -30,10 +32,38 @@ std::vector<RendererKind> study_renderers(const Study& study);
 Renderers probe_renderers(const std::vector<RendererKind>& kinds, double timeout_s,
                           const std::string& probe_cache = "");
 
+// Evaluator bump renders of one variant that differ only in their method
+// share their samples: the first of them to start renders them all in one
+// pass (render_evaluator_methods), with every core; the others wait for it
+// and take their image. Each is still its own job: cached under its own key,
+// counted, failed or cancelled alone. The images have the bits of separate
+// renders (tested), so cache keys do not change. Thread-safe.
+class MethodBatches {
+ public:
+  // Batches of two or more among `jobs[todo]`.
+  MethodBatches(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo);
+  ~MethodBatches();
+
+  // The run of `job` when it is in a batch (its share of the pass's wall
+  // time in `seconds`); nullopt when it renders alone. Throws what the pass
+  // threw, and RendererError when its image has NaN or Inf values.
+  std::optional<RendererRun> take(const Job& job, const RenderSettings& settings);
+
+  std::size_t batches() const { return batches_.size(); }
+  std::size_t members() const { return member_.size(); }
+
+ private:
+  struct Batch;
+  const std::vector<Job>& jobs_;
+  std::map<std::string, std::pair<std::size_t, std::size_t>> member_;  // key -> batch, slot
+  std::vector<std::unique_ptr<Batch>> batches_;
+};
+
 // Renders `job` with `threads` threads and writes it into the cache; returns
 // the image. Throws RendererError (or ExportError), TaskCancelled when
-// interrupted.
+// interrupted. With `batches`, a job in a batch takes its image from the
+// batch's shared pass.
 Image render_into_cache(const Job& job, const RenderCache& cache, double timeout_s, int threads,
-                        const Renderers& renderers);
+                        const Renderers& renderers, MethodBatches* batches = nullptr);
 
 }  // namespace penumbra

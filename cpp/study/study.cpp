@@ -190,11 +190,18 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
   eo.progress = options.progress;
   eo.already_done = cached;
   eo.total = jobs.size();
+  MethodBatches batches(jobs, todo);
+  stats.method_batches += batches.batches();
+  stats.batched_renders += batches.members();
+  if (options.log && batches.batches() > 0)
+    options.log(fmt::format("{} of them in {} passes that render several methods of one variant",
+                            batches.members(), batches.batches()));
   const ExecuteResult result = execute_tasks(
       todo.size(), eo,
       [&](std::size_t t) {
-        r.images.images[todo[t]] = render_into_cache(jobs[todo[t]], cache, options.timeout_s,
-                                                     threads_per_job(options.jobs), renderers);
+        r.images.images[todo[t]] =
+            render_into_cache(jobs[todo[t]], cache, options.timeout_s,
+                              threads_per_job(options.jobs), renderers, &batches);
       },
       [&](std::size_t t) { return jobs[todo[t]].label; });
   for (std::size_t t = 0; t < todo.size(); ++t) {

@@ -70,6 +70,9 @@ struct StudyRunStats {
   // Comparisons measured by this run, and those taken from the study's
   // comparison store (study/comparison_store.h).
   std::size_t comparisons_measured = 0, comparisons_kept = 0;
+  // Passes that rendered several methods of one variant at once
+  // (study/rendering.h, MethodBatches), and the renders they held.
+  std::size_t method_batches = 0, batched_renders = 0;
   int blender_processes = 0;             // Blender processes started; each serves many renders
   std::optional<SlurmSubmission> slurm;  // what a Slurm run submitted
   CostEstimate cost;                     // dry run: of the renders to do

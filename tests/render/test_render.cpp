@@ -4,12 +4,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <thread>
 #include <vector>
 
 #include <tbb/global_control.h>
 
+#include "core/random.h"
+#include "core/shading.h"
 #include "render/displaced_mesh.h"
 #include "render/evaluator.h"
 #include "scene/scene_json.h"
@@ -120,6 +123,99 @@ TEST(Render, BumpWithZeroAmplitudeEqualsSmoothBitForBit) {
       return render(scene_with("sphere-weave.json", sets)).pixels;
     };
     EXPECT_EQ(with("bump"), with("smooth")) << m.id;
+  }
+}
+
+// render_methods gives each method the bits of its own render, on every
+// tracer: the analytic base (with jitter, a point light and GGX), a low-poly
+// mesh with a prop, the displaced mesh, and the microshadowing methods'
+// shared visibility. A method that draws random numbers is refused.
+TEST(Render, MethodsRenderedTogetherHaveTheBitsOfTheirOwnRenders) {
+  const std::vector<std::string> ids{"none",
+                                     "chiang2019",
+                                     "estevez2019",
+                                     "deshmukh2020",
+                                     "shading-offset",
+                                     "cycles45",
+                                     "mitsuba3",
+                                     "mitsuba3-flip",
+                                     "iray2017",
+                                     "schuessler2017-shadowing",
+                                     "microshadow-chan2018",
+                                     "microshadow-brinck2016"};
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases{
+      {"cylinder-weave.json",
+       {"/representation=\"bump\"", "/camera/jitter=true",
+        "/material/specular={\"weight\":0.4,\"roughness\":0.3}", "/terminator/lobes=\"all\""}},
+      {"sphere-grating.json",
+       {"/representation=\"bump\"", "/camera/projection=\"perspective\"",
+        "/light={\"type\":\"point\",\"position\":[-6,1,-2],\"intensity\":40}"}},
+      {"lowpoly/ball-on-sphere.json",
+       {"/representation=\"bump\"",
+        "/height={\"type\":\"grating\",\"amplitude\":0.01,\"frequency\":8,\"direction\":[1,0,0]}"}},
+      {"sphere-noise.json",
+       {"/representation=\"displacement\"", "/displacement/edge_length=0.03"}}};
+  for (const auto& [file, sets] : cases) {
+    std::vector<std::string> base = sets;
+    for (const char* s : {"/camera/width=24", "/camera/height=24", "/camera/spp=4"})
+      base.push_back(s);
+    const Scene scene = scene_with(file, base);
+    std::vector<TerminatorSettings> methods;
+    std::vector<Image> alone;
+    for (const std::string& id : ids) {
+      std::vector<std::string> with_method = base;
+      with_method.push_back("/terminator/method=\"" + id + "\"");
+      const Scene one = scene_with(file, with_method);
+      if (scene.tessellation && method_info(one.terminator.method.method).needs_visibility)
+        continue;  // refused on meshes
+      methods.push_back(one.terminator);
+      alone.push_back(render(one));
+    }
+    RenderStats together_stats;
+    const std::vector<Image> together = render_methods(scene, methods, {}, &together_stats);
+    ASSERT_EQ(together.size(), methods.size());
+    for (std::size_t k = 0; k < methods.size(); ++k) {
+      ASSERT_EQ(together[k].pixels.size(), alone[k].pixels.size());
+      EXPECT_EQ(std::memcmp(together[k].pixels.data(), alone[k].pixels.data(),
+                            alone[k].pixels.size() * sizeof(float)),
+                0)
+          << file << ", " << method_info(methods[k].method.method).id;
+    }
+    // Not all alike: the methods do differ on these scenes.
+    EXPECT_NE(std::memcmp(together[0].pixels.data(), together[1].pixels.data(),
+                          together[0].pixels.size() * sizeof(float)),
+              0)
+        << file;
+  }
+  Scene walk = scene_with("sphere-grating.json", {"/camera/width=8", "/camera/height=8"});
+  TerminatorSettings w = walk.terminator;
+  w.method.method = TerminatorMethod::kSchuessler2017Walk;
+  EXPECT_FALSE(shares_samples(w));
+  EXPECT_THROW(render_methods(walk, {walk.terminator, w}), std::invalid_argument);
+  EXPECT_EQ(render_methods(walk, {w}).size(), 1u);  // alone it is a plain render
+}
+
+// The table's draws_random is what shade() does: a method that says it draws
+// none leaves the pixel's stream where it was, at points where it shades.
+TEST(Render, MethodsDrawRandomNumbersExactlyWhenTheTableSaysSo) {
+  Material m;
+  m.albedo = 0.8;
+  const Vec3 ng{0, 0, 1}, wo = normalize(Vec3{0.2, 0.1, 1});
+  for (const MethodInfo& info : all_methods()) {
+    TerminatorSettings t;
+    t.method.method = info.method;
+    bool drew = false;
+    for (double tilt : {0.1, 0.3, 0.6})
+      for (double light : {0.2, 0.8, 1.4}) {
+        const Vec3 ns = normalize(Vec3{tilt, 0, 1});
+        const Vec3 wi = normalize(Vec3{std::sin(light), 0.05, std::cos(light)});
+        Pcg32 rng(7), untouched(7);
+        ShadingPoint p{ng, ng, ns, wi, wo};
+        p.visibility = 0.7;
+        shade(t, m, p, &rng);
+        drew = drew || rng.next_double() != untouched.next_double();
+      }
+    EXPECT_EQ(drew, info.draws_random) << info.id;
   }
 }
 

@@ -21,6 +21,7 @@
 #include "analysis/contour.h"
 #include "analysis/metrics.h"
 #include "image/image_io.h"
+#include "render/evaluator.h"
 #include "scene/scene_json.h"
 #include "study/cache.h"
 #include "study/figures.h"
@@ -45,6 +46,14 @@ class Study : public TempDirTest {
   // A small study: 2 variants x (evaluator 1 + 3 methods, POV-Ray 2) renders,
   // and one convergence check of each evaluator truth (3 renders, one of
   // them the truth itself).
+  // Two jobs at a time into `out`, no figures.
+  StudyOptions quiet_options(const std::string& out) const {
+    StudyOptions o;
+    o.output_dir = path(out);
+    o.jobs = 2;
+    o.figures = false;
+    return o;
+  }
   json tiny() const {
     return {{"version", 1},
             {"name", "tiny"},
@@ -132,10 +141,7 @@ TEST_F(Study, ComparisonsAreKeptBetweenRunsAndGiveTheSameReport) {
   json j = tiny();
   j["renderers"] = {"evaluator"};
   const ::penumbra::Study study = load_study(write("tiny.json", j));
-  StudyOptions o;
-  o.output_dir = path("out");
-  o.jobs = 2;
-  o.figures = false;
+  const StudyOptions o = quiet_options("out");
   const StudyRunStats first = run_study(study, o);
   ASSERT_TRUE(first.complete());
   EXPECT_EQ(first.comparisons_kept, 0u);
@@ -179,6 +185,43 @@ TEST_F(Study, ComparisonsAreKeptBetweenRunsAndGiveTheSameReport) {
   const StudyRunStats changed = run_study(study, o);
   EXPECT_EQ(changed.comparisons_measured, 1u);
   EXPECT_EQ(changed.comparisons_kept, first.comparisons_measured - 1);
+}
+
+// The evaluator renders the methods of a variant in one pass; each cache
+// entry has the bits of its own scene (the one its header records) rendered
+// alone.
+TEST_F(Study, MethodsOfAVariantShareAPassWithTheBitsOfSeparateRenders) {
+  json j = tiny();
+  j["renderers"] = {"evaluator"};
+  j["methods"] = {"none", "chiang2019", "estevez2019", "microshadow-chan2018",
+                  "schuessler2017-walk"};
+  const ::penumbra::Study study = load_study(write("tiny.json", j));
+  const StudyRunStats stats = run_study(study, quiet_options("out"));
+  ASSERT_TRUE(stats.complete());
+  EXPECT_EQ(stats.method_batches, 2u);   // one per variant
+  EXPECT_EQ(stats.batched_renders, 8u);  // all but the random walk
+  const json report = json::parse(read_text(path("out/report.json")));
+  int checked = 0;
+  for (const json& variant : report["variants"])
+    for (const json& render : variant["renders"]) {
+      const std::string exr = path("out/" + render["exr"].get<std::string>());
+      const auto attributes = read_image_attributes(exr);
+      if (attributes.at("penumbra:representation") != "bump") continue;
+      const Image cached = read_image(exr);
+      const Image alone =
+          penumbra::render(scene_from_json(json::parse(attributes.at("penumbra:scene")), exr));
+      ASSERT_EQ(cached.pixels.size(), alone.pixels.size());
+      // The cache stores channels sorted by name; compare channel by channel.
+      for (const std::string& name : alone.channels) {
+        const int a = alone.channel_index(name), c = cached.channel_index(name);
+        ASSERT_GE(c, 0) << name;
+        for (int y = 0; y < alone.height; ++y)
+          for (int x = 0; x < alone.width; ++x)
+            ASSERT_EQ(cached.at(x, y, c), alone.at(x, y, a)) << exr << " " << name;
+      }
+      ++checked;
+    }
+  EXPECT_EQ(checked, 2 * 5);
 }
 
 // A compound axis sets several pointers per value; a renderer that cannot
