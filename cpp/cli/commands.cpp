@@ -1338,6 +1338,30 @@ json bench_scene(int size, int spp) {
       {"representation", "bump"}};
 }
 
+// Every method that shares its samples, rendered in one pass
+// (render_methods), as a study renders the methods of a variant.
+void bench_shared_pass(int size, int spp, std::ostream& out) {
+  const Scene scene = scene_from_json(bench_scene(size, spp), "<bench>");
+  std::vector<TerminatorSettings> methods;
+  for (const MethodInfo& m : all_methods()) {
+    TerminatorSettings t = scene.terminator;
+    t.method.method = m.method;
+    if (shares_samples(t)) methods.push_back(t);
+  }
+  RenderStats stats;
+  const double cpu_before = process_cpu_seconds();
+  render_methods(scene, methods, {}, &stats);
+  const double cpu = process_cpu_seconds() - cpu_before;
+  const double msamples = double(stats.camera_samples) * double(methods.size()) / 1e6;
+  out << fmt::format("{:<24} {:>10.3f} {:>10.3f} {:>16.2f} {:>20.2f}\n",
+                     fmt::format("{} methods, one pass", methods.size()), stats.seconds, cpu,
+                     msamples / stats.seconds, msamples / cpu);
+  out << fmt::format(
+      "  (one pass: each camera sample counted once per method, as {} separate "
+      "renders would count it)\n",
+      methods.size());
+}
+
 }  // namespace
 
 int command_bench(int size, int spp, std::ostream& out) {
@@ -1358,6 +1382,7 @@ int command_bench(int size, int spp, std::ostream& out) {
     out << fmt::format("{:<24} {:>10.3f} {:>10.3f} {:>16.2f} {:>20.2f}\n", m.id, stats.seconds, cpu,
                        msamples / stats.seconds, msamples / cpu);
   }
+  bench_shared_pass(size, spp, out);
   const double rss_before = peak_rss_mib();
   json document = bench_scene(size, spp);
   document["representation"] = "displacement";
