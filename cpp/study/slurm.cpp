@@ -322,6 +322,11 @@ SlurmTaskResult run_slurm_task(const std::string& batch_file, int task, int thre
   BlenderSessions sessions(cache.folder());
   renderers.blender_sessions = &sessions;
   SlurmTaskResult result;
+  // The task's renders of one variant's methods share a pass, as locally.
+  std::vector<std::size_t> todo;
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (!cache.contains(jobs[i].key)) todo.push_back(i);
+  MethodBatches batches(jobs, todo);
   for (const Job& job : jobs) {
     if (cache.contains(job.key)) {
       ++result.cached;
@@ -329,7 +334,7 @@ SlurmTaskResult run_slurm_task(const std::string& batch_file, int task, int thre
     }
     try {
       if (!mismatch.empty()) throw RendererError(mismatch);
-      render_into_cache(job, cache, timeout_s, threads, renderers);
+      render_into_cache(job, cache, timeout_s, threads, renderers, &batches);
       ++result.rendered;
       if (log) log("rendered " + job.label);
     } catch (const TaskCancelled&) {
