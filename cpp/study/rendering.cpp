@@ -82,8 +82,8 @@ struct MethodBatches::Batch {
   std::vector<std::size_t> jobs;  // indices into jobs_
   std::mutex mutex;
   bool started = false;
-  std::shared_future<MethodsRun> run;
-  std::size_t taken = 0;
+  std::shared_future<MethodsRun> run;  // reset once every slot took its image
+  std::vector<char> taken;             // per slot
 };
 
 MethodBatches::MethodBatches(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo)
@@ -103,6 +103,7 @@ MethodBatches::MethodBatches(const std::vector<Job>& jobs, const std::vector<std
     if (members.size() < 2) continue;
     auto batch = std::make_unique<Batch>();
     batch->jobs = members;
+    batch->taken.assign(members.size(), 0);
     for (std::size_t slot = 0; slot < members.size(); ++slot)
       member_[jobs[members[slot]].key] = {batches_.size(), slot};
     batches_.push_back(std::move(batch));
@@ -125,6 +126,8 @@ std::optional<RendererRun> MethodBatches::take(const Job& job, const RenderSetti
       batch.started = owner = true;
       batch.run = promise.get_future().share();
     }
+    // A job asked again after the pass was freed renders alone (same bits).
+    if (!batch.run.valid()) return std::nullopt;
     run = batch.run;
   }
   if (owner) {
@@ -145,7 +148,9 @@ std::optional<RendererRun> MethodBatches::take(const Job& job, const RenderSetti
   {
     // The last member frees the pass's images.
     const std::lock_guard<std::mutex> lock(batch.mutex);
-    if (++batch.taken == batch.jobs.size()) batch.run = {};
+    batch.taken[slot] = 1;
+    if (std::all_of(batch.taken.begin(), batch.taken.end(), [](char t) { return t != 0; }))
+      batch.run = {};
   }
   return out;
 }

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "malformed_study.h"
+#include "study_options.h"
 #include "temp_dir_test.h"
 
 #include "image/bump_maps.h"
@@ -62,14 +63,7 @@ class FilteringStudy : public TempDirTest {
           {"sweep_step_deg", 2}}}};
   }
   StudyOptions options(std::vector<std::string>* log) const {
-    StudyOptions o;
-    o.output_dir = path("out");
-    o.figures = false;
-    o.jobs = 2;
-    o.log = [log](const std::string& line) {
-      if (line.rfind("filtering ", 0) == 0) log->push_back(line);
-    };
-    return o;
+    return test_study_options(path("out"), log, "filtering ");
   }
   json report() const { return json::parse(read_file(path("out/report.json"))); }
 };

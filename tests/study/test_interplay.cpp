@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "malformed_study.h"
+#include "study_options.h"
 #include "temp_dir_test.h"
 
 #include "analysis/metrics.h"
@@ -68,14 +69,7 @@ class Interplay : public TempDirTest {
     return path("s.json");
   }
   StudyOptions options(std::vector<std::string>* log) const {
-    StudyOptions o;
-    o.output_dir = path("out");
-    o.figures = false;
-    o.jobs = 2;
-    o.log = [log](const std::string& line) {
-      if (line.rfind("interplay: ", 0) == 0) log->push_back(line);
-    };
-    return o;
+    return test_study_options(path("out"), log, "interplay: ");
   }
   // The scene a user writes by hand: the grating baked over the cylinder at
   // 128 texels around (penumbra bake --on shape), loaded as a height map.

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "malformed_study.h"
+#include "study_options.h"
 #include "temp_dir_test.h"
 
 #include <cmath>
@@ -46,14 +47,6 @@ class Study : public TempDirTest {
   // A small study: 2 variants x (evaluator 1 + 3 methods, POV-Ray 2) renders,
   // and one convergence check of each evaluator truth (3 renders, one of
   // them the truth itself).
-  // Two jobs at a time into `out`, no figures.
-  StudyOptions quiet_options(const std::string& out) const {
-    StudyOptions o;
-    o.output_dir = path(out);
-    o.jobs = 2;
-    o.figures = false;
-    return o;
-  }
   json tiny() const {
     return {{"version", 1},
             {"name", "tiny"},
@@ -141,7 +134,7 @@ TEST_F(Study, ComparisonsAreKeptBetweenRunsAndGiveTheSameReport) {
   json j = tiny();
   j["renderers"] = {"evaluator"};
   const ::penumbra::Study study = load_study(write("tiny.json", j));
-  const StudyOptions o = quiet_options("out");
+  const StudyOptions o = test_study_options(path("out"));
   const StudyRunStats first = run_study(study, o);
   ASSERT_TRUE(first.complete());
   EXPECT_EQ(first.comparisons_kept, 0u);
@@ -196,7 +189,7 @@ TEST_F(Study, MethodsOfAVariantShareAPassWithTheBitsOfSeparateRenders) {
   j["methods"] = {"none", "chiang2019", "estevez2019", "microshadow-chan2018",
                   "schuessler2017-walk"};
   const ::penumbra::Study study = load_study(write("tiny.json", j));
-  const StudyRunStats stats = run_study(study, quiet_options("out"));
+  const StudyRunStats stats = run_study(study, test_study_options(path("out")));
   ASSERT_TRUE(stats.complete());
   EXPECT_EQ(stats.method_batches, 2u);   // one per variant
   EXPECT_EQ(stats.batched_renders, 8u);  // all but the random walk
