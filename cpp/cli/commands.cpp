@@ -1124,9 +1124,14 @@ SlurmOptions slurm_options(const RunArgs& a, const std::string& output_dir) {
 int print_submission(const SlurmSubmission& sub, const std::string& dir, std::ostream& out) {
   if (sub.submitted > 0)
     out << fmt::format(
-        "submitted {} renders to Slurm as array job {} ({} tasks); job {} writes the report when "
-        "they end (or submits what is still missing); `penumbra status {}` shows progress\n",
-        sub.submitted, sub.array_job, sub.tasks, sub.report_job, dir);
+        "submitted {} renders to Slurm as array job {} ({} tasks{}); job {} writes the report "
+        "when they end (or submits what is still missing); `penumbra status {}` shows progress\n",
+        sub.submitted - sub.chains, sub.array_job, sub.tasks,
+        sub.chains > 0 ? fmt::format(", with {} ground-truth convergence chains, each in a task of "
+                                     "its own with its variant's evaluator renders",
+                                     sub.chains)
+                       : "",
+        sub.report_job, dir);
   if (sub.still_queued > 0)
     out << fmt::format(
         "{} renders are still queued or running in an earlier submission; nothing submitted "
@@ -1169,10 +1174,14 @@ int command_status(const std::string& folder, std::ostream& out) {
   const SlurmStatus status = slurm_status(folder);
   if (status.batches.empty()) out << fmt::format("{}: no Slurm submissions\n", folder);
   for (const SlurmStatus::Batch& b : status.batches)
-    out << fmt::format("array job {} (report job {}): {} renders: {} done, {} failed, {} not yet\n",
-                       b.array_job.empty() ? "?" : b.array_job,
-                       b.report_job.empty() ? "?" : b.report_job, b.renders, b.done, b.failed,
-                       b.renders - b.done - b.failed);
+    out << fmt::format(
+        "array job {} (report job {}): {} renders: {} done, {} failed, {} not yet{}\n",
+        b.array_job.empty() ? "?" : b.array_job, b.report_job.empty() ? "?" : b.report_job,
+        b.renders, b.done, b.failed, b.renders - b.done - b.failed,
+        b.chains > 0 ? fmt::format("; and {} ground-truth convergence chains (their renders are "
+                                   "counted by the report job)",
+                                   b.chains)
+                     : "");
   out << (status.report_written ? fmt::format("report: {}/report.json\n", folder)
                                 : std::string("report: not written yet\n"));
   return kExitOk;

@@ -18,7 +18,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // One variant's state between rounds.
 struct Track {
   std::size_t variant = 0;
-  long truth_job = -1;  // the plan's evaluator truth
+  const Job* truth = nullptr;  // the plan's evaluator truth, at the plan's settings
   double edge_length0 = 0.0;
   int spp0 = 0;
   int edge_steps = 0, spp_steps = 0;
@@ -46,19 +46,23 @@ std::optional<Job> truth_at(const Job& truth, double edge_length, int spp, doubl
   return job;
 }
 
+Track track_of(const Job& truth, int edge_steps, int spp_steps) {
+  Track track;
+  track.truth = &truth;
+  track.edge_length0 = truth.scene.displacement.edge_length;
+  track.spp0 = truth.scene.camera.spp;
+  track.edge_steps = edge_steps, track.spp_steps = spp_steps;
+  return track;
+}
+
 std::vector<Track> tracks_of(const Plan& plan) {
   std::vector<Track> tracks;
   for (std::size_t v = 0; v < plan.variants.size(); ++v) {
     if (plan.variants[v].section != SectionKind::kBump) continue;
     const long t = plan.truth(v, RendererKind::kEvaluator);
     if (t < 0) continue;
-    const Scene& scene = plan.jobs[t].scene;
-    Track track;
-    track.variant = v, track.truth_job = t;
-    track.edge_length0 = scene.displacement.edge_length;
-    track.spp0 = scene.camera.spp;
-    track.result.variant = v;
-    tracks.push_back(track);
+    tracks.push_back(track_of(plan.jobs[t], 0, 0));
+    tracks.back().variant = tracks.back().result.variant = v;
   }
   return tracks;
 }
@@ -69,8 +73,8 @@ struct CheckJobs {
   std::string why;
 };
 
-CheckJobs check_jobs(const Plan& plan, const Track& t, double max_memory_bytes) {
-  const Job& truth = plan.jobs[t.truth_job];
+CheckJobs check_jobs(const Track& t, double max_memory_bytes) {
+  const Job& truth = *t.truth;
   CheckJobs c;
   c.current = truth_at(truth, t.edge_length(), t.spp(), max_memory_bytes, &c.why);
   c.edge = truth_at(truth, t.edge_length() / 2.0, t.spp(), max_memory_bytes, &c.why);
@@ -103,19 +107,23 @@ void advance(Track& t, double edge_change, double spp_change, const GroundTruthS
 }
 
 // One round: every unfinished track's check, rendered as one batch.
-void run_round(const Plan& plan, std::vector<Track>& tracks, const GroundTruthSettings& s,
-               double max_memory_bytes, const RenderBatch& render) {
+void run_round(std::vector<Track>& tracks, const GroundTruthSettings& s, double max_memory_bytes,
+               const RenderBatch& render) {
   std::vector<Job> batch;
+  std::vector<ChainState> chains;
   std::vector<std::pair<std::size_t, CheckJobs>> checks;
   for (std::size_t k = 0; k < tracks.size(); ++k) {
     if (tracks[k].done) continue;
-    CheckJobs c = check_jobs(plan, tracks[k], max_memory_bytes);
+    CheckJobs c = check_jobs(tracks[k], max_memory_bytes);
+    ChainState chain{tracks[k].truth, tracks[k].edge_steps, tracks[k].spp_steps, batch.size(), 0};
     for (const std::optional<Job>* j : {&c.current, &c.edge, &c.spp})
       if (*j) batch.push_back(**j);
+    chain.count = batch.size() - chain.first;
+    chains.push_back(chain);
     checks.push_back({k, std::move(c)});
   }
   std::vector<std::string> errors;
-  const std::vector<std::optional<Image>> images = render(batch, &errors);
+  const std::vector<std::optional<Image>> images = render(batch, chains, &errors);
   std::size_t next = 0;
   for (auto& [k, c] : checks) {
     Track& t = tracks[k];
@@ -123,7 +131,7 @@ void run_round(const Plan& plan, std::vector<Track>& tracks, const GroundTruthSe
     const std::optional<Image>* current = c.current ? &images[next++] : nullptr;
     const std::optional<Image>* edge = c.edge ? &images[next++] : nullptr;
     const std::optional<Image>* spp = c.spp ? &images[next++] : nullptr;
-    const double scale = radiance_scale(plan.jobs[t.truth_job].scene);
+    const double scale = radiance_scale(t.truth->scene);
     auto change = [&](const std::optional<Image>* refined) {
       return current && *current && refined && *refined ? truth_change(**current, **refined, scale)
                                                         : kNaN;
@@ -137,17 +145,27 @@ void run_round(const Plan& plan, std::vector<Track>& tracks, const GroundTruthSe
 
 // The variant's evaluator jobs at the settings reached.
 void apply(Plan& plan, const VariantConvergence& r) {
-  for (std::size_t j : plan.variants[r.variant].jobs) {
-    Job& job = plan.jobs[j];
-    if (job.renderer != RendererKind::kEvaluator) continue;
-    job.scene_json["displacement"]["edge_length"] = r.edge_length;
-    job.scene_json["camera"]["spp"] = r.spp;
-    job.scene = scene_from_json(job.scene_json, job.origin);
-    job.resources = estimate_resources(job.renderer, job.scene);
-  }
+  for (std::size_t j : plan.variants[r.variant].jobs) apply_convergence(plan.jobs[j], r);
 }
 
 }  // namespace
+
+void apply_convergence(Job& job, const VariantConvergence& r) {
+  if (job.renderer != RendererKind::kEvaluator) return;
+  job.scene_json["displacement"]["edge_length"] = r.edge_length;
+  job.scene_json["camera"]["spp"] = r.spp;
+  job.scene = scene_from_json(job.scene_json, job.origin);
+  job.resources = estimate_resources(job.renderer, job.scene);
+}
+
+VariantConvergence continue_chain(const Job& truth, int edge_steps, int spp_steps,
+                                  const GroundTruthSettings& settings, double max_memory_bytes,
+                                  const RenderBatch& render) {
+  std::vector<Track> tracks{track_of(truth, edge_steps, spp_steps)};
+  tracks[0].variant = tracks[0].result.variant = truth.variant;
+  while (!tracks[0].done) run_round(tracks, settings, max_memory_bytes, render);
+  return tracks[0].result;
+}
 
 std::string convergence_log_line(const Plan& plan, const VariantConvergence& r) {
   const Variant& v = plan.variants[r.variant];
@@ -202,7 +220,7 @@ std::vector<VariantConvergence> converge_truths(Plan& plan, const GroundTruthSet
       advance(t, kNaN, kNaN, settings, "a refinement budget is 0: nothing was checked");
   }
   while (std::any_of(tracks.begin(), tracks.end(), [](const Track& t) { return !t.done; }))
-    run_round(plan, tracks, settings, max_memory_bytes, render);
+    run_round(tracks, settings, max_memory_bytes, render);
   std::vector<VariantConvergence> out;
   for (const Track& t : tracks) {
     apply(plan, t.result);

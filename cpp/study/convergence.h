@@ -60,10 +60,22 @@ ConvergenceDecision decide_refinement(double edge_change, double spp_change, int
 // The change between two truths of the same variant (see above).
 double truth_change(const Image& truth, const Image& refined, double radiance_scale);
 
+// One variant's chain of checks as a round finds it: its truth (the plan's
+// job, at the plan's settings), the refinements made so far, and which of
+// the round's jobs are its checks (jobs[first, first + count)). A Slurm run
+// hands the rest of a chain to one array task (continue_chain) rather than
+// submitting every round.
+struct ChainState {
+  const Job* truth = nullptr;
+  int edge_steps = 0, spp_steps = 0;
+  std::size_t first = 0, count = 0;
+};
+
 // Renders jobs (through the study's cache); an entry is nullopt when its
-// render failed, with the error in `errors`.
+// render failed, with the error in `errors`. `chains` says whose checks they are.
 using RenderBatch = std::function<std::vector<std::optional<Image>>(
-    const std::vector<Job>& jobs, std::vector<std::string>* errors)>;
+    const std::vector<Job>& jobs, const std::vector<ChainState>& chains,
+    std::vector<std::string>* errors)>;
 
 // Runs the checks for every bump variant with an evaluator truth, in rounds
 // (one batch of renders per round, all variants together), then sets the
@@ -71,6 +83,19 @@ using RenderBatch = std::function<std::vector<std::optional<Image>>(
 // again afterwards.
 std::vector<VariantConvergence> converge_truths(Plan& plan, const GroundTruthSettings& settings,
                                                 double max_memory_bytes, const RenderBatch& render);
+
+// The rest of one variant's chain, from `edge_steps` and `spp_steps`
+// refinements of `truth` (the plan's job) to its end, one round at a time:
+// the same checks and decisions as converge_truths makes for that variant,
+// so that the renders it leaves in the cache let converge_truths finish the
+// variant without rendering. `steps` then holds this call's checks only.
+VariantConvergence continue_chain(const Job& truth, int edge_steps, int spp_steps,
+                                  const GroundTruthSettings& settings, double max_memory_bytes,
+                                  const RenderBatch& render);
+
+// `job` at the settings reached, when it is an evaluator job (the others
+// keep theirs). Its key must be assigned again.
+void apply_convergence(Job& job, const VariantConvergence& r);
 
 // "ground truth v003 (...): converged at edge length 0.006, 16 spp (change ...)".
 std::string convergence_log_line(const Plan& plan, const VariantConvergence& r);

@@ -16,6 +16,7 @@
 
 #include "image/image_io.h"
 #include "scene/scene_json.h"
+#include "study/convergence.h"
 #include "study/execute.h"
 #include "util/data_files.h"
 #include "util/files.h"
@@ -29,6 +30,7 @@ using nlohmann::json;
 namespace {
 
 constexpr const char* kBatchFormat = "penumbra-slurm-batch";
+constexpr int kBatchVersion = 2;  // 2: the task table, convergence chains
 
 fs::path slurm_folder(const std::string& study_folder) {
   return fs::path(study_folder) / "slurm";
@@ -48,6 +50,19 @@ json job_to_json(const Job& job) {
   return {{"key", job.key},         {"label", job.label},     {"renderer", to_string(job.renderer)},
           {"method", job.method},   {"origin", job.origin},   {"truth", job.truth},
           {"variant", job.variant}, {"scene", job.scene_json}};
+}
+
+json chain_to_json(const SlurmChain& c) {
+  json then = json::array();
+  for (const Job& j : c.then) then.push_back(job_to_json(j));
+  return {{"truth", job_to_json(c.truth)},
+          {"edge_steps", c.edge_steps},
+          {"spp_steps", c.spp_steps},
+          {"tolerance", c.settings.tolerance},
+          {"max_edge_refinements", c.settings.max_edge_refinements},
+          {"max_spp_refinements", c.settings.max_spp_refinements},
+          {"max_memory_bytes", c.max_memory_bytes},
+          {"then", std::move(then)}};
 }
 
 // The batch files of `folder`'s slurm/, parsed, oldest first (names sort by time).
@@ -133,6 +148,37 @@ std::set<std::string> active_jobs(const std::set<std::string>& ids, const SlurmO
   return active;
 }
 
+// A chain renders one check after another: an array task of its own each,
+// first; the other renders in tasks of `per`, in plan order. `tasks` lists
+// each task's [first, count) of `jobs`.
+void add_entries(const std::vector<Job>& jobs, const std::vector<std::size_t>& submit,
+                 const SlurmChains* chains, int per, json& batch, SlurmSubmission& sub) {
+  std::vector<std::size_t> plain;
+  for (std::size_t i : submit) {
+    const SlurmChain* chain = nullptr;
+    if (chains)
+      if (const auto it = chains->by_key.find(jobs[i].key); it != chains->by_key.end())
+        chain = &it->second;
+    if (!chain) {
+      plain.push_back(i);
+      continue;
+    }
+    json entry = job_to_json(jobs[i]);
+    entry["chain"] = chain_to_json(*chain);
+    batch["tasks"].push_back({batch["jobs"].size(), 1});
+    batch["jobs"].push_back(std::move(entry));
+    ++sub.chains;
+  }
+  for (std::size_t k = 0; k < plain.size(); k += std::size_t(per)) {
+    const std::size_t count = std::min(plain.size() - k, std::size_t(per));
+    batch["tasks"].push_back({batch["jobs"].size(), count});
+    for (std::size_t m = k; m < k + count; ++m)
+      batch["jobs"].push_back(job_to_json(jobs[plain[m]]));
+  }
+  sub.submitted = submit.size();
+  sub.tasks = static_cast<int>(batch["tasks"].size());
+}
+
 // ---- sorting the renders ----------------------------------------------------------------
 
 struct Sorted {
@@ -140,9 +186,15 @@ struct Sorted {
   std::size_t failed = 0, queued = 0;
 };
 
-Sorted sort_todo(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo,
-                 const std::string& study_folder, const RenderCache& cache,
-                 const SlurmOptions& options, std::vector<std::string>& errors) {
+// What earlier submissions say about a render: queued in an array that still
+// runs (or, for a chain, its variant's chain is), and how often this chain of
+// submissions has asked for it.
+struct History {
+  std::set<std::string> queued_keys, queued_truths;
+  std::map<std::string, int> submissions;
+};
+
+History read_history(const std::string& study_folder, const SlurmOptions& options) {
   const auto batches = read_batches(study_folder);
   std::set<std::string> array_ids;
   for (const auto& [file, b] : batches)
@@ -150,37 +202,78 @@ Sorted sort_todo(const std::vector<Job>& jobs, const std::vector<std::size_t>& t
       array_ids.insert(b["array_job"].get<std::string>());
   const std::set<std::string> active =
       active_jobs(array_ids, options, slurm_folder(study_folder) / "logs");
-  std::set<std::string> queued_keys;
-  std::map<std::string, int> submissions;  // in this chain
+  History h;
   for (const auto& [file, b] : batches) {
     const bool is_active = active.count(b.value("array_job", std::string()));
     const bool same_chain = !options.chain.empty() && b.value("chain", "") == options.chain;
     for (const json& j : b["jobs"]) {
-      if (is_active) queued_keys.insert(j["key"].get<std::string>());
-      if (same_chain) ++submissions[j["key"].get<std::string>()];
+      if (is_active) h.queued_keys.insert(j["key"].get<std::string>());
+      if (is_active && j.contains("chain"))
+        h.queued_truths.insert(j["chain"]["truth"]["key"].get<std::string>());
+      if (same_chain) ++h.submissions[j["key"].get<std::string>()];
     }
   }
+  return h;
+}
+
+// Why `key` must not be submitted again: a failure this chain of submissions
+// recorded, or too many submissions without a result; "" when it may be.
+std::string given_up(const std::string& key, const History& h, const std::string& study_folder,
+                     const RenderCache& cache, const SlurmOptions& options) {
+  std::string failure = options.chain.empty() ? "" : read_failure(cache, key);
+  const auto asked = h.submissions.find(key);
+  if (failure.empty() && asked != h.submissions.end() && asked->second >= kMaxSlurmSubmissions)
+    failure = fmt::format(
+        "submitted {} times to Slurm without a result (task killed, preempted or out of "
+        "time?); see {}/logs",
+        asked->second, slurm_folder(study_folder).string());
+  return failure;
+}
+
+Sorted sort_todo(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo,
+                 const std::string& study_folder, const RenderCache& cache,
+                 const SlurmOptions& options, const SlurmChains* chains,
+                 std::vector<std::string>& errors) {
+  const History h = read_history(study_folder, options);
   Sorted s;
+  std::set<std::string> taken;  // keys submitted now or left to a queued chain
+  std::vector<std::size_t> covered;
   for (std::size_t i : todo) {
     const std::string& key = jobs[i].key;
-    if (queued_keys.count(key)) {
-      ++s.queued;
+    if (chains && chains->covered.count(key)) {
+      covered.push_back(i);
       continue;
     }
-    std::string failure = options.chain.empty() ? "" : read_failure(cache, key);
-    if (failure.empty() && submissions[key] >= kMaxSlurmSubmissions)
-      failure = fmt::format(
-          "submitted {} times to Slurm without a result (task killed, preempted or out of "
-          "time?); see {}/logs",
-          submissions[key], slurm_folder(study_folder).string());
-    if (!failure.empty()) {
-      errors[i] = failure;
+    const auto chain = chains ? chains->by_key.find(key) : SlurmChains::Map::const_iterator{};
+    if (h.queued_keys.count(key) || (chains && chain != chains->by_key.end() &&
+                                     h.queued_truths.count(chain->second.truth.key))) {
+      ++s.queued;
+      taken.insert(key);
+      continue;
+    }
+    if (std::string failure = given_up(key, h, study_folder, cache, options); !failure.empty()) {
+      errors[i] = std::move(failure);
       ++s.failed;
       continue;
     }
     std::error_code ec;
     fs::remove(failure_path(cache, key), ec);  // a run by hand tries again
     s.submit.push_back(i);
+    taken.insert(key);
+  }
+  // A chain's other checks are its to render, unless the chain itself is
+  // not going (given up): then they are renders like any other.
+  for (std::size_t i : covered) {
+    const std::string& key = jobs[i].key;
+    if (taken.count(chains->covered.at(key))) continue;
+    if (std::string failure = given_up(key, h, study_folder, cache, options); !failure.empty()) {
+      errors[i] = std::move(failure);
+      ++s.failed;
+    } else if (h.queued_keys.count(key)) {
+      ++s.queued;
+    } else {
+      s.submit.push_back(i);
+    }
   }
   return s;
 }
@@ -191,27 +284,28 @@ SlurmSubmission submit_renders(const std::vector<Job>& jobs, const std::vector<s
                                const std::string& study_folder, const RenderCache& cache,
                                const std::vector<std::pair<RendererKind, RendererIdentity>>& ids,
                                double render_timeout_s, const SlurmOptions& options,
-                               std::vector<std::string>& errors) {
+                               std::vector<std::string>& errors, const SlurmChains* chains) {
   const fs::path folder = fs::absolute(slurm_folder(study_folder));
   fs::create_directories(folder / "logs");
-  const Sorted sorted = sort_todo(jobs, todo, study_folder, cache, options, errors);
+  const Sorted sorted = sort_todo(jobs, todo, study_folder, cache, options, chains, errors);
   SlurmSubmission sub;
   sub.still_queued = sorted.queued;
   if (sorted.submit.empty()) return sub;
   sub.chain = options.chain.empty() ? new_chain() : options.chain;
   json batch{{"format", kBatchFormat},
-             {"version", 1},
+             {"version", kBatchVersion},
              {"chain", sub.chain},
              {"study_folder", fs::absolute(study_folder).string()},
              {"timeout_s", render_timeout_s},
              {"renders_per_task", options.renders_per_task},
              {"identities", json::object()},
              {"jobs", json::array()},
+             {"tasks", json::array()},
              {"array_job", ""},
              {"report_job", ""}};
   for (const auto& [r, id] : ids)
     batch["identities"][to_string(r)] = {{"version", id.version}, {"code_digest", id.code_digest}};
-  for (std::size_t i : sorted.submit) batch["jobs"].push_back(job_to_json(jobs[i]));
+  add_entries(jobs, sorted.submit, chains, options.renders_per_task, batch, sub);
   const auto now = std::chrono::system_clock::now().time_since_epoch();
   sub.batch_file =
       (folder / fmt::format("batch-{:013d}-{}.json",
@@ -219,9 +313,6 @@ SlurmSubmission submit_renders(const std::vector<Job>& jobs, const std::vector<s
                             sub.chain))
           .string();
   write_text_file(sub.batch_file, batch.dump(1) + "\n");
-  sub.submitted = sorted.submit.size();
-  sub.tasks = static_cast<int>((sub.submitted + options.renders_per_task - 1) /
-                               std::size_t(options.renders_per_task));
   const std::string task_script = data_file("harness/slurm_task.sh");
   std::vector<std::string> array = sbatch_common(options);
   array.insert(array.end(),
@@ -245,34 +336,65 @@ SlurmSubmission submit_renders(const std::vector<Job>& jobs, const std::vector<s
 
 namespace {
 
-// The jobs of task `task`, rebuilt from the batch file.
-std::vector<Job> task_jobs(const json& batch, int task, const std::string& file) {
-  const auto per = batch.at("renders_per_task").get<std::size_t>();
+Job job_from_json(const json& j, const std::string& file, const std::string& pointer) {
+  Job job;
+  job.key = j.at("key");
+  job.label = j.at("label");
+  job.method = j.at("method");
+  job.origin = j.at("origin");
+  job.truth = j.at("truth");
+  job.variant = j.at("variant");
+  const std::optional<RendererKind> r = renderer_from_id(j.at("renderer").get<std::string>());
+  if (!r) throw InputError(file, pointer + "/renderer", "expected a renderer id");
+  job.renderer = *r;
+  job.scene_json = j.at("scene");
+  job.scene = scene_from_json(job.scene_json, job.origin);
+  job.representation = job.scene.representation;
+  return job;
+}
+
+SlurmChain chain_from_json(const json& c, const std::string& file, const std::string& pointer) {
+  SlurmChain chain;
+  chain.truth = job_from_json(c.at("truth"), file, pointer + "/truth");
+  chain.edge_steps = c.at("edge_steps");
+  chain.spp_steps = c.at("spp_steps");
+  chain.settings.tolerance = c.at("tolerance");
+  chain.settings.max_edge_refinements = c.at("max_edge_refinements");
+  chain.settings.max_spp_refinements = c.at("max_spp_refinements");
+  chain.max_memory_bytes = c.at("max_memory_bytes");
+  const json& then = c.at("then");
+  for (std::size_t k = 0; k < then.size(); ++k)
+    chain.then.push_back(job_from_json(then[k], file, fmt::format("{}/then/{}", pointer, k)));
+  return chain;
+}
+
+// One entry of a task: a render, or a convergence chain (its first check).
+struct TaskEntry {
+  Job job;
+  std::optional<SlurmChain> chain;
+};
+
+// The entries of task `task`, rebuilt from the batch file.
+std::vector<TaskEntry> task_entries(const json& batch, int task, const std::string& file) {
+  const json& tasks = batch.at("tasks");
   const json& all = batch.at("jobs");
-  const std::size_t first = std::size_t(task) * per;
-  if (task < 0 || first >= all.size())
-    throw InputError(
-        file, "/jobs",
-        fmt::format("task {} is out of range ({} renders, {} per task)", task, all.size(), per));
-  std::vector<Job> jobs;
-  for (std::size_t i = first; i < std::min(all.size(), first + per); ++i) {
-    const json& j = all[i];
-    Job job;
-    job.key = j.at("key");
-    job.label = j.at("label");
-    job.method = j.at("method");
-    job.origin = j.at("origin");
-    job.truth = j.at("truth");
-    job.variant = j.at("variant");
-    const std::optional<RendererKind> r = renderer_from_id(j.at("renderer").get<std::string>());
-    if (!r) throw InputError(file, fmt::format("/jobs/{}/renderer", i), "expected a renderer id");
-    job.renderer = *r;
-    job.scene_json = j.at("scene");
-    job.scene = scene_from_json(job.scene_json, job.origin);
-    job.representation = job.scene.representation;
-    jobs.push_back(std::move(job));
+  if (task < 0 || std::size_t(task) >= tasks.size())
+    throw InputError(file, "/tasks",
+                     fmt::format("task {} is out of range ({} tasks)", task, tasks.size()));
+  const auto first = tasks[task].at(0).get<std::size_t>();
+  const auto count = tasks[task].at(1).get<std::size_t>();
+  if (first + count > all.size())
+    throw InputError(file, fmt::format("/tasks/{}", task),
+                     fmt::format("expected renders within the {} of /jobs", all.size()));
+  std::vector<TaskEntry> entries;
+  for (std::size_t i = first; i < first + count; ++i) {
+    const std::string pointer = fmt::format("/jobs/{}", i);
+    TaskEntry e{job_from_json(all[i], file, pointer), std::nullopt};
+    if (all[i].contains("chain"))
+      e.chain = chain_from_json(all[i]["chain"], file, pointer + "/chain");
+    entries.push_back(std::move(e));
   }
-  return jobs;
+  return entries;
 }
 
 // "" when this node's renderers are the plan's; else why not.
@@ -291,10 +413,94 @@ std::string identity_mismatch(const json& batch, const Renderers& here) {
 
 }  // namespace
 
+namespace {
+
+// What every render of one array task shares.
+struct TaskContext {
+  const RenderCache& cache;
+  const Renderers& renderers;
+  std::string mismatch;  // why this node must not render, if it must not
+  double timeout_s = 0.0;
+  int threads = 1;
+  const std::function<void(const std::string&)>& log;
+  SlurmTaskResult& result;
+};
+
+// `job` from the cache, else rendered into it; a failure is recorded beside
+// its entry, in `error` and the result, and gives nullopt.
+std::optional<Image> cached_or_rendered(const Job& job, TaskContext& t, MethodBatches* batches,
+                                        std::string* error = nullptr) {
+  if (t.cache.contains(job.key)) {
+    std::string reason;
+    if (std::optional<Image> image = t.cache.lookup(job.key, &reason)) {
+      ++t.result.cached;
+      return image;
+    }
+    t.cache.remove(job.key);  // damaged: rendered again
+  }
+  try {
+    if (!t.mismatch.empty()) throw RendererError(t.mismatch);
+    Image image = render_into_cache(job, t.cache, t.timeout_s, t.threads, t.renderers, batches);
+    ++t.result.rendered;
+    if (t.log) t.log("rendered " + job.label);
+    return image;
+  } catch (const TaskCancelled&) {
+    throw;
+  } catch (const std::exception& e) {
+    write_text_file(failure_path(t.cache, job.key), e.what());
+    ++t.result.failed;
+    if (t.log) t.log(fmt::format("FAILED {}: {}", job.label, printable(e.what(), 300)));
+    if (error) *error = e.what();
+  }
+  return std::nullopt;
+}
+
+// The renders of `jobs` missing from the cache, a variant's methods in one pass.
+void render_missing(const std::vector<Job>& jobs, TaskContext& t) {
+  std::vector<std::size_t> todo;
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (!t.cache.contains(jobs[i].key)) todo.push_back(i);
+  MethodBatches batches(jobs, todo);
+  for (const Job& job : jobs) {
+    if (t.cache.contains(job.key)) {
+      ++t.result.cached;
+      continue;
+    }
+    cached_or_rendered(job, t, &batches);
+  }
+}
+
+// The rest of a variant's convergence chain, then its evaluator jobs at the
+// settings reached: the renders the next `penumbra run` will look up.
+void run_chain(const SlurmChain& chain, TaskContext& t) {
+  const RenderBatch render = [&](const std::vector<Job>& jobs, const std::vector<ChainState>&,
+                                 std::vector<std::string>* errors) {
+    std::vector<Job> keyed = jobs;
+    assign_keys(keyed, t.renderers.identities);
+    errors->assign(keyed.size(), "");
+    std::vector<std::optional<Image>> images(keyed.size());
+    for (std::size_t i = 0; i < keyed.size(); ++i)
+      images[i] = cached_or_rendered(keyed[i], t, nullptr, &(*errors)[i]);
+    return images;
+  };
+  const VariantConvergence reached = continue_chain(chain.truth, chain.edge_steps, chain.spp_steps,
+                                                    chain.settings, chain.max_memory_bytes, render);
+  if (t.log)
+    t.log(fmt::format("{}: {} at edge length {:g}, {} spp", chain.truth.label,
+                      reached.converged ? "converged" : "not converged", reached.edge_length,
+                      reached.spp));
+  std::vector<Job> then = chain.then;
+  for (Job& job : then) apply_convergence(job, reached);
+  assign_keys(then, t.renderers.identities);
+  render_missing(then, t);
+}
+
+}  // namespace
+
 SlurmTaskResult run_slurm_task(const std::string& batch_file, int task, int threads,
                                const std::function<void(const std::string&)>& log) {
   const json batch = read_json_file(batch_file);
-  std::vector<Job> jobs;
+  std::vector<TaskEntry> entries;
   std::string study_folder, mismatch;
   double timeout_s = 0.0;
   Renderers renderers;
@@ -302,15 +508,18 @@ SlurmTaskResult run_slurm_task(const std::string& batch_file, int task, int thre
   // is damaged or hand-edited is bad input naming the file, never a crash.
   try {
     if (!batch.is_object() || batch.value("format", "") != kBatchFormat ||
-        batch.value("version", 0) != 1)
-      throw InputError(batch_file, "/format", "expected a penumbra-slurm-batch file, version 1");
-    jobs = task_jobs(batch, task, batch_file);
+        batch.value("version", 0) != kBatchVersion)
+      throw InputError(batch_file, "/format",
+                       fmt::format("expected a penumbra-slurm-batch file, version {} (one written "
+                                   "by another Penumbra version: submit the study again)",
+                                   kBatchVersion));
+    entries = task_entries(batch, task, batch_file);
     study_folder = batch.at("study_folder").get<std::string>();
     timeout_s = batch.at("timeout_s").get<double>();
     std::vector<RendererKind> kinds;
-    for (const Job& j : jobs)
-      if (std::find(kinds.begin(), kinds.end(), j.renderer) == kinds.end())
-        kinds.push_back(j.renderer);
+    for (const TaskEntry& e : entries)
+      if (std::find(kinds.begin(), kinds.end(), e.job.renderer) == kinds.end())
+        kinds.push_back(e.job.renderer);
     const std::string probes =
         (fs::path(study_folder) / "slurm" / fmt::format("versions.{}.json", host_tag())).string();
     renderers = probe_renderers(kinds, std::min(60.0, timeout_s), probes);
@@ -322,29 +531,15 @@ SlurmTaskResult run_slurm_task(const std::string& batch_file, int task, int thre
   BlenderSessions sessions(cache.folder());
   renderers.blender_sessions = &sessions;
   SlurmTaskResult result;
-  // The task's renders of one variant's methods share a pass, as locally.
-  std::vector<std::size_t> todo;
-  for (std::size_t i = 0; i < jobs.size(); ++i)
-    if (!cache.contains(jobs[i].key)) todo.push_back(i);
-  MethodBatches batches(jobs, todo);
-  for (const Job& job : jobs) {
-    if (cache.contains(job.key)) {
-      ++result.cached;
-      continue;
-    }
-    try {
-      if (!mismatch.empty()) throw RendererError(mismatch);
-      render_into_cache(job, cache, timeout_s, threads, renderers, &batches);
-      ++result.rendered;
-      if (log) log("rendered " + job.label);
-    } catch (const TaskCancelled&) {
-      throw;
-    } catch (const std::exception& e) {
-      write_text_file(failure_path(cache, job.key), e.what());
-      ++result.failed;
-      if (log) log(fmt::format("FAILED {}: {}", job.label, printable(e.what(), 300)));
-    }
+  TaskContext context{cache, renderers, mismatch, timeout_s, threads, log, result};
+  std::vector<Job> renders;
+  for (const TaskEntry& e : entries) {
+    if (e.chain)
+      run_chain(*e.chain, context);
+    else
+      renders.push_back(e.job);
   }
+  render_missing(renders, context);
   return result;
 }
 
@@ -358,6 +553,10 @@ SlurmStatus slurm_status(const std::string& study_folder) {
     s.report_job = b.value("report_job", "");
     s.chain = b.value("chain", "");
     for (const json& j : b["jobs"]) {
+      if (j.contains("chain")) {  // how far it got shows in the renders the report job finds
+        ++s.chains;
+        continue;
+      }
       ++s.renders;
       const std::string key = j["key"];
       if (cache.contains(key))

@@ -22,6 +22,7 @@
 #include "study/plan.h"
 #include "study/rendering.h"
 #include "study/report_files.h"
+#include "study/slurm.h"
 #include "util/files.h"
 #include "util/parallel.h"
 
@@ -136,14 +137,14 @@ void settle_duplicates(const std::vector<Job>& jobs, Renders& r, StudyRunStats& 
 // here.
 void slurm_phase(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo,
                  const RenderCache& cache, const StudyOptions& options, const Renderers& renderers,
-                 Renders& r, StudyRunStats& stats) {
+                 const SlurmChains* chains, Renders& r, StudyRunStats& stats) {
   // One submission per run, whose report job is the one continuation: later
   // rounds of this run wait for it.
   if (todo.empty() || (stats.slurm && stats.slurm->submitted > 0))
     return settle_duplicates(jobs, r, stats);
   const SlurmSubmission sub =
       submit_renders(jobs, todo, options.output_dir, cache, renderers.identities, options.timeout_s,
-                     *options.slurm, r.errors);
+                     *options.slurm, r.errors, chains);
   for (std::size_t i : todo)
     if (!r.errors[i].empty()) {
       r.attempted[i] = 1;
@@ -152,10 +153,11 @@ void slurm_phase(const std::vector<Job>& jobs, const std::vector<std::size_t>& t
                                r.errors[i].substr(0, r.errors[i].find('\n')));
     }
   if (options.log && sub.submitted > 0)
-    options.log(
-        fmt::format("slurm: submitted {} renders as array job {} ({} tasks); the report "
-                    "follows as job {}",
-                    sub.submitted, sub.array_job, sub.tasks, sub.report_job));
+    options.log(fmt::format(
+        "slurm: submitted {} renders as array job {} ({} tasks{}); the report follows as job {}",
+        sub.submitted - sub.chains, sub.array_job, sub.tasks,
+        sub.chains > 0 ? fmt::format(", with {} ground-truth convergence chains", sub.chains) : "",
+        sub.report_job));
   if (options.log && sub.still_queued > 0)
     options.log(fmt::format("slurm: {} renders are still queued or running", sub.still_queued));
   stats.slurm = sub;
@@ -165,7 +167,8 @@ void slurm_phase(const std::vector<Job>& jobs, const std::vector<std::size_t>& t
 // The render phase: the cache, then what it lacks; counts what never started.
 Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
                     const RenderCache& cache, const StudyOptions& options,
-                    const Renderers& renderers, StudyRunStats& stats) {
+                    const Renderers& renderers, StudyRunStats& stats,
+                    const SlurmChains* chains = nullptr) {
   Renders r(jobs.size());
   const std::size_t cached_before = stats.cached;
   const std::vector<std::size_t> todo =
@@ -176,7 +179,7 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
   for (std::size_t i : todo) needed.output_bytes += jobs[i].resources.output_bytes;
   check_resources(needed, std::numeric_limits<double>::infinity(), study_file, cache.folder());
   if (options.slurm) {
-    slurm_phase(jobs, todo, cache, options, renderers, r, stats);
+    slurm_phase(jobs, todo, cache, options, renderers, chains, r, stats);
     return r;
   }
   if (options.log)
@@ -239,6 +242,33 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// On Slurm, every variant whose checks this round lacks goes to an array task
+// as the rest of its chain, with its evaluator jobs (plan settings) to render
+// at the settings reached: one submission instead of one per round.
+// Variants with the same truth (the same check keys) decide alike: one chain
+// renders the evaluator jobs of all of them.
+SlurmChains chains_to_submit(const Plan& plan, const Study& study, double max_memory_bytes,
+                             const std::vector<Job>& keyed, const std::vector<ChainState>& chains,
+                             const RenderCache& cache) {
+  SlurmChains out;
+  for (const ChainState& c : chains) {
+    std::vector<std::size_t> missing;
+    for (std::size_t i = c.first; i < c.first + c.count; ++i)
+      if (!cache.contains(keyed[i].key)) missing.push_back(i);
+    if (missing.empty()) continue;
+    std::vector<Job> then;
+    for (std::size_t j : plan.variants[c.truth->variant].jobs)
+      if (plan.jobs[j].renderer == RendererKind::kEvaluator) then.push_back(plan.jobs[j]);
+    for (std::size_t k = 1; k < missing.size(); ++k)
+      out.covered.emplace(keyed[missing[k]].key, keyed[missing[0]].key);
+    const auto [it, inserted] = out.by_key.try_emplace(keyed[missing[0]].key);
+    if (inserted)
+      it->second = {*c.truth, c.edge_steps, c.spp_steps, study.ground_truth, max_memory_bytes, {}};
+    it->second.then.insert(it->second.then.end(), then.begin(), then.end());
+  }
+  return out;
+}
+
 // The convergence phase: check renders go through the cache like any other.
 std::vector<VariantConvergence> converge(const Study& study, Plan& plan, const RenderCache& cache,
                                          const StudyOptions& options, const Renderers& renderers,
@@ -247,7 +277,8 @@ std::vector<VariantConvergence> converge(const Study& study, Plan& plan, const R
   // not depend on the truths' settings, so the first one carries them too
   // and they render while the truths converge.
   bool carry_external = options.slurm.has_value();
-  const RenderBatch batch = [&](const std::vector<Job>& jobs, std::vector<std::string>* errors) {
+  const RenderBatch batch = [&](const std::vector<Job>& jobs, const std::vector<ChainState>& chains,
+                                std::vector<std::string>* errors) {
     std::vector<Job> keyed = jobs;
     assign_keys(keyed, renderers.identities);
     const std::size_t checks = keyed.size();
@@ -256,12 +287,16 @@ std::vector<VariantConvergence> converge(const Study& study, Plan& plan, const R
     // Only with a round that must be submitted anyway: a run submits once.
     const bool submits = std::any_of(keyed.begin(), keyed.end(),
                                      [&](const Job& j) { return !cache.contains(j.key); });
+    const SlurmChains slurm_chains =
+        submits && options.slurm
+            ? chains_to_submit(plan, study, options.max_memory_bytes, keyed, chains, cache)
+            : SlurmChains{};
     if (submits && std::exchange(carry_external, false))
       for (const Job& j : plan.jobs)
         if (j.renderer != RendererKind::kEvaluator) keyed.push_back(j);
     StudyRunStats carried;  // the external jobs are counted in the main phase
     const Renders r = render_jobs(study.file, keyed, cache, options, renderers,
-                                  keyed.size() == checks ? stats : carried);
+                                  keyed.size() == checks ? stats : carried, &slurm_chains);
     if (keyed.size() != checks) {
       stats.slurm = carried.slurm;
       stats.not_started += carried.not_started;
@@ -291,7 +326,7 @@ std::vector<VariantConvergence> converge(const Study& study, Plan& plan, const R
 void dry_run_convergence(const Study& study, Plan& plan, const RenderCache& cache,
                          const StudyOptions& options, const Renderers& renderers,
                          StudyRunStats& stats) {
-  const RenderBatch from_cache = [&](const std::vector<Job>& jobs,
+  const RenderBatch from_cache = [&](const std::vector<Job>& jobs, const std::vector<ChainState>&,
                                      std::vector<std::string>* errors) {
     std::vector<Job> keyed = jobs;
     assign_keys(keyed, renderers.identities);

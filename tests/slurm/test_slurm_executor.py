@@ -96,9 +96,13 @@ def task_keys(folder, task_id):
     array, index = task_id.split("_")
     for b in batches(folder):
         if b["array_job"] == array:
-            per = b["renders_per_task"]
-            return b, int(index), {j["key"] for j in b["jobs"][int(index) * per:(int(index) + 1) * per]}
+            return b, int(index), set(task_entry_keys(b, int(index)))
     return None, None, set()
+
+
+def task_entry_keys(batch, task):
+    first, count = batch["tasks"][task]
+    return [j["key"] for j in batch["jobs"][first:first + count]]
 
 
 def cancel_a_running_task(folder, env):
@@ -127,8 +131,7 @@ def killed_task_check(local, folder, env):
     print(p.stdout.strip(), flush=True)
     batch, task, present = cancel_a_running_task(folder, env)
     wait_for_chain(folder, env)
-    per = batch["renders_per_task"]
-    killed = {j["key"] for j in batch["jobs"][task * per:(task + 1) * per]}
+    killed = set(task_entry_keys(batch, task))
     unfinished = killed - set(present)
     # A render submitted twice is one the killed task did not finish; later
     # convergence rounds submit new renders, never an earlier batch's again.
@@ -173,6 +176,14 @@ def main():
         wait_for_chain(folder, env)
         t_slurm = time.monotonic() - t0
         same_outputs(local, folder)
+        # The truths' convergence runs inside array tasks (a chain per
+        # variant), with the external renders: one submission, one report job.
+        arrays = [b["array_job"] for b in batches(folder)]
+        if len(arrays) != 1:
+            fail(f"the smoke study took {len(arrays)} submissions ({arrays}), expected one")
+        chains = sum(1 for j in batches(folder)[0]["jobs"] if "chain" in j)
+        if chains != 4:
+            fail(f"{chains} convergence chains submitted, expected one per variant (4)")
         print(f"smoke study: local executor {t_local:.1f} s, Slurm executor {t_slurm:.1f} s "
               f"({t_slurm / t_local:.2f}x) on this one-node cluster; report.json and "
               f"metrics.csv identical", flush=True)

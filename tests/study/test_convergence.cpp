@@ -9,6 +9,8 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <map>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -91,7 +93,8 @@ class Convergence : public TempDirTest {
   }
   // Renders with the evaluator directly (no cache), counting renders.
   RenderBatch batch() {
-    return [this](const std::vector<Job>& jobs, std::vector<std::string>* errors) {
+    return [this](const std::vector<Job>& jobs, const std::vector<ChainState>&,
+                  std::vector<std::string>* errors) {
       std::vector<std::optional<Image>> out;
       for (const Job& j : jobs) out.push_back(render(j.scene));
       errors->assign(jobs.size(), "");
@@ -135,6 +138,76 @@ TEST_F(Convergence, StopsAtTheFirstSettingsWhoseChangesAreBelowTheTolerance) {
       EXPECT_EQ(job.scene.camera.spp, 1);
       EXPECT_EQ(job.scene.displacement.edge_length, 0.04);
     }
+  }
+}
+
+// What a Slurm array task does with a chain (continue_chain, from the start
+// and from a later state) leaves exactly the renders that the rounds then
+// need: they decide the same from those alone, rendering nothing.
+TEST_F(Convergence, AChainContinuedElsewhereLeavesWhatTheRoundsNeed) {
+  Plan p = plan();
+  const long t = p.truth(0, RendererKind::kEvaluator);
+  ASSERT_GE(t, 0);
+  const Job truth = p.jobs[t];
+  std::map<std::string, Image> rendered;  // by scene
+  const RenderBatch render_and_keep = [&](const std::vector<Job>& jobs,
+                                          const std::vector<ChainState>& chains,
+                                          std::vector<std::string>* errors) {
+    EXPECT_EQ(chains.size(), 1u);
+    std::vector<std::optional<Image>> out;
+    for (const Job& j : jobs) out.push_back(rendered[j.scene_json.dump()] = render(j.scene));
+    errors->assign(jobs.size(), "");
+    return out;
+  };
+  std::size_t missing = 0;
+  const RenderBatch kept_only = [&](const std::vector<Job>& jobs, const std::vector<ChainState>&,
+                                    std::vector<std::string>* errors) {
+    std::vector<std::optional<Image>> out;
+    for (const Job& j : jobs) {
+      const auto it = rendered.find(j.scene_json.dump());
+      missing += it == rendered.end();
+      out.push_back(it == rendered.end() ? std::nullopt : std::optional<Image>(it->second));
+    }
+    errors->assign(jobs.size(), "");
+    return out;
+  };
+  // A tolerance that needs more than one check.
+  const GroundTruthSettings loose = budget(1.0, 2, 3);
+  Plan a = plan();
+  const double first = [&] {
+    const auto r = converge_truths(a, loose, 8.0 * kGiB, batch());
+    return std::max(r[0].steps[0].edge_change, r[0].steps[0].spp_change);
+  }();
+  const GroundTruthSettings tight = budget(0.9 * first, 3, 4);
+  const VariantConvergence chain = continue_chain(truth, 0, 0, tight, 8.0 * kGiB, render_and_keep);
+  const auto rounds = converge_truths(p, tight, 8.0 * kGiB, kept_only);
+  EXPECT_EQ(missing, 0u);
+  ASSERT_EQ(rounds.size(), 1u);
+  EXPECT_GE(rounds[0].steps.size(), 2u);
+  EXPECT_EQ(chain.steps.size(), rounds[0].steps.size());
+  EXPECT_EQ(chain.converged, rounds[0].converged);
+  EXPECT_EQ(chain.edge_length, rounds[0].edge_length);
+  EXPECT_EQ(chain.spp, rounds[0].spp);
+  EXPECT_EQ(chain.reached, rounds[0].reached);
+  // Continued from the second check's state, it has the steps from there on.
+  const ConvergenceStep& second = rounds[0].steps[1];
+  const int edge_steps =
+      int(std::lround(std::log2(truth.scene.displacement.edge_length / second.edge_length)));
+  const int spp_steps = int(std::lround(std::log2(second.spp / truth.scene.camera.spp) / 2));
+  const VariantConvergence later =
+      continue_chain(truth, edge_steps, spp_steps, tight, 8.0 * kGiB, kept_only);
+  EXPECT_EQ(missing, 0u);
+  ASSERT_EQ(later.steps.size(), rounds[0].steps.size() - 1);
+  EXPECT_EQ(later.steps[0].edge_length, second.edge_length);
+  EXPECT_EQ(later.steps[0].spp, second.spp);
+  EXPECT_EQ(later.edge_length, rounds[0].edge_length);
+  EXPECT_EQ(later.spp, rounds[0].spp);
+  // The variant's evaluator jobs at the settings reached, the others as planned.
+  const Plan fresh = plan();
+  for (std::size_t j : p.variants[0].jobs) {
+    Job job = fresh.jobs[j];
+    apply_convergence(job, chain);
+    EXPECT_EQ(job.scene_json, p.jobs[j].scene_json) << job.label;
   }
 }
 
