@@ -787,7 +787,9 @@ json report_json(const ReportInputs& in) {
   return {{"format", "penumbra-report"},
           {"version", kReportFormatVersion},
           {"penumbra", kPenumbraVersion},
-          {"study", {{"name", in.study.name}, {"file", in.study.file}}},
+          // Absolute: the same study run as `study.json` or `./study.json`
+          // gives the same report (and keeps its figures).
+          {"study", {{"name", in.study.name}, {"file", in.study.absolute_file}}},
           {"units", units_json()},
           {"axes", axes_json(in.study.bump.axes)},
           {"renderers", offered.renderers},

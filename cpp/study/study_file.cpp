@@ -333,6 +333,7 @@ Study load_study(const std::string& path) {
         fmt::format("expected {}, got {}", kStudyFormatVersion, describe_json(version)));
   Study s;
   s.file = path;
+  s.absolute_file = std::filesystem::absolute(path).lexically_normal().string();
   if (doc.contains("name")) {
     if (!doc["name"].is_string()) throw InputError(f, "/name", "expected a string");
     s.name = doc["name"].get<std::string>();

@@ -121,8 +121,9 @@ struct InterplaySection {
 
 struct Study {
   std::string name;
-  std::string file;
-  Section bump;  // no scenes: a low-poly-only or filtering-only study
+  std::string file;           // as given (error messages name it so)
+  std::string absolute_file;  // the report's: the same however `file` was spelled
+  Section bump;               // no scenes: a low-poly-only or filtering-only study
   std::optional<Section> lowpoly;
   std::optional<FilteringSection> filtering;
   std::optional<InterplaySection> interplay;

@@ -488,6 +488,26 @@ TEST_F(Study, UnchangedFiguresAreKeptAndAnyChangeRedrawsThem) {
   EXPECT_TRUE(fs::exists(path("figures/figures/.inputs")));
 }
 
+// How the study file is named on the command line (relative, absolute, with
+// "./") does not change report.json: a warm run that names it otherwise
+// keeps the figures rather than redrawing them for a path.
+TEST_F(Study, TheStudyFilesSpellingDoesNotChangeTheReport) {
+  json j = tiny();
+  j["set"]["/camera/width"] = j["set"]["/camera/height"] = 8;
+  j["methods"] = {"none"};
+  j["renderers"] = {"evaluator"};
+  write("named.json", j);
+  const fs::path cwd = fs::current_path();
+  fs::current_path(dir_);
+  const ::penumbra::Study relative = load_study("./named.json");
+  fs::current_path(cwd);
+  run_study(load_study(path("named.json")), test_study_options(path("out")));
+  const std::string absolute_report = read_text(path("out/report.json"));
+  run_study(relative, test_study_options(path("out")));
+  EXPECT_TRUE(read_text(path("out/report.json")) == absolute_report);
+  EXPECT_NE(absolute_report.find("\"file\": \"" + path("named.json") + "\""), std::string::npos);
+}
+
 // The smoke study end to end, every renderer, then its report.html in
 // headless Chromium at 1024 px: no console errors, every linked image
 // decoded, nothing wider than the page, the headline's method table, the
