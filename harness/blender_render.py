@@ -16,9 +16,10 @@ With --serve, one Blender renders job after job, so that its start-up (about
 {"job": "/abs/JOB.json", "output": "/abs/OUT.exr", "threads": N}; the
 answer is OUT.exr (renamed into place when done) or OUT.exr.error (one line:
 why), and a log line on stdout.  A bad job does not end the server; end of
-input does.  Every job starts from Blender's factory settings with an empty
-scene, in both modes, so that a job's pixels do not depend on what the same
-process rendered before.
+input does.  A served job on the mesh of the last one keeps that mesh (and
+its material, when that is the same too; see KEPT); any other job starts
+from Blender's factory settings with an empty scene.  Either way a job's
+pixels do not depend on what the same process rendered before.
 
 JOB.json ("penumbra-blender-job" version 2, see SCHEMA) gives a camera, a sun,
 a triangle mesh in three raw little-endian files beside it (float32 positions,
@@ -42,6 +43,7 @@ renamed into place only on success.  On failure one line starting with
 "blender_render.py: " goes to stderr and the exit status is 1.
 """
 
+import hashlib
 import json
 import math
 import os
@@ -289,11 +291,44 @@ def build_mesh(job, folder):
     if (kept != smooth).any():
         raise JobError("/mesh/faces: Blender did not keep the face shading")
     ob = bpy.data.objects.new("penumbra_object", me)
+    set_offsets(ob, job)
+    return ob
+
+
+def set_offsets(ob, job):
     sh = job["shading"]
     configure(ob.cycles, "Object.cycles",
               shadow_terminator_offset=sh["shading_offset"],
               shadow_terminator_geometry_offset=sh["geometry_offset"])
-    return ob
+
+
+def digest(parts, folder, files):
+    """A digest of JSON `parts` and the bytes of `files` (pointer, name)."""
+    h = hashlib.sha256(json.dumps(parts, sort_keys=True).encode("utf-8"))
+    for pointer, name in files:
+        try:
+            with open(os.path.join(folder, name), "rb") as f:
+                h.update(f.read())
+        except OSError as e:
+            raise JobError(f"{pointer}: cannot read: {e.strerror}") from None
+    return h.hexdigest()
+
+
+def mesh_digest(job, folder):
+    """What build_mesh builds from: /mesh and its raw files."""
+    jm = job["mesh"]
+    return digest(jm, folder, [(f"/mesh/{k}", jm[k]) for k in
+                               ("positions", "normals", "triangles", "uvs")
+                               if k in jm])
+
+
+def material_digest(job, folder):
+    """What build_material builds from: the mode, /height (and its image
+    file), /material."""
+    image = job["height"].get("image")
+    return digest([job["shading"]["mode"], job["height"], job["material"]],
+                  folder, [("/height/image/file", image["file"])] if image
+                  else [])
 
 
 def height_socket(nt, hgt):
@@ -425,6 +460,22 @@ def reset_blender():
         raise JobError("Blender could not reset to factory settings")
 
 
+def clear_all_but(ob, keep_material):
+    """Everything an earlier job built but the mesh object `ob` (and, with
+    `keep_material`, its material): what the next job builds again
+    (build_scene sets every setting it uses)."""
+    for o in list(bpy.data.objects):
+        if o != ob:
+            bpy.data.objects.remove(o, do_unlink=True)
+    kinds = [bpy.data.cameras, bpy.data.lights, bpy.data.worlds]
+    if not keep_material:
+        kinds += [bpy.data.materials, bpy.data.images, bpy.data.node_groups]
+        ob.data.materials.clear()
+    for blocks in kinds:
+        for block in list(blocks):
+            blocks.remove(block)
+
+
 def build_sun(lj):
     """The distant light: a sun of the job's strength, shining along
     -direction, with sharp shadows; returns its (unlinked) object."""
@@ -445,11 +496,17 @@ def build_sun(lj):
     return lo
 
 
-def build_scene(job, folder, threads):
-    reset_blender()
+def build_scene(job, folder, threads, keep=None, keep_material=False):
+    """The job's scene; with `keep`, the mesh object of the last job (built
+    from the same mesh) stays, with `keep_material` its material too, and
+    the rest is built again."""
+    if keep is None:
+        reset_blender()
+        for o in list(bpy.data.objects):
+            bpy.data.objects.remove(o, do_unlink=True)
+    else:
+        clear_all_but(keep, keep_material)
     scene = bpy.context.scene
-    for o in list(bpy.data.objects):
-        bpy.data.objects.remove(o, do_unlink=True)
 
     scene.world = bpy.data.worlds.new("penumbra_world")  # no nodes: black
     scene.world.use_nodes = False
@@ -507,11 +564,24 @@ def build_scene(job, folder, threads):
     scene.camera = co
 
     lo = build_sun(job["light"])
-    ob = build_mesh(job, folder)
-    build_material(job, ob, folder)
-    for o in (co, lo, ob):
+    ob = build_mesh(job, folder) if keep is None else keep
+    if keep is not None:
+        set_offsets(ob, job)
+    if not (keep is not None and keep_material):
+        build_material(job, ob, folder)
+    for o in (co, lo) if keep is not None else (co, lo, ob):
         scene.collection.objects.link(o)
     return ob
+
+
+# A serving process keeps the mesh object of its last job, and its material,
+# with the digests of what they were built from. A job on the same mesh (a
+# variant's methods and offsets, variants that differ in light) builds the
+# rest again, and Cycles keeps what it synced (persistent data): the mesh
+# build is saved, and with the same material also the shader compilation
+# and the BVH. The pixels are those of a fresh process (tested against one
+# process per job: Renderers.ServedBlenderJobsAreBitIdenticalToOne...).
+KEPT = {"mesh": None, "material": None, "object": None}
 
 
 # -------------------------------------------------------------------- main
@@ -564,7 +634,13 @@ def parse_args(argv):
     return args[0], args[1], threads
 
 
-def render_job(job_path, out_path, threads):
+def kept_what(keep, keep_material):
+    if keep is None:
+        return ""
+    return "mesh and material kept, " if keep_material else "mesh kept, "
+
+
+def render_job(job_path, out_path, threads, serving=False):
     """Render one job file into out_path (atomically); one log line."""
     try:
         with open(job_path, "rb") as f:
@@ -575,16 +651,23 @@ def render_job(job_path, out_path, threads):
     if not os.path.isdir(os.path.dirname(out_path)):
         raise JobError(f"{out_path}: output folder does not exist")
     t0 = time.monotonic()
+    folder = os.path.dirname(os.path.abspath(job_path))
+    kept, KEPT["object"] = KEPT["object"], None  # a failure keeps nothing
     try:
         check(job, SCHEMA)
-        ob = build_scene(job, os.path.dirname(os.path.abspath(job_path)),
-                         threads)
+        digests = ((mesh_digest(job, folder), material_digest(job, folder))
+                   if serving else (None, None))
+        keep = (kept if digests[0] is not None and digests[0] == KEPT["mesh"]
+                else None)
+        keep_material = keep is not None and digests[1] == KEPT["material"]
+        ob = build_scene(job, folder, threads, keep, keep_material)
     except JobError as e:
         raise JobError(f"{job_path}: {e}") from None
     t1 = time.monotonic()
     tmp = f"{out_path}.tmp-{os.getpid()}.exr"
     raw = f"{out_path}.raw-{os.getpid()}.exr"
     scene = bpy.context.scene
+    scene.render.use_persistent_data = serving
     try:
         result = bpy.ops.render.render(write_still=False)
         t2 = time.monotonic()
@@ -592,6 +675,8 @@ def render_job(job_path, out_path, threads):
             raise JobError(f"render failed ({', '.join(sorted(result))})")
         write_exr(scene, raw, tmp)
         os.replace(tmp, out_path)
+        if serving:
+            KEPT.update(mesh=digests[0], material=digests[1], object=ob)
     finally:
         for name in (raw, tmp):
             if os.path.exists(name):
@@ -602,7 +687,8 @@ def render_job(job_path, out_path, threads):
           f"{ob.cycles.shadow_terminator_geometry_offset:g}, "
           f"{scene.cycles.samples} samples, "
           f"{scene.render.resolution_x}x{scene.render.resolution_y}, "
-          f"{scene.render.threads} threads, setup {t1 - t0:.2f} s, "
+          f"{scene.render.threads} threads, "
+          f"{kept_what(keep, keep_material)}setup {t1 - t0:.2f} s, "
           f"render {t2 - t1:.2f} s -> {out_path}", flush=True)
 
 
@@ -623,7 +709,7 @@ def serve_request(line):
         raise JobError(f"bad request on stdin: {e}") from None
     out_path = request["output"]
     try:
-        render_job(request["job"], out_path, request["threads"])
+        render_job(request["job"], out_path, request["threads"], serving=True)
     except (JobError, OSError) as e:
         message = f"{PROG}: {e}"
     except Exception as e:  # noqa: BLE001 - answer, then serve on

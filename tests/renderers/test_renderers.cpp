@@ -192,32 +192,54 @@ TEST_F(Renderers, FailingRendererReportsTheLogTailAndLeavesNoImage) {
 // Batched Blender: one serving process renders job after job. Each job starts
 // from factory settings, so a job's pixels must not depend on what the
 // process rendered before: the same bits as the job in a process of its own.
+// One serving process renders job after job with the bits of one process
+// per job: after a job on another mesh, on the same mesh with another
+// material (the mesh kept), and on the same mesh and material under another
+// light (mesh, material and Cycles' synced data kept).
 TEST_F(Renderers, ServedBlenderJobsAreBitIdenticalToOneProcessPerJob) {
-  auto scene = [](const char* representation, int spp) {
+  auto scene = [](const char* representation, int spp, const char* method = "none",
+                  double light_y = 0.3) {
     json doc = calibration_scene("sphere");
     doc["representation"] = representation;
     doc["camera"]["width"] = doc["camera"]["height"] = 24;
     doc["camera"]["spp"] = spp;
+    doc["terminator"]["method"] = method;
+    doc["light"]["direction"] = {-1.0, light_y, -0.2};
     return scene_from_json(doc, "<served>");
   };
-  const Scene first = scene("displacement", 4), second = scene("bump", 8);
+  const std::vector<std::pair<std::string, Scene>> jobs{
+      {"displacement", scene("displacement", 4)},
+      {"bump", scene("bump", 8)},
+      {"bump-chiang2019", scene("bump", 8, "chiang2019")},
+      {"bump-chiang2019-light", scene("bump", 8, "chiang2019", -0.3)}};
   RenderSettings settings;
   settings.timeout_s = 300;
   settings.threads = 1;
-  settings.log_path = path("alone.log");
-  const Image alone = render_with(RendererKind::kBlender, second, settings).image;
+  std::vector<Image> alone;
+  for (const auto& [name, s] : jobs) {
+    settings.log_path = path("alone-" + name + ".log");
+    alone.push_back(render_with(RendererKind::kBlender, s, settings).image);
+  }
   BlenderSessions sessions(dir_.string());
   settings.blender_sessions = &sessions;
-  settings.log_path = path("served-first.log");
-  render_with(RendererKind::kBlender, first, settings);
-  settings.log_path = path("served-second.log");
-  const Image served = render_with(RendererKind::kBlender, second, settings).image;
-  EXPECT_EQ(sessions.started(), 1) << "one process served both";
-  ASSERT_EQ(served.pixels.size(), alone.pixels.size());
-  EXPECT_EQ(std::memcmp(served.pixels.data(), alone.pixels.data(), alone.pixels.size() * 4), 0);
-  // Each job's log holds that job's line from the shared process log.
-  EXPECT_NE(read_text(path("served-second.log")).find("mode bump"), std::string::npos);
-  EXPECT_EQ(read_text(path("served-second.log")).find("mode mesh"), std::string::npos);
+  for (std::size_t k = 0; k < jobs.size(); ++k) {
+    settings.log_path = path("served-" + jobs[k].first + ".log");
+    const Image served = render_with(RendererKind::kBlender, jobs[k].second, settings).image;
+    ASSERT_EQ(served.pixels.size(), alone[k].pixels.size());
+    EXPECT_EQ(std::memcmp(served.pixels.data(), alone[k].pixels.data(), served.pixels.size() * 4),
+              0)
+        << jobs[k].first;
+  }
+  EXPECT_EQ(sessions.started(), 1) << "one process served them all";
+  // Each job's log holds that job's line from the shared process log, which
+  // says what was kept.
+  const std::string second = read_text(path("served-bump.log"));
+  EXPECT_NE(second.find("mode bump"), std::string::npos);
+  EXPECT_EQ(second.find("mode mesh"), std::string::npos);
+  EXPECT_EQ(second.find(" kept, "), std::string::npos) << "another mesh than the truth's";
+  EXPECT_NE(read_text(path("served-bump-chiang2019.log")).find("mesh kept, "), std::string::npos);
+  EXPECT_NE(read_text(path("served-bump-chiang2019-light.log")).find("mesh and material kept, "),
+            std::string::npos);
 }
 
 // The serving script answers a job it cannot render with an .error file and
