@@ -212,12 +212,16 @@ def check(v, spec, path=""):
 # ------------------------------------------------------------------- scene
 
 def configure(owner, what, **settings):
-    """Set properties, failing clearly if this Blender lacks one."""
+    """Set properties, failing clearly if this Blender lacks one. A property
+    that already has its value is left alone: setting it would still tag
+    the scene for Cycles to sync again (a color-management setting makes a
+    served render on a kept mesh resync everything)."""
     for key, value in settings.items():
         if not hasattr(owner, key):
             raise JobError(f"Blender {bpy.app.version_string} has no "
                            f"{what}.{key}")
-        setattr(owner, key, value)
+        if getattr(owner, key) != value:
+            setattr(owner, key, value)
 
 
 def read_raw(folder, name, dtype, count, path):
@@ -523,7 +527,7 @@ def build_scene(job, folder, threads, keep=None, keep_material=False):
     if threads:
         r.threads = threads
     for attr in dir(r):  # no stamp in pixels or header
-        if attr.startswith("use_stamp"):
+        if attr.startswith("use_stamp") and getattr(r, attr):
             setattr(r, attr, False)
     configure(scene.cycles, "Scene.cycles", device="CPU",
               feature_set="SUPPORTED", samples=job["render"]["samples"],
@@ -538,12 +542,14 @@ def build_scene(job, folder, threads, keep=None, keep_material=False):
               caustics_refractive=False, light_sampling_threshold=0.0,
               sample_offset=0, time_limit=0.0, film_exposure=1.0,
               use_fast_gi=False, use_layer_samples="IGNORE")
-    scene.view_layers[0].samples = 0
+    if scene.view_layers[0].samples != 0:
+        scene.view_layers[0].samples = 0
     configure(r.image_settings, "ImageFormatSettings",
               file_format="OPEN_EXR", color_mode="RGBA", color_depth="32",
               exr_codec="ZIP", use_zbuffer=False, use_preview=False,
               color_management="FOLLOW_SCENE")
-    scene.display_settings.display_device = "sRGB"
+    if scene.display_settings.display_device != "sRGB":
+        scene.display_settings.display_device = "sRGB"
     configure(scene.view_settings, "ColorManagedViewSettings",
               view_transform="Standard", look="None", exposure=0.0,
               gamma=1.0, use_curve_mapping=False)

@@ -55,38 +55,44 @@ ExecuteResult execute_tasks(std::size_t count, const ExecuteOptions& options,
   r.errors.resize(count);
   r.seconds.assign(count, 0.0);
   Shared shared;
-  run_parallel(options.jobs, count, [&](std::size_t i) {
-    {
-      std::lock_guard<std::mutex> lock(shared.mutex);
-      if (!may_start(options, shared)) return;
-      r.attempted[i] = 1;
-    }
-    const auto t0 = std::chrono::steady_clock::now();
-    std::string error;
-    try {
-      task(i);
-    } catch (const TaskCancelled&) {  // neither done nor failed: a later run does it
-      std::lock_guard<std::mutex> lock(shared.mutex);
-      r.attempted[i] = 0;
-      return;
-    } catch (const std::exception& e) {
-      error = e.what();
-      if (error.empty()) error = "failed";
-    }
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::lock_guard<std::mutex> lock(shared.mutex);
-    ++r.finished;
-    shared.busy_seconds += seconds;
-    r.seconds[i] = seconds;
-    if (error.empty()) {
-      r.done[i] = 1;
-    } else {
-      r.errors[i] = error;
-      ++r.failed;
-    }
-    report(options, count, r, shared, label(i), error, seconds);
-  });
+  const std::vector<std::size_t> no_groups;
+  const std::vector<std::size_t>& groups =
+      options.max_started >= 0 ? no_groups : options.group_starts;
+  run_parallel(
+      options.jobs, count,
+      [&](std::size_t i) {
+        {
+          std::lock_guard<std::mutex> lock(shared.mutex);
+          if (!may_start(options, shared)) return;
+          r.attempted[i] = 1;
+        }
+        const auto t0 = std::chrono::steady_clock::now();
+        std::string error;
+        try {
+          task(i);
+        } catch (const TaskCancelled&) {  // neither done nor failed: a later run does it
+          std::lock_guard<std::mutex> lock(shared.mutex);
+          r.attempted[i] = 0;
+          return;
+        } catch (const std::exception& e) {
+          error = e.what();
+          if (error.empty()) error = "failed";
+        }
+        const double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::lock_guard<std::mutex> lock(shared.mutex);
+        ++r.finished;
+        shared.busy_seconds += seconds;
+        r.seconds[i] = seconds;
+        if (error.empty()) {
+          r.done[i] = 1;
+        } else {
+          r.errors[i] = error;
+          ++r.failed;
+        }
+        report(options, count, r, shared, label(i), error, seconds);
+      },
+      groups);
   return r;
 }
 

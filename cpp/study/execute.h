@@ -22,6 +22,9 @@ struct ExecuteOptions {
   // Counted as done before this run, for "[done/total]" (cached renders).
   std::size_t already_done = 0;
   std::size_t total = 0;  // for progress; default: already_done + tasks
+  // Groups of tasks that one worker runs in order (util/parallel.h); empty:
+  // each task alone. Ignored with max_started, which needs index order.
+  std::vector<std::size_t> group_starts;
 };
 
 // What happened to each task.

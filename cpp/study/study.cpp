@@ -88,31 +88,56 @@ std::vector<std::size_t> use_cache(const std::vector<Job>& jobs, const RenderCac
   return todo;
 }
 
-// The evaluator's displacement renders of one geometry one after another,
-// so that they share its mesh while this process still holds it
-// (render/displaced_mesh.h: the checks of a truth, the variants that differ
-// in light or material); the rest in the plan's order.
-std::vector<std::size_t> group_by_mesh(const std::vector<Job>& jobs,
-                                       const std::vector<std::size_t>& todo) {
+// The key of the jobs that render one after another on one worker: the
+// evaluator's displacement renders of one geometry (they share its mesh while
+// this process holds it: render/displaced_mesh.h; the checks of a truth, the
+// variants that differ in light or material), and Blender's renders of one
+// scene but for its light, material and method (a serving Blender keeps the
+// mesh, and the material when that is the same too:
+// harness/blender_render.py). "" for the rest.
+std::string group_key(const Job& job) {
+  if (job.renderer == RendererKind::kEvaluator &&
+      job.scene.representation == Representation::kDisplacement)
+    return "evaluator:" + displaced_mesh_key(job.scene);
+  if (job.renderer != RendererKind::kBlender) return "";
+  nlohmann::json mesh = job.scene_json;
+  for (const char* part : {"light", "material", "terminator"}) mesh.erase(part);
+  return "blender:" + mesh.dump();
+}
+
+// The jobs of `todo` in plan order, each group placed at its first member;
+// Blender groups sorted by method, so that renders with the same material
+// follow each other. Blender groups are groups of tasks for one worker
+// (execute_tasks), in `group_starts`; an evaluator render uses its own.
+struct Order {
+  std::vector<std::size_t> todo, group_starts;
+};
+Order group_by_mesh(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo) {
   std::vector<std::string> keys(todo.size());
   std::map<std::string, std::vector<std::size_t>> groups;
   for (std::size_t k = 0; k < todo.size(); ++k) {
-    const Job& job = jobs[todo[k]];
-    if (job.renderer != RendererKind::kEvaluator ||
-        job.scene.representation != Representation::kDisplacement)
-      continue;
-    keys[k] = displaced_mesh_key(job.scene);
-    groups[keys[k]].push_back(todo[k]);
+    keys[k] = group_key(jobs[todo[k]]);
+    if (!keys[k].empty()) groups[keys[k]].push_back(todo[k]);
   }
-  std::vector<std::size_t> order;
+  Order order;
+  auto add = [&](std::size_t i, bool starts) {
+    if (starts) order.group_starts.push_back(order.todo.size());
+    order.todo.push_back(i);
+  };
   for (std::size_t k = 0; k < todo.size(); ++k) {
     if (keys[k].empty()) {
-      order.push_back(todo[k]);
+      add(todo[k], true);
       continue;
     }
     const auto group = groups.find(keys[k]);
     if (group == groups.end()) continue;  // placed with the first of its group
-    order.insert(order.end(), group->second.begin(), group->second.end());
+    std::vector<std::size_t>& members = group->second;
+    const bool blender = jobs[members.front()].renderer == RendererKind::kBlender;
+    if (blender)
+      std::stable_sort(members.begin(), members.end(), [&](std::size_t a, std::size_t b) {
+        return jobs[a].scene_json["terminator"].dump() < jobs[b].scene_json["terminator"].dump();
+      });
+    for (std::size_t m = 0; m < members.size(); ++m) add(members[m], !blender || m == 0);
     groups.erase(group);
   }
   return order;
@@ -171,8 +196,8 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
                     const SlurmChains* chains = nullptr) {
   Renders r(jobs.size());
   const std::size_t cached_before = stats.cached;
-  const std::vector<std::size_t> todo =
-      group_by_mesh(jobs, use_cache(jobs, cache, options, r, stats));
+  const Order order = group_by_mesh(jobs, use_cache(jobs, cache, options, r, stats));
+  const std::vector<std::size_t>& todo = order.todo;
   const std::size_t cached = stats.cached - cached_before;
   // The cache must hold what is to be rendered (uncompressed EXR sizes).
   ResourceEstimate needed;
@@ -193,6 +218,7 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
   eo.progress = options.progress;
   eo.already_done = cached;
   eo.total = jobs.size();
+  eo.group_starts = order.group_starts;
   MethodBatches batches(jobs, todo);
   stats.method_batches += batches.batches();
   stats.batched_renders += batches.members();

@@ -17,13 +17,26 @@
 
 namespace penumbra {
 
-inline void run_parallel(int jobs, std::size_t tasks,
-                         const std::function<void(std::size_t)>& task) {
+//
+// With `group_starts` (ascending, the first 0), the tasks from one start to
+// the next are one group that one worker runs in order: renders that reuse
+// what the worker's last render built (a serving Blender's mesh) stay on one
+// worker. Groups start in index order.
+inline void run_parallel(int jobs, std::size_t tasks, const std::function<void(std::size_t)>& task,
+                         const std::vector<std::size_t>& group_starts = {}) {
   std::atomic<std::size_t> next{0};
+  const std::size_t groups = group_starts.empty() ? tasks : group_starts.size();
   auto worker = [&] {
-    for (std::size_t i = next++; i < tasks; i = next++) task(i);
+    for (std::size_t g = next++; g < groups; g = next++) {
+      if (group_starts.empty()) {
+        task(g);
+        continue;
+      }
+      const std::size_t end = g + 1 < groups ? group_starts[g + 1] : tasks;
+      for (std::size_t i = group_starts[g]; i < end; ++i) task(i);
+    }
   };
-  const int n = std::max(1, std::min<int>(jobs, static_cast<int>(tasks)));
+  const int n = std::max(1, std::min<int>(jobs, static_cast<int>(groups)));
   std::vector<std::thread> threads;
   for (int t = 1; t < n; ++t) threads.emplace_back(worker);
   worker();

@@ -488,6 +488,37 @@ TEST_F(Study, UnchangedFiguresAreKeptAndAnyChangeRedrawsThem) {
   EXPECT_TRUE(fs::exists(path("figures/figures/.inputs")));
 }
 
+// Blender's renders of one mesh run one after another on one worker, sorted
+// by method, so that its serving process keeps the mesh (and the material
+// when that is the same too): every render of a group but its first says so
+// in its log. Two variants that differ in light only share their meshes.
+TEST_F(Study, BlenderRendersOfOneMeshFollowEachOtherOnOneWorker) {
+  json j = tiny();
+  j["set"]["/camera/width"] = j["set"]["/camera/height"] = 16;
+  j["set"].erase("/camera/spp");
+  j["axes"] = {{{"pointer", "/light/direction"}, {"values", {{-1, 0.3, -0.2}, {-1, -0.3, -0.2}}}}};
+  j["methods"] = {"none", "chiang2019"};
+  j["renderers"] = {"evaluator", "blender"};
+  j["blender_spp"] = 2;
+  const ::penumbra::Study study = load_study(write("blender.json", j));
+  const StudyRunStats stats = run_study(study, test_study_options(path("out")));
+  ASSERT_TRUE(stats.complete()) << (stats.failures.empty() ? "" : stats.failures[0]);
+  std::size_t logs = 0, kept = 0, both_kept = 0;
+  for (const auto& e : fs::directory_iterator(path("out/cache"))) {
+    if (e.path().extension() != ".log") continue;
+    const std::string log = read_text(e.path().string());
+    if (log.find("blender_render.py: ") == std::string::npos) continue;
+    ++logs;
+    kept += log.find(" kept, ") != std::string::npos;
+    both_kept += log.find("mesh and material kept, ") != std::string::npos;
+  }
+  // Bump: chiang2019 twice, then none twice, on one mesh; the two truths on
+  // another.
+  EXPECT_EQ(logs, 6u);
+  EXPECT_EQ(kept, 4u);
+  EXPECT_EQ(both_kept, 3u);
+}
+
 // How the study file is named on the command line (relative, absolute, with
 // "./") does not change report.json: a warm run that names it otherwise
 // keeps the figures rather than redrawing them for a path.
