@@ -319,11 +319,19 @@ def digest(parts, folder, files):
 
 
 def mesh_digest(job, folder):
-    """What build_mesh builds from: /mesh and its raw files."""
+    """What a kept mesh object must share with the job: all of the job (the
+    mesh's raw files included) but the light and what build_material builds
+    from. Cycles does not see a change of a kept object's own settings (its
+    shading and geometry offsets) under persistent data, so those count
+    here too."""
     jm = job["mesh"]
-    return digest(jm, folder, [(f"/mesh/{k}", jm[k]) for k in
-                               ("positions", "normals", "triangles", "uvs")
-                               if k in jm])
+    parts = {k: v for k, v in job.items()
+             if k not in ("light", "height", "material", "shading")}
+    parts["shading"] = {k: v for k, v in job["shading"].items()
+                        if k != "mode"}
+    return digest(parts, folder, [(f"/mesh/{k}", jm[k]) for k in
+                                  ("positions", "normals", "triangles", "uvs")
+                                  if k in jm])
 
 
 def material_digest(job, folder):

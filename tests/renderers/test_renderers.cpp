@@ -194,24 +194,31 @@ TEST_F(Renderers, FailingRendererReportsTheLogTailAndLeavesNoImage) {
 // process rendered before: the same bits as the job in a process of its own.
 // One serving process renders job after job with the bits of one process
 // per job: after a job on another mesh, on the same mesh with another
-// material (the mesh kept), and on the same mesh and material under another
-// light (mesh, material and Cycles' synced data kept).
+// material (the mesh kept), on the same mesh and material under another
+// light (mesh, material and Cycles' synced data kept), and with a shading
+// offset, an object setting that Cycles' persistent data would miss on a
+// kept object (it rendered as none in a study before the mesh's digest
+// counted the offsets).
 TEST_F(Renderers, ServedBlenderJobsAreBitIdenticalToOneProcessPerJob) {
-  auto scene = [](const char* representation, int spp, const char* method = "none",
+  auto scene = [](const char* representation, int spp, json terminator = {{"method", "none"}},
                   double light_y = 0.3) {
     json doc = calibration_scene("sphere");
     doc["representation"] = representation;
     doc["camera"]["width"] = doc["camera"]["height"] = 24;
     doc["camera"]["spp"] = spp;
-    doc["terminator"]["method"] = method;
+    doc["terminator"] = terminator;
     doc["light"]["direction"] = {-1.0, light_y, -0.2};
     return scene_from_json(doc, "<served>");
   };
+  const json chiang = {{"method", "chiang2019"}};
+  const json offset = {{"method", "shading-offset"}, {"parameters", {{"s", 0.3}}}};
   const std::vector<std::pair<std::string, Scene>> jobs{
       {"displacement", scene("displacement", 4)},
       {"bump", scene("bump", 8)},
-      {"bump-chiang2019", scene("bump", 8, "chiang2019")},
-      {"bump-chiang2019-light", scene("bump", 8, "chiang2019", -0.3)}};
+      {"bump-chiang2019", scene("bump", 8, chiang)},
+      {"bump-chiang2019-light", scene("bump", 8, chiang, -0.3)},
+      {"bump-none-light", scene("bump", 8, {{"method", "none"}}, -0.3)},
+      {"bump-shading-offset-light", scene("bump", 8, offset, -0.3)}};
   RenderSettings settings;
   settings.timeout_s = 300;
   settings.threads = 1;
@@ -240,6 +247,12 @@ TEST_F(Renderers, ServedBlenderJobsAreBitIdenticalToOneProcessPerJob) {
   EXPECT_NE(read_text(path("served-bump-chiang2019.log")).find("mesh kept, "), std::string::npos);
   EXPECT_NE(read_text(path("served-bump-chiang2019-light.log")).find("mesh and material kept, "),
             std::string::npos);
+  EXPECT_EQ(read_text(path("served-bump-shading-offset-light.log")).find(" kept, "),
+            std::string::npos)
+      << "another offset: built afresh";
+  // The offset shows: s = 0.3 does not render as none.
+  EXPECT_NE(std::memcmp(alone[4].pixels.data(), alone[5].pixels.data(), alone[4].pixels.size() * 4),
+            0);
 }
 
 // The serving script answers a job it cannot render with an .error file and
