@@ -16,9 +16,10 @@ With --serve, one Blender renders job after job, so that its start-up (about
 {"job": "/abs/JOB.json", "output": "/abs/OUT.exr", "threads": N}; the
 answer is OUT.exr (renamed into place when done) or OUT.exr.error (one line:
 why), and a log line on stdout.  A bad job does not end the server; end of
-input does.  A served job on the mesh of the last one keeps that mesh (and
-its material, when that is the same too; see KEPT); any other job starts
-from Blender's factory settings with an empty scene.  Either way a job's
+input does.  A served job that differs from the last one only in its light
+and material keeps the last one's mesh object (and its material, when that
+is the same too; see KEPT); any other job starts from Blender's factory
+settings with an empty scene.  Either way a job's
 pixels do not depend on what the same process rendered before.
 
 JOB.json ("penumbra-blender-job" version 2, see SCHEMA) gives a camera, a sun,
@@ -295,15 +296,11 @@ def build_mesh(job, folder):
     if (kept != smooth).any():
         raise JobError("/mesh/faces: Blender did not keep the face shading")
     ob = bpy.data.objects.new("penumbra_object", me)
-    set_offsets(ob, job)
-    return ob
-
-
-def set_offsets(ob, job):
     sh = job["shading"]
     configure(ob.cycles, "Object.cycles",
               shadow_terminator_offset=sh["shading_offset"],
               shadow_terminator_geometry_offset=sh["geometry_offset"])
+    return ob
 
 
 def digest(parts, folder, files):
@@ -579,8 +576,6 @@ def build_scene(job, folder, threads, keep=None, keep_material=False):
 
     lo = build_sun(job["light"])
     ob = build_mesh(job, folder) if keep is None else keep
-    if keep is not None:
-        set_offsets(ob, job)
     if not (keep is not None and keep_material):
         build_material(job, ob, folder)
     for o in (co, lo) if keep is not None else (co, lo, ob):
@@ -589,12 +584,13 @@ def build_scene(job, folder, threads, keep=None, keep_material=False):
 
 
 # A serving process keeps the mesh object of its last job, and its material,
-# with the digests of what they were built from. A job on the same mesh (a
-# variant's methods and offsets, variants that differ in light) builds the
-# rest again, and Cycles keeps what it synced (persistent data): the mesh
-# build is saved, and with the same material also the shader compilation
-# and the BVH. The pixels are those of a fresh process (tested against one
-# process per job: Renderers.ServedBlenderJobsAreBitIdenticalToOne...).
+# with the digests of what they were built from (mesh_digest,
+# material_digest). A job that differs only in its light and material (a
+# variant's methods, variants that differ in light) builds the rest again,
+# and Cycles keeps what it synced (persistent data): the mesh build is saved,
+# and with the same material also the shader compilation and the BVH. The
+# pixels are those of a fresh process (tested against one process per job:
+# Renderers.ServedBlenderJobsAreBitIdenticalToOne...).
 KEPT = {"mesh": None, "material": None, "object": None}
 
 

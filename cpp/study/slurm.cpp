@@ -148,6 +148,13 @@ std::set<std::string> active_jobs(const std::set<std::string>& ids, const SlurmO
   return active;
 }
 
+// The chain whose batch entry is `key`, or null.
+const SlurmChain* find_chain(const SlurmChains* chains, const std::string& key) {
+  if (!chains) return nullptr;
+  const auto it = chains->by_key.find(key);
+  return it != chains->by_key.end() ? &it->second : nullptr;
+}
+
 // A chain renders one check after another: an array task of its own each,
 // first; the other renders in tasks of `per`, in plan order. `tasks` lists
 // each task's [first, count) of `jobs`.
@@ -155,10 +162,7 @@ void add_entries(const std::vector<Job>& jobs, const std::vector<std::size_t>& s
                  const SlurmChains* chains, int per, json& batch, SlurmSubmission& sub) {
   std::vector<std::size_t> plain;
   for (std::size_t i : submit) {
-    const SlurmChain* chain = nullptr;
-    if (chains)
-      if (const auto it = chains->by_key.find(jobs[i].key); it != chains->by_key.end())
-        chain = &it->second;
+    const SlurmChain* chain = find_chain(chains, jobs[i].key);
     if (!chain) {
       plain.push_back(i);
       continue;
@@ -244,9 +248,8 @@ Sorted sort_todo(const std::vector<Job>& jobs, const std::vector<std::size_t>& t
       covered.push_back(i);
       continue;
     }
-    const auto chain = chains ? chains->by_key.find(key) : SlurmChains::Map::const_iterator{};
-    if (h.queued_keys.count(key) || (chains && chain != chains->by_key.end() &&
-                                     h.queued_truths.count(chain->second.truth.key))) {
+    const SlurmChain* chain = find_chain(chains, key);
+    if (h.queued_keys.count(key) || (chain && h.queued_truths.count(chain->truth.key))) {
       ++s.queued;
       taken.insert(key);
       continue;
@@ -410,10 +413,6 @@ std::string identity_mismatch(const json& batch, const Renderers& here) {
   }
   return "";
 }
-
-}  // namespace
-
-namespace {
 
 // What every render of one array task shares.
 struct TaskContext {

@@ -60,8 +60,7 @@ struct SlurmChain {
   std::vector<Job> then;  // at the plan's settings
 };
 struct SlurmChains {
-  using Map = std::map<std::string, SlurmChain>;
-  Map by_key;  // by the key of the chain's batch entry
+  std::map<std::string, SlurmChain> by_key;  // by the key of the chain's batch entry
   // The chains' other missing checks, each with its chain's entry key.
   std::map<std::string, std::string> covered;
 };

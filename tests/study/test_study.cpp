@@ -61,6 +61,14 @@ class Study : public TempDirTest {
             {"renderers", {"evaluator", "povray"}},
             {"ground_truth", {{"max_edge_refinements", 1}, {"max_spp_refinements", 1}}}};
   }
+  // tiny() at 8 x 8 pixels, the evaluator alone, with `method`.
+  json tiny_evaluator(const std::string& method) const {
+    json j = tiny();
+    j["set"]["/camera/width"] = j["set"]["/camera/height"] = 8;
+    j["methods"] = {method};
+    j["renderers"] = {"evaluator"};
+    return j;
+  }
 };
 
 std::string read_text(const std::string& p) {
@@ -401,14 +409,11 @@ TEST_F(Study, LowPolyStudyComparesEveryOffsetWithTheAnalyticSurface) {
 // and the last among them, says how many there are, and report.json and
 // metrics.csv keep every variant.
 TEST_F(Study, AReportOfManyVariantsShowsASampleAndSaysSo) {
-  json j = tiny();
+  json j = tiny_evaluator("chiang2019");
   json amplitudes = json::array();
   for (int i = 0; i < 60; ++i) amplitudes.push_back(0.002 + 0.0005 * i);
   j["axes"] = {{{"pointer", "/height/amplitude"}, {"values", amplitudes}}};
-  j["set"]["/camera/width"] = j["set"]["/camera/height"] = 8;
   j["set"]["/camera/spp"] = 1;
-  j["methods"] = {"chiang2019"};
-  j["renderers"] = {"evaluator"};
   j["ground_truth"] = {{"max_edge_refinements", 0}, {"max_spp_refinements", 0}};
   StudyOptions o;
   o.output_dir = path("many");
@@ -439,10 +444,7 @@ TEST_F(Study, AReportOfManyVariantsShowsASampleAndSaysSo) {
 // the figures (the bulk of a warm run); a missing figure, another HTML mode
 // or another report.json draws them again, and so does `penumbra report`.
 TEST_F(Study, UnchangedFiguresAreKeptAndAnyChangeRedrawsThem) {
-  json j = tiny();
-  j["set"]["/camera/width"] = j["set"]["/camera/height"] = 8;
-  j["methods"] = {"chiang2019"};
-  j["renderers"] = {"evaluator"};
+  json j = tiny_evaluator("chiang2019");
   const ::penumbra::Study study = load_study(write("figures.json", j));
   std::vector<std::string> lines;
   StudyOptions o;
@@ -523,11 +525,7 @@ TEST_F(Study, BlenderRendersOfOneMeshFollowEachOtherOnOneWorker) {
 // "./") does not change report.json: a warm run that names it otherwise
 // keeps the figures rather than redrawing them for a path.
 TEST_F(Study, TheStudyFilesSpellingDoesNotChangeTheReport) {
-  json j = tiny();
-  j["set"]["/camera/width"] = j["set"]["/camera/height"] = 8;
-  j["methods"] = {"none"};
-  j["renderers"] = {"evaluator"};
-  write("named.json", j);
+  write("named.json", tiny_evaluator("none"));
   const fs::path cwd = fs::current_path();
   fs::current_path(dir_);
   const ::penumbra::Study relative = load_study("./named.json");
