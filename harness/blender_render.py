@@ -684,6 +684,11 @@ def render_job(job_path, out_path, threads, serving=False):
         if "FINISHED" not in result:
             raise JobError(f"render failed ({', '.join(sorted(result))})")
         write_exr(scene, raw, tmp)
+        # The line goes out before the image appears: a serving process's
+        # caller copies the job's log lines as soon as it sees the image.
+        print(f"{PROG}: {summary(job, ob, scene)}, "
+              f"{kept_what(keep, keep_material)}setup {t1 - t0:.2f} s, "
+              f"render {t2 - t1:.2f} s -> {out_path}", flush=True)
         os.replace(tmp, out_path)
         if serving:
             KEPT.update(mesh=digests[0], material=digests[1], object=ob)
@@ -691,15 +696,17 @@ def render_job(job_path, out_path, threads, serving=False):
         for name in (raw, tmp):
             if os.path.exists(name):
                 os.remove(name)
-    print(f"{PROG}: {len(ob.data.vertices)} vertices, "
-          f"{len(ob.data.polygons)} {job['mesh']['faces']} triangles, mode "
-          f"{job['shading']['mode']}, geometry offset "
-          f"{ob.cycles.shadow_terminator_geometry_offset:g}, "
-          f"{scene.cycles.samples} samples, "
-          f"{scene.render.resolution_x}x{scene.render.resolution_y}, "
-          f"{scene.render.threads} threads, "
-          f"{kept_what(keep, keep_material)}setup {t1 - t0:.2f} s, "
-          f"render {t2 - t1:.2f} s -> {out_path}", flush=True)
+
+
+def summary(job, ob, scene):
+    """What was rendered, for the job's log."""
+    return (f"{len(ob.data.vertices)} vertices, "
+            f"{len(ob.data.polygons)} {job['mesh']['faces']} triangles, mode "
+            f"{job['shading']['mode']}, geometry offset "
+            f"{ob.cycles.shadow_terminator_geometry_offset:g}, "
+            f"{scene.cycles.samples} samples, "
+            f"{scene.render.resolution_x}x{scene.render.resolution_y}, "
+            f"{scene.render.threads} threads")
 
 
 def answer_error(out_path, message):
