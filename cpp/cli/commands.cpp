@@ -30,6 +30,7 @@
 #include "analysis/intervals.h"
 #include "analysis/metrics.h"
 #include "analysis/metrics_json.h"
+#include "core/ray_packet.h"
 #include "core/roughness_filter.h"
 #include "export/export.h"
 #include "image/bump_maps.h"
@@ -1347,9 +1348,17 @@ json bench_scene(int size, int spp) {
       {"representation", "bump"}};
 }
 
+// One line of the table: wall and CPU seconds, samples per second.
+void bench_line(std::string_view label, double seconds, double cpu, double msamples, bool packets,
+                std::ostream& out) {
+  out << fmt::format("{:<30} {:>8} {:>8.3f} {:>8.3f} {:>14.2f} {:>17.2f}\n", label,
+                     packets ? "packets" : "scalar", seconds, cpu, msamples / seconds,
+                     msamples / cpu);
+}
+
 // Every method that shares its samples, rendered in one pass
 // (render_methods), as a study renders the methods of a variant.
-void bench_shared_pass(int size, int spp, std::ostream& out) {
+void bench_shared_pass(int size, int spp, bool packets, std::ostream& out) {
   const Scene scene = scene_from_json(bench_scene(size, spp), "<bench>");
   std::vector<TerminatorSettings> methods;
   for (const MethodInfo& m : all_methods()) {
@@ -1358,40 +1367,46 @@ void bench_shared_pass(int size, int spp, std::ostream& out) {
     if (shares_samples(t)) methods.push_back(t);
   }
   RenderStats stats;
+  RenderOptions options;
+  options.packets = packets;
   const double cpu_before = process_cpu_seconds();
-  render_methods(scene, methods, {}, &stats);
+  render_methods(scene, methods, options, &stats);
   const double cpu = process_cpu_seconds() - cpu_before;
-  const double msamples = double(stats.camera_samples) * double(methods.size()) / 1e6;
-  out << fmt::format("{:<24} {:>10.3f} {:>10.3f} {:>16.2f} {:>20.2f}\n",
-                     fmt::format("{} methods, one pass", methods.size()), stats.seconds, cpu,
-                     msamples / stats.seconds, msamples / cpu);
-  out << fmt::format(
-      "  (one pass: each camera sample counted once per method, as {} separate "
-      "renders would count it)\n",
-      methods.size());
+  bench_line(fmt::format("{} methods, one pass", methods.size()), stats.seconds, cpu,
+             double(stats.camera_samples) * double(methods.size()) / 1e6, stats.packets, out);
+}
+
+// One method's render, through the packets where they apply or the scalar path.
+void bench_method(const MethodInfo& m, int size, int spp, bool packets, std::ostream& out) {
+  json document = bench_scene(size, spp);
+  document["terminator"] = {{"method", m.id}};
+  const Scene scene = scene_from_json(document, "<bench>");
+  RenderStats stats;
+  RenderOptions options;
+  options.packets = packets;
+  const double cpu_before = process_cpu_seconds();
+  render(scene, options, &stats);
+  const double cpu = process_cpu_seconds() - cpu_before;
+  bench_line(m.id, stats.seconds, cpu, double(stats.camera_samples) / 1e6, stats.packets, out);
 }
 
 }  // namespace
 
 int command_bench(int size, int spp, std::ostream& out) {
   out << fmt::format(
-      "penumbra bench: {}x{}, {} spp, bump cylinder (grating, A = 0.01), {} threads\n", size, size,
-      spp, tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
-  out << fmt::format("{:<24} {:>10} {:>10} {:>16} {:>20}\n", "method", "wall s", "CPU s",
-                     "M samples/s", "M samples/CPU-s");
-  for (const MethodInfo& m : all_methods()) {
-    json document = bench_scene(size, spp);
-    document["terminator"] = {{"method", m.id}};
-    const Scene scene = scene_from_json(document, "<bench>");
-    RenderStats stats;
-    const double cpu_before = process_cpu_seconds();
-    render(scene, {}, &stats);
-    const double cpu = process_cpu_seconds() - cpu_before;
-    const double msamples = double(stats.camera_samples) / 1e6;
-    out << fmt::format("{:<24} {:>10.3f} {:>10.3f} {:>16.2f} {:>20.2f}\n", m.id, stats.seconds, cpu,
-                       msamples / stats.seconds, msamples / cpu);
-  }
-  bench_shared_pass(size, spp, out);
+      "penumbra bench: {}x{}, {} spp, bump cylinder (grating, A = 0.01), {} threads, packets on "
+      "{}\n",
+      size, size, spp,
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
+      packet_target());
+  out << fmt::format("{:<30} {:>8} {:>8} {:>8} {:>14} {:>17}\n", "method", "path", "wall s",
+                     "CPU s", "M samples/s", "M samples/CPU-s");
+  for (const MethodInfo& m : all_methods()) bench_method(m, size, spp, true, out);
+  bench_shared_pass(size, spp, true, out);
+  out << "  (one pass: each camera sample counted once per method, as separate renders would "
+         "count it)\nthe scalar path, for comparison (same bits):\n";
+  bench_method(all_methods().front(), size, spp, false, out);
+  bench_shared_pass(size, spp, false, out);
   const double rss_before = peak_rss_mib();
   json document = bench_scene(size, spp);
   document["representation"] = "displacement";

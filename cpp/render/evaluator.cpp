@@ -7,6 +7,7 @@
 #include <memory>
 #include <mutex>
 #include <stdexcept>
+#include <type_traits>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -14,6 +15,7 @@
 #include <fmt/format.h>
 
 #include "core/random.h"
+#include "core/ray_packet.h"
 #include "core/shading.h"
 #include "render/displaced_mesh.h"
 #include "render/lowpoly_mesh.h"
@@ -266,6 +268,12 @@ struct BumpNormals {
   }
 };
 
+// A worker's packet: rays and what they hit (about 60 KiB, so on the heap).
+struct PacketBuffers {
+  RayPacket rays;
+  HitPacket hits;
+};
+
 struct PixelSums {
   double radiance = 0.0, hits = 0.0, theta = 0.0, deviation = 0.0, g = 0.0, g_count = 0.0,
          view = 0.0;
@@ -290,6 +298,204 @@ void write_pixel(const PixelSums& sums, double inv_spp, float* out) {
   }
 }
 
+// The camera ray of sample (sx, sy) of pixel (i, j), jittered within its
+// stratum by two draws from `rng` unless the camera does not jitter;
+// `orthographic_direction` is the camera's direction, normalised.
+Ray camera_ray(const Camera& camera, const Vec3& orthographic_direction, int i, int j, int sx,
+               int sy, int nx, int ny, Pcg32* rng) {
+  const double a = (sx + (camera.jitter ? rng->next_double() : 0.5)) / nx;
+  const double b = (sy + (camera.jitter ? rng->next_double() : 0.5)) / ny;
+  const double x0 = (i + a) / camera.width - 0.5;
+  const double y0 = 0.5 - (j + b) / camera.height;
+  if (camera.projection == Projection::kPerspective)
+    return {camera.position, normalize(camera.direction + camera.right * x0 + camera.up * y0)};
+  return {camera.position + camera.right * x0 + camera.up * y0, orthographic_direction};
+}
+
+// Shades one camera sample's hit with every pass, into one PixelSums each:
+// what every tracer and both the scalar and the packet path share.
+template <typename Tracer>
+class SampleShader {
+ public:
+  SampleShader(const Scene& scene, const Tracer& tracer, const Props& props,
+               const std::vector<TerminatorSettings>& passes)
+      : scene_(scene),
+        tracer_(tracer),
+        props_(props),
+        passes_(passes),
+        displaced_shading_(scene.representation != Representation::kSmooth),
+        is_ground_truth_(scene.representation == Representation::kDisplacement),
+        // A filter shades bump samples only: the truth is the unfiltered surface.
+        bump_{
+            scene, scene.height.height_map(), scene.height.normal_map(),
+            scene.representation == Representation::kBump ? scene.height.filtered.get() : nullptr},
+        perturbed_(scene.height.amplitude != 0.0 || bump_.normal_map) {
+    // The same visibility serves every method that reads it.
+    for (const TerminatorSettings& t : passes)
+      needs_visibility_ =
+          needs_visibility_ || (!is_ground_truth_ && method_info(t.method.method).needs_visibility);
+  }
+
+  const BumpNormals& bump() const { return bump_; }
+  // Whether a hit's shading normal is the bump normal (BumpNormals::at).
+  bool bumps() const { return displaced_shading_ && perturbed_; }
+
+  // `bumped`, when given, is what bump().at() would return for the hit.
+  void shade(const Ray& ray, const SurfaceHit& hit, const Vec3* bumped, Material* material,
+             Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays) const;
+
+ private:
+  const Scene& scene_;
+  const Tracer& tracer_;
+  const Props& props_;
+  const std::vector<TerminatorSettings>& passes_;
+  bool displaced_shading_, is_ground_truth_;
+  BumpNormals bump_;
+  bool perturbed_;
+  bool needs_visibility_ = false;
+};
+
+template <typename Tracer>
+void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Vec3* bumped,
+                                 Material* material, Pcg32* rng, PixelSums* sums,
+                                 std::uint64_t* shadow_rays) const {
+  const SurfaceGeometry& g = hit.geometry;
+  const Vec3 wo = -ray.direction;
+  Vec3 n = g.n;
+  FacingNormals facing{hit.ng, hit.ni, false};
+  Vec3 ni = hit.ni;
+  if (bumps() && g.displaceable) {
+    // The bump perturbs the analytic normal; on a mesh it is carried
+    // over to Ni, so that Ns relates to Ni as it would to N.
+    const Vec3 b = bumped ? *bumped : bump_.at(g, ray, hit.t, material);
+    facing.ns = hit.ni == g.n ? b : normalize(rotate_between(g.n, hit.ni, b));
+  }
+  // Two-sided: the inside of an open cylinder is seen from inside.
+  if (dot(facing.ng, wo) < 0.0) {
+    n = -n;
+    ni = -ni;
+    facing.ng = -facing.ng;
+    facing.ns = -facing.ns;
+    facing.backfacing = true;
+  }
+  const Vec3& ns = facing.ns;
+  const LightSample light = sample_light(scene_.light, hit.shading_point);
+  // On the displaced surface the true normal is Ns itself; on the
+  // analytic base Ng and Ni coincide with the base normal.
+  ShadingPoint point = is_ground_truth_ && !hit.on_prop
+                           ? ShadingPoint{ns, ns, ns, light.wi, wo}
+                           : ShadingPoint{facing.ng, ni, ns, light.wi, wo};
+  // Seen from inside (an open cylinder), the height field is inverted.
+  const double amplitude = scene_.height.amplitude;
+  if (needs_visibility_ && displaced_shading_ && g.displaceable && amplitude != 0.0)
+    point.visibility = height_field_visibility(scene_.height.function,
+                                               facing.backfacing ? -amplitude : amplitude, g.p, n);
+  // Within 1.2e-6 degrees: below what the float channels resolve.
+  const SampleAngles angles{degrees(acos_approx(dot(n, light.wi))),
+                            degrees(acos_approx(dot(ns, n))), degrees(acos_approx(dot(n, wo)))};
+  int blocked = -1;  // the shadow ray, traced for the first method that needs it
+  for (std::size_t k = 0; k < passes_.size(); ++k) {
+    const Shaded shaded = penumbra::shade(passes_[k], *material, point, rng);
+    PixelSums& s = sums[k];
+    s.hits += 1.0;
+    s.theta += angles.theta;
+    s.deviation += angles.deviation;
+    if (shaded.factor_defined) {
+      s.g += shaded.factor;
+      s.g_count += 1.0;
+    }
+    s.view += angles.view;
+    if (!(shaded.value > 0.0) || light.irradiance == 0.0) continue;
+    if (blocked < 0) {
+      ++*shadow_rays;
+      const ShadowRay shadow =
+          hit.on_prop ? ShadowRay{hit.shading_point} : tracer_.shadow_ray(hit, facing, light.wi);
+      blocked = tracer_.occluded(shadow, light.wi, light.distance) ||
+                props_.occluded(shadow.origin, light.wi, light.distance);
+    }
+    if (blocked == 0) s.radiance += shaded.value * light.irradiance;
+  }
+}
+
+// Whether render_image traces its camera rays in packets (core/ray_packet.h):
+// on the analytic base shape (BaseTracer) with no props, no image map and no
+// filter, the packet computes what the tracer and the analytic bump do, to
+// the bit; and with no method drawing random numbers between a pixel's
+// samples, drawing all their jitter first moves no sample.
+template <typename Tracer>
+bool traces_packets(const Scene& scene, const SampleShader<Tracer>& shader,
+                    const std::vector<TerminatorSettings>& passes, const RenderOptions& options) {
+  if (!std::is_same_v<Tracer, BaseTracer> || !options.packets || !scene.props.empty() ||
+      !packet_supports(scene.shape))
+    return false;
+  const BumpNormals& bump = shader.bump();
+  if (bump.filtered || bump.normal_map || bump.height_map) return false;
+  return std::all_of(passes.begin(), passes.end(), shares_samples);
+}
+
+// One pixel's samples through the packet: rays, hits and bump normals a
+// packet at a time, then each hit shaded.
+template <typename Tracer>
+void shade_pixel_packets(const Scene& scene, const SampleShader<Tracer>& shader, int i, int j,
+                         Pcg32* rng, PacketBuffers* buffers, PixelSums* sums,
+                         std::uint64_t* shadow_rays) {
+  const Camera& camera = scene.camera;
+  int nx, ny;
+  strata(camera.spp, &nx, &ny);
+  const Vec3 orthographic_direction = normalize(camera.direction);
+  SurfaceHit hit;
+  Material material = scene.material;
+  RayPacket& rays = buffers->rays;
+  HitPacket& hits = buffers->hits;
+  for (int first = 0; first < camera.spp; first += int(kPacketSize)) {
+    rays.count = std::min<std::size_t>(kPacketSize, std::size_t(camera.spp - first));
+    for (std::size_t k = 0; k < rays.count; ++k) {
+      const int sample = first + int(k);
+      rays.set(k, camera_ray(camera, orthographic_direction, i, j, sample % nx, sample / nx, nx, ny,
+                             rng));
+    }
+    trace_packet(scene.shape, scene.height.function, scene.height.amplitude, shader.bumps(), rays,
+                 &hits);
+    for (std::size_t k = 0; k < rays.count; ++k) {
+      if (hits.found[k] == 0.0) continue;
+      const Hit h = hits.hit(k, scene.shape);
+      hit.t = h.t;
+      hit.geometry = h.geometry;
+      hit.shading_point = h.geometry.p;
+      hit.ng = hit.ni = h.geometry.n;
+      const Vec3 bumped = hits.ns(k);
+      const Ray ray{{rays.ox[k], rays.oy[k], rays.oz[k]}, {rays.dx[k], rays.dy[k], rays.dz[k]}};
+      shader.shade(ray, hit, &bumped, &material, rng, sums, shadow_rays);
+    }
+  }
+}
+
+// One pixel's samples one at a time, in the order of the strata.
+template <typename Tracer>
+void shade_pixel(const Scene& scene, const Tracer& tracer, const Props& props,
+                 const SampleShader<Tracer>& shader, int i, int j, Pcg32* rng, PixelSums* sums,
+                 std::uint64_t* shadow_rays) {
+  const Camera& camera = scene.camera;
+  int nx, ny;
+  strata(camera.spp, &nx, &ny);
+  const Vec3 orthographic_direction = normalize(camera.direction);
+  // One per pixel, not per sample: value-initialising it (a mesh hit
+  // included) took 9% of a bump render. Every tracer sets all the
+  // fields it uses; `on_prop` is the one field only props set.
+  SurfaceHit hit;
+  Material material = scene.material;  // a filtered map sets its lobe per sample
+  for (int sy = 0; sy < ny; ++sy) {
+    for (int sx = 0; sx < nx; ++sx) {
+      const Ray ray = camera_ray(camera, orthographic_direction, i, j, sx, sy, nx, ny, rng);
+      hit.on_prop = false;
+      material.filtered.active = false;
+      const bool found = tracer.primary(ray, &hit);
+      if (!(props.nearer(ray, found, &hit) || found)) continue;
+      shader.shade(ray, hit, nullptr, &material, rng, sums, shadow_rays);
+    }
+  }
+}
+
 // Renders with each of `passes` (one per image); see render_methods.
 template <typename Tracer>
 void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions& options,
@@ -299,25 +505,10 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   const int width = camera.width, height = camera.height;
   const std::size_t channel_count = evaluator_channels().size();
   const std::size_t pass_count = passes.size();
-  int nx, ny;
-  strata(camera.spp, &nx, &ny);
   const double inv_spp = 1.0 / camera.spp;
-  const bool perspective = camera.projection == Projection::kPerspective;
-  const Vec3 orthographic_direction = normalize(camera.direction);
-  const bool displaced_shading = scene.representation != Representation::kSmooth;
-  const bool is_ground_truth = scene.representation == Representation::kDisplacement;
-  const double amplitude = scene.height.amplitude;
-  const HeightFunction& height_function = scene.height.function;
-  // A filter shades bump samples only: the truth is the unfiltered surface.
-  const BumpNormals bump{
-      scene, scene.height.height_map(), scene.height.normal_map(),
-      scene.representation == Representation::kBump ? scene.height.filtered.get() : nullptr};
-  const bool perturbed = amplitude != 0.0 || bump.normal_map;
-  bool needs_visibility = false;  // the same visibility serves every method that reads it
-  for (const TerminatorSettings& t : passes)
-    needs_visibility =
-        needs_visibility || (!is_ground_truth && method_info(t.method.method).needs_visibility);
   const Props props(scene);
+  const SampleShader<Tracer> shader(scene, tracer, props, passes);
+  const bool packets = traces_packets(scene, shader, passes, options);
 
   std::atomic<int> rows_done{0};
   std::atomic<std::uint64_t> shadow_rays{0};
@@ -327,91 +518,17 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
     std::uint64_t local_shadow_rays = 0;
     std::vector<PixelSums> sums(pass_count);
+    const std::unique_ptr<PacketBuffers> buffers(packets ? new PacketBuffers : nullptr);
     for (int j = rows.begin(); j != rows.end(); ++j) {
       for (int i = 0; i < width; ++i) {
         const std::uint64_t pixel = std::uint64_t(j) * width + i;
         Pcg32 rng(mix64(camera.seed ^ mix64(pixel)));
         std::fill(sums.begin(), sums.end(), PixelSums{});
-        // One per pixel, not per sample: value-initialising it (a mesh hit
-        // included) took 9% of a bump render. Every tracer sets all the
-        // fields it uses; `on_prop` is the one field only props set.
-        SurfaceHit hit;
-        Material material = scene.material;  // a filtered map sets its lobe per sample
-        for (int sy = 0; sy < ny; ++sy) {
-          for (int sx = 0; sx < nx; ++sx) {
-            const double a = (sx + (camera.jitter ? rng.next_double() : 0.5)) / nx;
-            const double b = (sy + (camera.jitter ? rng.next_double() : 0.5)) / ny;
-            const double x0 = (i + a) / width - 0.5;
-            const double y0 = 0.5 - (j + b) / height;
-            Ray ray;
-            if (perspective) {
-              ray = {camera.position,
-                     normalize(camera.direction + camera.right * x0 + camera.up * y0)};
-            } else {
-              ray = {camera.position + camera.right * x0 + camera.up * y0, orthographic_direction};
-            }
-            hit.on_prop = false;
-            material.filtered.active = false;
-            const bool found = tracer.primary(ray, &hit);
-            if (!(props.nearer(ray, found, &hit) || found)) continue;
-            const SurfaceGeometry& g = hit.geometry;
-            const Vec3 wo = -ray.direction;
-            Vec3 n = g.n;
-            FacingNormals facing{hit.ng, hit.ni, false};
-            Vec3 ni = hit.ni;
-            if (displaced_shading && g.displaceable && perturbed) {
-              // The bump perturbs the analytic normal; on a mesh it is carried
-              // over to Ni, so that Ns relates to Ni as it would to N.
-              const Vec3 bumped = bump.at(g, ray, hit.t, &material);
-              facing.ns = hit.ni == g.n ? bumped : normalize(rotate_between(g.n, hit.ni, bumped));
-            }
-            // Two-sided: the inside of an open cylinder is seen from inside.
-            if (dot(facing.ng, wo) < 0.0) {
-              n = -n;
-              ni = -ni;
-              facing.ng = -facing.ng;
-              facing.ns = -facing.ns;
-              facing.backfacing = true;
-            }
-            const Vec3& ns = facing.ns;
-            const LightSample light = sample_light(scene.light, hit.shading_point);
-            // On the displaced surface the true normal is Ns itself; on the
-            // analytic base Ng and Ni coincide with the base normal.
-            ShadingPoint point = is_ground_truth && !hit.on_prop
-                                     ? ShadingPoint{ns, ns, ns, light.wi, wo}
-                                     : ShadingPoint{facing.ng, ni, ns, light.wi, wo};
-            // Seen from inside (an open cylinder), the height field is inverted.
-            if (needs_visibility && displaced_shading && g.displaceable && amplitude != 0.0)
-              point.visibility = height_field_visibility(
-                  height_function, facing.backfacing ? -amplitude : amplitude, g.p, n);
-            // Within 1.2e-6 degrees: below what the float channels resolve.
-            const SampleAngles angles{degrees(acos_approx(dot(n, light.wi))),
-                                      degrees(acos_approx(dot(ns, n))),
-                                      degrees(acos_approx(dot(n, wo)))};
-            int blocked = -1;  // the shadow ray, traced for the first method that needs it
-            for (std::size_t k = 0; k < pass_count; ++k) {
-              const Shaded shaded = shade(passes[k], material, point, &rng);
-              PixelSums& s = sums[k];
-              s.hits += 1.0;
-              s.theta += angles.theta;
-              s.deviation += angles.deviation;
-              if (shaded.factor_defined) {
-                s.g += shaded.factor;
-                s.g_count += 1.0;
-              }
-              s.view += angles.view;
-              if (!(shaded.value > 0.0) || light.irradiance == 0.0) continue;
-              if (blocked < 0) {
-                ++local_shadow_rays;
-                const ShadowRay shadow = hit.on_prop ? ShadowRay{hit.shading_point}
-                                                     : tracer.shadow_ray(hit, facing, light.wi);
-                blocked = tracer.occluded(shadow, light.wi, light.distance) ||
-                          props.occluded(shadow.origin, light.wi, light.distance);
-              }
-              if (blocked == 0) s.radiance += shaded.value * light.irradiance;
-            }
-          }
-        }
+        if (packets)
+          shade_pixel_packets(scene, shader, i, j, &rng, buffers.get(), sums.data(),
+                              &local_shadow_rays);
+        else
+          shade_pixel(scene, tracer, props, shader, i, j, &rng, sums.data(), &local_shadow_rays);
         for (std::size_t k = 0; k < pass_count; ++k)
           write_pixel(sums[k], inv_spp, &(*images)[k].pixels[pixel * channel_count]);
       }
@@ -430,6 +547,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   if (stats) {
     stats->camera_samples = std::uint64_t(width) * height * camera.spp;
     stats->shadow_rays = shadow_rays;
+    stats->packets = packets;
   }
 }
 

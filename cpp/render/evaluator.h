@@ -34,6 +34,7 @@ struct RenderStats {
   double build_seconds = 0.0;  // displacement and low-poly meshes: mesh + BVH build
   std::size_t triangles = 0;   // displacement and low-poly meshes: mesh size
   bool mesh_reused = false;    // displacement: the mesh came from this process's cache
+  bool packets = false;        // camera rays were traced in SIMD packets (RenderOptions)
 };
 
 struct RenderOptions {
@@ -43,6 +44,10 @@ struct RenderOptions {
   // Displacement: take the mesh from this process's cache of recent meshes
   // (render/displaced_mesh.h, shared_displaced_mesh) rather than build it.
   bool share_meshes = true;
+  // Trace camera rays in SIMD packets where the packet path applies (an
+  // analytic shape without props, image maps or filtering; core/ray_packet.h).
+  // It gives the same bits as the scalar path, which false forces.
+  bool packets = true;
 };
 
 Image render(const Scene& scene, const RenderOptions& options = {}, RenderStats* stats = nullptr);

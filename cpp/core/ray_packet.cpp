@@ -1,0 +1,312 @@
+// Each line of the vector code below mirrors an expression of shape.cpp,
+// height.cpp or vec.h operation for operation (the comments name which):
+// that is what keeps the bits equal to the scalar path's. Built without
+// floating-point contraction (CMakeLists.txt), which would fuse a multiply
+// and an add where the scalar code rounds twice.
+#include "core/ray_packet.h"
+
+#include <cmath>
+#include <limits>
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "core/ray_packet.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace penumbra {
+namespace HWY_NAMESPACE {
+namespace {
+
+namespace hn = hwy::HWY_NAMESPACE;
+using D = hn::ScalableTag<double>;
+using V = hn::Vec<D>;
+
+struct V3 {
+  V x, y, z;
+};
+
+V3 splat(D d, const Vec3& a) {
+  return {hn::Set(d, a.x), hn::Set(d, a.y), hn::Set(d, a.z)};
+}
+V3 load3(D d, const double* x, const double* y, const double* z, std::size_t i) {
+  return {hn::Load(d, x + i), hn::Load(d, y + i), hn::Load(d, z + i)};
+}
+void store3(D d, const V3& a, double* x, double* y, double* z, std::size_t i) {
+  hn::Store(a.x, d, x + i);
+  hn::Store(a.y, d, y + i);
+  hn::Store(a.z, d, z + i);
+}
+// dot(a, b) of vec.h: (a.x b.x + a.y b.y) + a.z b.z.
+V dot3(const V3& a, const V3& b) {
+  return hn::Add(hn::Add(hn::Mul(a.x, b.x), hn::Mul(a.y, b.y)), hn::Mul(a.z, b.z));
+}
+V3 sub3(const V3& a, const V3& b) {
+  return {hn::Sub(a.x, b.x), hn::Sub(a.y, b.y), hn::Sub(a.z, b.z)};
+}
+V3 add3(const V3& a, const V3& b) {
+  return {hn::Add(a.x, b.x), hn::Add(a.y, b.y), hn::Add(a.z, b.z)};
+}
+V3 scale3(const V3& a, V s) {
+  return {hn::Mul(a.x, s), hn::Mul(a.y, s), hn::Mul(a.z, s)};
+}
+// normalize() of vec.h: a * (1 / sqrt(dot(a, a))).
+V3 normalize3(D d, const V3& a) {
+  return scale3(a, hn::Div(hn::Set(d, 1.0), hn::Sqrt(dot3(a, a))));
+}
+// cross() of vec.h.
+V3 cross3(const V3& a, const V3& b) {
+  return {hn::Sub(hn::Mul(a.y, b.z), hn::Mul(a.z, b.y)),
+          hn::Sub(hn::Mul(a.z, b.x), hn::Mul(a.x, b.z)),
+          hn::Sub(hn::Mul(a.x, b.y), hn::Mul(a.y, b.x))};
+}
+
+// Frame::to_local and Frame::to_world of vec.h.
+struct VFrame {
+  V3 s, t, n;
+  V3 to_local(const V3& v) const { return {dot3(v, s), dot3(v, t), dot3(v, n)}; }
+  V3 to_world(const V3& v) const {
+    return add3(add3(scale3(s, v.x), scale3(t, v.y)), scale3(n, v.z));
+  }
+};
+
+// solve_quadratic of shape.cpp: the roots in ascending order, and where
+// there are any (a NaN discriminant passes, as there, and gives NaN roots).
+struct Roots {
+  V lo, hi;
+  hn::Mask<D> real;
+};
+Roots solve_quadratic(D d, V a, V b, V c) {
+  const V discriminant = hn::Sub(hn::Mul(b, b), hn::Mul(a, c));
+  const auto real = hn::Not(hn::Or(hn::Lt(discriminant, hn::Zero(d)), hn::Eq(a, hn::Zero(d))));
+  const V q = hn::Neg(hn::Add(b, hn::CopySign(hn::Sqrt(discriminant), b)));
+  const V r0 = hn::Div(q, a);
+  const V r1 = hn::IfThenElse(hn::Ne(q, hn::Zero(d)), hn::Div(c, q), r0);
+  const auto swap = hn::Gt(r0, r1);
+  return {hn::IfThenElse(swap, r1, r0), hn::IfThenElse(swap, r0, r1), real};
+}
+
+// The packet's constants: the shape and its frame as vectors.
+struct VShape {
+  VFrame frame;
+  V3 center, axis;
+  V radius, half_height, inv_radius;
+};
+
+// intersect() for a cylinder without caps, then cylinder_side() at the hit.
+void cylinder_lanes(D d, const VShape& s, const RayPacket& r, HitPacket* h, std::size_t i) {
+  const V zero = hn::Zero(d), infinity = hn::Set(d, std::numeric_limits<double>::infinity());
+  const V3 o = s.frame.to_local(sub3(load3(d, r.ox, r.oy, r.oz, i), s.center));
+  const V3 dir = s.frame.to_local(load3(d, r.dx, r.dy, r.dz, i));
+  const Roots roots = solve_quadratic(
+      d, hn::Add(hn::Mul(dir.x, dir.x), hn::Mul(dir.y, dir.y)),
+      hn::Add(hn::Mul(o.x, dir.x), hn::Mul(o.y, dir.y)),
+      hn::Sub(hn::Add(hn::Mul(o.x, o.x), hn::Mul(o.y, o.y)), hn::Mul(s.radius, s.radius)));
+  // for_each_cylinder_hit: a root is a candidate within the height, the
+  // first candidate in (t_min, t_max) is the hit.
+  const auto usable = [&](V t) {
+    const V z = hn::Add(o.z, hn::Mul(t, dir.z));
+    return hn::And(hn::And(roots.real, hn::Le(hn::Abs(z), s.half_height)),
+                   hn::And(hn::Gt(t, zero), hn::Lt(t, infinity)));
+  };
+  const auto lo_hit = usable(roots.lo);
+  const auto found = hn::Or(lo_hit, usable(roots.hi));
+  const V t = hn::IfThenElse(lo_hit, roots.lo, roots.hi);
+  const V3 local = add3(o, scale3(dir, t));
+  // cylinder_side.
+  const V inv_r = hn::Div(hn::Set(d, 1.0),
+                          hn::Sqrt(hn::Add(hn::Mul(local.x, local.x), hn::Mul(local.y, local.y))));
+  const V3 radial{hn::Mul(local.x, inv_r), hn::Mul(local.y, inv_r), zero};
+  const V3 n = s.frame.to_world(radial);
+  const V3 p =
+      add3(s.center,
+           s.frame.to_world({hn::Mul(s.radius, radial.x), hn::Mul(s.radius, radial.y), local.z}));
+  hn::Store(hn::IfThenElseZero(found, hn::Set(d, 1.0)), d, h->found + i);
+  hn::Store(t, d, h->t + i);
+  hn::Store(local.z, d, h->v + i);
+  store3(d, p, h->px, h->py, h->pz, i);
+  store3(d, n, h->nx, h->ny, h->nz, i);
+  store3(d, cross3(s.axis, n), h->t1x, h->t1y, h->t1z, i);
+  store3(d, s.axis, h->t2x, h->t2y, h->t2z, i);
+}
+
+// intersect() for a sphere, then sphere_at_direction() and Frame::from_z.
+void sphere_lanes(D d, const VShape& s, const RayPacket& r, HitPacket* h, std::size_t i) {
+  const V zero = hn::Zero(d), one = hn::Set(d, 1.0);
+  const V3 o = s.frame.to_local(sub3(load3(d, r.ox, r.oy, r.oz, i), s.center));
+  const V3 dir = s.frame.to_local(load3(d, r.dx, r.dy, r.dz, i));
+  const Roots roots = solve_quadratic(d, dot3(dir, dir), dot3(o, dir),
+                                      hn::Sub(dot3(o, o), hn::Mul(s.radius, s.radius)));
+  const V t = hn::IfThenElse(hn::Gt(roots.lo, zero), roots.lo, roots.hi);
+  const auto found = hn::And(
+      roots.real,
+      hn::And(hn::Gt(t, zero), hn::Lt(t, hn::Set(d, std::numeric_limits<double>::infinity()))));
+  const V3 n = s.frame.to_world(normalize3(d, add3(o, scale3(dir, t))));
+  const V3 p = add3(s.center, scale3(n, s.radius));
+  // Frame::from_z(n).
+  const V sign = hn::CopySign(one, n.z);
+  const V a = hn::Div(hn::Set(d, -1.0), hn::Add(sign, n.z));
+  const V b = hn::Mul(hn::Mul(n.x, n.y), a);
+  const V3 t1{hn::Add(one, hn::Mul(hn::Mul(hn::Mul(sign, n.x), n.x), a)), hn::Mul(sign, b),
+              hn::Mul(hn::Neg(sign), n.x)};
+  const V3 t2{b, hn::Add(sign, hn::Mul(hn::Mul(n.y, n.y), a)), hn::Neg(n.y)};
+  hn::Store(hn::IfThenElseZero(found, one), d, h->found + i);
+  hn::Store(t, d, h->t + i);
+  hn::Store(zero, d, h->v + i);
+  store3(d, p, h->px, h->py, h->pz, i);
+  store3(d, n, h->nx, h->ny, h->nz, i);
+  store3(d, t1, h->t1x, h->t1y, h->t1z, i);
+  store3(d, t2, h->t2x, h->t2y, h->t2z, i);
+}
+
+// The arguments 2 pi dot(k, P) + phase of one term into `out`, then their
+// sines there and cosines into `cosines`, from the C library as
+// evaluate_height takes them.
+void sine_term(D d, const SineTerm& term, const HitPacket& h, std::size_t lanes, double* out,
+               double* cosines) {
+  const V3 k = splat(d, term.k);
+  const V two_pi = hn::Set(d, 2.0 * kPi), phase = hn::Set(d, term.phase);
+  for (std::size_t i = 0; i < lanes; i += hn::Lanes(d))
+    hn::Store(hn::Add(hn::Mul(two_pi, dot3(k, load3(d, h.px, h.py, h.pz, i))), phase), d, out + i);
+  for (std::size_t i = 0; i < lanes; ++i) {
+    const double arg = out[i];
+    out[i] = std::sin(arg);
+    cosines[i] = std::cos(arg);
+  }
+}
+
+// evaluate_height at every hit point into h, gx, gy, gz.
+void height_lanes(D d, const HeightFunction& f, HitPacket* h, std::size_t lanes) {
+  const std::size_t step = hn::Lanes(d);
+  for (std::size_t i = 0; i < lanes; i += step) {
+    const V start =
+        hn::Set(d, f.combine == HeightCombine::kProduct && !f.terms.empty() ? 1.0 : 0.0);
+    hn::Store(start, d, h->h + i);
+    store3(d, {hn::Zero(d), hn::Zero(d), hn::Zero(d)}, h->gx, h->gy, h->gz, i);
+  }
+  if (f.combine == HeightCombine::kSum) {
+    for (const SineTerm& term : f.terms) {
+      sine_term(d, term, *h, lanes, h->sines[0], h->cosines[0]);
+      const V weight = hn::Set(d, term.weight), scale = hn::Set(d, 2.0 * kPi * term.weight);
+      const V3 k = splat(d, term.k);
+      for (std::size_t i = 0; i < lanes; i += step) {
+        hn::Store(hn::Add(hn::Load(d, h->h + i), hn::Mul(weight, hn::Load(d, h->sines[0] + i))), d,
+                  h->h + i);
+        const V3 g = scale3(k, hn::Mul(scale, hn::Load(d, h->cosines[0] + i)));
+        store3(d, add3(load3(d, h->gx, h->gy, h->gz, i), g), h->gx, h->gy, h->gz, i);
+      }
+    }
+    return;
+  }
+  const std::size_t m = std::min<std::size_t>(f.terms.size(), kMaxProductFactors);
+  for (std::size_t j = 0; j < m; ++j)
+    sine_term(d, f.terms[j], *h, lanes, h->sines[j], h->cosines[j]);
+  for (std::size_t i = 0; i < lanes; i += step) {
+    V value = hn::Load(d, h->h + i);
+    for (std::size_t j = 0; j < m; ++j) value = hn::Mul(value, hn::Load(d, h->sines[j] + i));
+    hn::Store(value, d, h->h + i);
+    V3 g = load3(d, h->gx, h->gy, h->gz, i);
+    for (std::size_t j = 0; j < m; ++j) {
+      V others = hn::Set(d, 1.0);
+      for (std::size_t l = 0; l < m; ++l)
+        if (l != j) others = hn::Mul(others, hn::Load(d, h->sines[l] + i));
+      const V factor =
+          hn::Mul(hn::Mul(hn::Set(d, 2.0 * kPi), hn::Load(d, h->cosines[j] + i)), others);
+      g = add3(g, scale3(splat(d, f.terms[j].k), factor));
+    }
+    store3(d, g, h->gx, h->gy, h->gz, i);
+  }
+}
+
+// displaced_normal of shape.cpp with kappa1, kappa2 of the shape.
+void bump_lanes(D d, double amplitude, double kappa1, double kappa2, HitPacket* h, std::size_t i) {
+  const V a = hn::Set(d, amplitude), one = hn::Set(d, 1.0);
+  const V ah = hn::Mul(a, hn::Load(d, h->h + i));
+  const V c1 = hn::Add(one, hn::Mul(ah, hn::Set(d, kappa1)));
+  const V c2 = hn::Add(one, hn::Mul(ah, hn::Set(d, kappa2)));
+  const V3 grad = load3(d, h->gx, h->gy, h->gz, i);
+  const V3 t1 = load3(d, h->t1x, h->t1y, h->t1z, i), t2 = load3(d, h->t2x, h->t2y, h->t2z, i);
+  const V3 n = load3(d, h->nx, h->ny, h->nz, i);
+  const V3 v =
+      sub3(sub3(scale3(n, hn::Mul(c1, c2)), scale3(t1, hn::Mul(hn::Mul(a, dot3(grad, t1)), c2))),
+           scale3(t2, hn::Mul(hn::Mul(a, dot3(grad, t2)), c1)));
+  store3(d, normalize3(d, v), h->nsx, h->nsy, h->nsz, i);
+}
+
+void copy_normals(D d, HitPacket* h, std::size_t i) {
+  store3(d, load3(d, h->nx, h->ny, h->nz, i), h->nsx, h->nsy, h->nsz, i);
+}
+
+}  // namespace
+
+void TracePacket(const Shape& shape, const HeightFunction& height, double amplitude, bool bump,
+                 const RayPacket& rays, HitPacket* hits) {
+  const D d;
+  const std::size_t step = hn::Lanes(d);
+  const std::size_t lanes = (rays.count + step - 1) / step * step;
+  const VShape s{{splat(d, shape.frame.s), splat(d, shape.frame.t), splat(d, shape.frame.n)},
+                 splat(d, shape.center),
+                 splat(d, shape.axis),
+                 hn::Set(d, shape.radius),
+                 hn::Set(d, 0.5 * shape.height),
+                 hn::Set(d, 1.0 / shape.radius)};
+  const bool sphere = shape.type == ShapeType::kSphere;
+  for (std::size_t i = 0; i < lanes; i += step) {
+    if (sphere)
+      sphere_lanes(d, s, rays, hits, i);
+    else
+      cylinder_lanes(d, s, rays, hits, i);
+  }
+  // displaced_normal returns the base normal itself without an amplitude.
+  if (!bump || amplitude == 0.0) {
+    for (std::size_t i = 0; i < lanes; i += step) copy_normals(d, hits, i);
+    return;
+  }
+  height_lanes(d, height, hits, lanes);
+  const double kappa1 = 1.0 / shape.radius, kappa2 = sphere ? 1.0 / shape.radius : 0.0;
+  for (std::size_t i = 0; i < lanes; i += step) bump_lanes(d, amplitude, kappa1, kappa2, hits, i);
+}
+
+const char* TargetName() {
+  return hwy::TargetName(HWY_TARGET);
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace penumbra
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace penumbra {
+
+HWY_EXPORT(TracePacket);
+HWY_EXPORT(TargetName);
+
+const char* packet_target() {
+  return HWY_DYNAMIC_DISPATCH(TargetName)();
+}
+
+void trace_packet(const Shape& shape, const HeightFunction& height, double amplitude, bool bump,
+                  const RayPacket& rays, HitPacket* hits) {
+  HWY_DYNAMIC_DISPATCH(TracePacket)(shape, height, amplitude, bump, rays, hits);
+}
+
+bool packet_supports(const Shape& shape) {
+  return shape.type == ShapeType::kSphere || (shape.type == ShapeType::kCylinder && !shape.caps);
+}
+
+Hit HitPacket::hit(std::size_t i, const Shape& shape) const {
+  Hit out;
+  out.t = t[i];
+  SurfaceGeometry& g = out.geometry;
+  g.p = {px[i], py[i], pz[i]};
+  g.n = {nx[i], ny[i], nz[i]};
+  g.t1 = {t1x[i], t1y[i], t1z[i]};
+  g.t2 = {t2x[i], t2y[i], t2z[i]};
+  g.v = v[i];
+  g.kappa1 = 1.0 / shape.radius;
+  g.kappa2 = shape.type == ShapeType::kSphere ? 1.0 / shape.radius : 0.0;
+  return out;
+}
+
+}  // namespace penumbra
+#endif

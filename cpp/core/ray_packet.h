@@ -1,0 +1,73 @@
+// Camera rays against an analytic shape, a packet at a time: the first hit,
+// its base geometry and the bump normal of a height function, in
+// structure-of-arrays form so that one SIMD instruction serves several rays
+// (Google Highway, the widest vectors the CPU offers, chosen at run time).
+//
+// The packet gives the bits that intersect(), evaluate_height() and
+// displaced_normal() give one ray at a time: it performs the same IEEE
+// operations in the same order (no fused multiply-adds; sqrt and division are
+// correctly rounded in every vector width) and takes its sines and cosines
+// from the same C library. So a render is the same whichever path or CPU
+// made it, and the scalar functions stay the reference the tests hold it to.
+#pragma once
+
+#include <cstddef>
+
+#include "core/height.h"
+#include "core/shape.h"
+
+namespace penumbra {
+
+// Rays per packet; a multiple of every vector width (8 doubles in AVX-512).
+inline constexpr std::size_t kPacketSize = 256;
+
+struct RayPacket {
+  std::size_t count = 0;  // rays in use, <= kPacketSize
+  // Origins and unit directions (scene units).
+  alignas(64) double ox[kPacketSize]{}, oy[kPacketSize]{}, oz[kPacketSize]{};
+  alignas(64) double dx[kPacketSize]{}, dy[kPacketSize]{}, dz[kPacketSize]{};
+
+  void set(std::size_t i, const Ray& ray) {
+    ox[i] = ray.origin.x, oy[i] = ray.origin.y, oz[i] = ray.origin.z;
+    dx[i] = ray.direction.x, dy[i] = ray.direction.y, dz[i] = ray.direction.z;
+  }
+};
+
+// What the rays of a packet hit, ray i in lane i: found[i] is 1 for a hit
+// with t in (0, inf) and 0 for a miss (the other fields are then undefined).
+// The geometry is the base surface's (SurfaceGeometry: p, n, t1, t2; v on a
+// cylinder); ns is the bump normal, n itself where there is no bump.
+struct HitPacket {
+  alignas(64) double found[kPacketSize]{}, t[kPacketSize]{}, v[kPacketSize]{};
+  alignas(64) double px[kPacketSize]{}, py[kPacketSize]{}, pz[kPacketSize]{};
+  alignas(64) double nx[kPacketSize]{}, ny[kPacketSize]{}, nz[kPacketSize]{};
+  alignas(64) double t1x[kPacketSize]{}, t1y[kPacketSize]{}, t1z[kPacketSize]{};
+  alignas(64) double t2x[kPacketSize]{}, t2y[kPacketSize]{}, t2z[kPacketSize]{};
+  alignas(64) double nsx[kPacketSize]{}, nsy[kPacketSize]{}, nsz[kPacketSize]{};
+  // Work space of the height function: h, its gradient, and the sines and
+  // cosines of a product's factors.
+  alignas(64) double h[kPacketSize]{}, gx[kPacketSize]{}, gy[kPacketSize]{}, gz[kPacketSize]{};
+  alignas(64) double sines[kMaxProductFactors][kPacketSize]{};
+  alignas(64) double cosines[kMaxProductFactors][kPacketSize]{};
+
+  // The hit of ray i as intersect() writes it.
+  Hit hit(std::size_t i, const Shape& shape) const;
+  Vec3 ns(std::size_t i) const { return {nsx[i], nsy[i], nsz[i]}; }
+};
+
+// Whether trace_packet handles the shape: a sphere, or a cylinder without
+// caps (a cap is not displaceable, which the packet does not track).
+bool packet_supports(const Shape& shape);
+
+// The first hit of each ray with t in (0, inf), like intersect(shape, ray,
+// 0, inf); and, when `bump` is true, the bump normal
+// displaced_normal(g, amplitude, evaluate_height(height, g.p)) of each hit.
+// `shape` must satisfy packet_supports and have its frame set (with_frame).
+void trace_packet(const Shape& shape, const HeightFunction& height, double amplitude, bool bump,
+                  const RayPacket& rays, HitPacket* hits);
+
+// The instruction set trace_packet runs on here, as Highway names it
+// ("AVX3" is AVX-512, "EMU128" plain C++).
+const char* packet_target();
+
+}  // namespace penumbra
