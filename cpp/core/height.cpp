@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/random.h"
+#include "core/sin_cos.h"
 
 namespace penumbra {
 
@@ -14,9 +15,9 @@ HeightSample evaluate_height(const HeightFunction& f, const Vec3& p) {
   if (f.terms.empty()) return out;
   if (f.combine == HeightCombine::kSum) {
     for (const SineTerm& term : f.terms) {
-      const double arg = 2.0 * kPi * dot(term.k, p) + term.phase;
-      out.h += term.weight * std::sin(arg);
-      out.gradient += term.k * (2.0 * kPi * term.weight * std::cos(arg));
+      const SinCos sc = sin_cos(2.0 * kPi * dot(term.k, p) + term.phase);
+      out.h += term.weight * sc.sin;
+      out.gradient += term.k * (2.0 * kPi * term.weight * sc.cos);
     }
     return out;
   }
@@ -26,9 +27,9 @@ HeightSample evaluate_height(const HeightFunction& f, const Vec3& p) {
   double cosines[kMaxProductFactors];
   const std::size_t m = std::min<std::size_t>(f.terms.size(), kMaxProductFactors);
   for (std::size_t i = 0; i < m; ++i) {
-    const double arg = 2.0 * kPi * dot(f.terms[i].k, p) + f.terms[i].phase;
-    sines[i] = std::sin(arg);
-    cosines[i] = std::cos(arg);
+    const SinCos sc = sin_cos(2.0 * kPi * dot(f.terms[i].k, p) + f.terms[i].phase);
+    sines[i] = sc.sin;
+    cosines[i] = sc.cos;
     out.h *= sines[i];
   }
   for (std::size_t i = 0; i < m; ++i) {

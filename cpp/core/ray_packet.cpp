@@ -6,7 +6,9 @@
 #include "core/ray_packet.h"
 
 #include <cmath>
+
 #include <limits>
+#include "core/sin_cos.h"
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "core/ray_packet.cpp"
@@ -21,6 +23,7 @@ namespace {
 namespace hn = hwy::HWY_NAMESPACE;
 using D = hn::ScalableTag<double>;
 using V = hn::Vec<D>;
+constexpr std::size_t kMaxLanes = HWY_MAX_BYTES / sizeof(double);
 
 struct V3 {
   V x, y, z;
@@ -159,19 +162,58 @@ void sphere_lanes(D d, const VShape& s, const RayPacket& r, HitPacket* h, std::s
   store3(d, t2, h->t2x, h->t2y, h->t2z, i);
 }
 
-// The arguments 2 pi dot(k, P) + phase of one term into `out`, then their
-// sines there and cosines into `cosines`, from the C library as
-// evaluate_height takes them.
-void sine_term(D d, const SineTerm& term, const HitPacket& h, std::size_t lanes, double* out,
+// sin_cos of core/sin_cos.h, lane by lane the same operations; lanes
+// beyond its reduction go to it one by one (it hands them to the C library).
+struct VSinCos {
+  V sin, cos;
+};
+VSinCos sin_cos_lanes(D d, V x) {
+  using namespace sin_cos_detail;
+  if (!hn::AllTrue(d, hn::Le(hn::Abs(x), hn::Set(d, kSinCosReduced)))) {
+    HWY_ALIGN_MAX double in[kMaxLanes], sines[kMaxLanes], cosines[kMaxLanes];
+    hn::Store(x, d, in);
+    for (std::size_t i = 0; i < hn::Lanes(d); ++i) {
+      const SinCos sc = sin_cos(in[i]);
+      sines[i] = sc.sin, cosines[i] = sc.cos;
+    }
+    return {hn::Load(d, sines), hn::Load(d, cosines)};
+  }
+  const auto set = [d](double v) { return hn::Set(d, v); };
+  const V j = hn::Round(hn::Mul(x, set(kTwoOverPi)));
+  const V r = hn::Sub(
+      hn::Sub(hn::Sub(hn::Sub(x, hn::Mul(j, set(kPiOver2Part1))), hn::Mul(j, set(kPiOver2Part2))),
+              hn::Mul(j, set(kPiOver2Part3))),
+      hn::Mul(j, set(kPiOver2Tail)));
+  const V z = hn::Mul(r, r);
+  // kS1 + z (kS2 + z (... + z kS6)) and the same for kC1..kC6, inside out.
+  const auto horner = [&](double c1, double c2, double c3, double c4, double c5, double c6) {
+    V p = hn::Add(set(c5), hn::Mul(z, set(c6)));
+    for (const double c : {c4, c3, c2, c1}) p = hn::Add(set(c), hn::Mul(z, p));
+    return p;
+  };
+  const V s = hn::Add(r, hn::Mul(hn::Mul(z, r), horner(kS1, kS2, kS3, kS4, kS5, kS6)));
+  const V one = set(1.0), half_z = hn::Mul(set(0.5), z);
+  const V w = hn::Sub(one, half_z);
+  const V c = hn::Add(w, hn::Add(hn::Sub(hn::Sub(one, w), half_z),
+                                 hn::Mul(z, hn::Mul(z, horner(kC1, kC2, kC3, kC4, kC5, kC6)))));
+  const V quadrant = hn::Sub(j, hn::Mul(set(4.0), hn::Floor(hn::Mul(j, set(0.25)))));
+  const auto odd = hn::Or(hn::Eq(quadrant, one), hn::Eq(quadrant, set(3.0)));
+  const V sin_r = hn::IfThenElse(odd, c, s), cos_r = hn::IfThenElse(odd, s, c);
+  const auto cos_negative = hn::Or(hn::Eq(quadrant, one), hn::Eq(quadrant, set(2.0)));
+  return {hn::IfThenElse(hn::Ge(quadrant, set(2.0)), hn::Neg(sin_r), sin_r),
+          hn::IfThenElse(cos_negative, hn::Neg(cos_r), cos_r)};
+}
+
+// The sines and cosines of 2 pi dot(k, P) + phase of one term at every hit.
+void sine_term(D d, const SineTerm& term, const HitPacket& h, std::size_t lanes, double* sines,
                double* cosines) {
   const V3 k = splat(d, term.k);
   const V two_pi = hn::Set(d, 2.0 * kPi), phase = hn::Set(d, term.phase);
-  for (std::size_t i = 0; i < lanes; i += hn::Lanes(d))
-    hn::Store(hn::Add(hn::Mul(two_pi, dot3(k, load3(d, h.px, h.py, h.pz, i))), phase), d, out + i);
-  for (std::size_t i = 0; i < lanes; ++i) {
-    const double arg = out[i];
-    out[i] = std::sin(arg);
-    cosines[i] = std::cos(arg);
+  for (std::size_t i = 0; i < lanes; i += hn::Lanes(d)) {
+    const V arg = hn::Add(hn::Mul(two_pi, dot3(k, load3(d, h.px, h.py, h.pz, i))), phase);
+    const VSinCos sc = sin_cos_lanes(d, arg);
+    hn::Store(sc.sin, d, sines + i);
+    hn::Store(sc.cos, d, cosines + i);
   }
 }
 
@@ -237,10 +279,73 @@ void copy_normals(D d, HitPacket* h, std::size_t i) {
   store3(d, load3(d, h->nx, h->ny, h->nz, i), h->nsx, h->nsy, h->nsz, i);
 }
 
+// occluded() of shape.cpp for a cylinder without caps or a sphere: any root
+// in (t_min, t_max), for the cylinder within its height.
+hn::Mask<D> occluded_lanes(D d, const VShape& s, bool sphere, const V3& origin, const V3& direction,
+                           V t_min, V t_max) {
+  const V3 o = s.frame.to_local(sub3(origin, s.center));
+  const V3 dir = s.frame.to_local(direction);
+  const V r2 = hn::Mul(s.radius, s.radius);
+  const Roots roots =
+      sphere ? solve_quadratic(d, dot3(dir, dir), dot3(o, dir), hn::Sub(dot3(o, o), r2))
+             : solve_quadratic(d, hn::Add(hn::Mul(dir.x, dir.x), hn::Mul(dir.y, dir.y)),
+                               hn::Add(hn::Mul(o.x, dir.x), hn::Mul(o.y, dir.y)),
+                               hn::Sub(hn::Add(hn::Mul(o.x, o.x), hn::Mul(o.y, o.y)), r2));
+  const auto blocks = [&](V t) {
+    auto in_range = hn::And(hn::Gt(t, t_min), hn::Lt(t, t_max));
+    if (!sphere)
+      in_range = hn::And(in_range, hn::Le(hn::Abs(hn::Add(o.z, hn::Mul(t, dir.z))), s.half_height));
+    return in_range;
+  };
+  return hn::And(roots.real, hn::Or(blocks(roots.lo), blocks(roots.hi)));
+}
+
+// acos_approx of vec.h, in degrees as the evaluator stores its angles.
+V degrees_acos(D d, V x) {
+  const V one = hn::Set(d, 1.0), abs_x = hn::Abs(x);
+  const V a = hn::IfThenElse(hn::Lt(one, abs_x), one, abs_x);  // std::min(|x|, 1)
+  V p = hn::Add(hn::Set(d, 0.0066700901), hn::Mul(a, hn::Set(d, -0.0012624911)));
+  for (const double c :
+       {-0.0170881256, 0.0308918810, -0.0501743046, 0.0889789874, -0.2145988016, 1.5707963050})
+    p = hn::Add(hn::Set(d, c), hn::Mul(a, p));
+  const V r = hn::Mul(hn::Sqrt(hn::Sub(one, a)), p);
+  const V angle = hn::IfThenElse(hn::Lt(x, hn::Zero(d)), hn::Sub(hn::Set(d, kPi), r), r);
+  return hn::Mul(angle, hn::Set(d, 180.0 / kPi));
+}
+
+// The light's direction and distance (sample_light of the evaluator), the
+// shadow ray, and the angles of the normals turned towards the viewer.
+void light_lanes(D d, const VShape& s, bool sphere, const PacketLighting& lighting,
+                 const RayPacket& r, HitPacket* h, std::size_t i) {
+  const V3 p = load3(d, h->px, h->py, h->pz, i);
+  V3 wi = splat(d, lighting.light);
+  V distance = hn::Set(d, std::numeric_limits<double>::infinity());
+  if (!lighting.distant) {
+    const V3 to_light = sub3(wi, p);
+    distance = hn::Sqrt(dot3(to_light, to_light));
+    wi = scale3(to_light, hn::Div(hn::Set(d, 1.0), distance));
+  }
+  const auto blocked =
+      occluded_lanes(d, s, sphere, p, wi, hn::Set(d, lighting.shadow_t_min), distance);
+  hn::Store(hn::IfThenElseZero(blocked, hn::Set(d, 1.0)), d, h->blocked + i);
+  const V3 dir = load3(d, r.dx, r.dy, r.dz, i);
+  const V3 wo{hn::Neg(dir.x), hn::Neg(dir.y), hn::Neg(dir.z)};
+  V3 n = load3(d, h->nx, h->ny, h->nz, i), ns = load3(d, h->nsx, h->nsy, h->nsz, i);
+  // Two-sided, as the evaluator turns them.
+  const auto flip = hn::Lt(dot3(n, wo), hn::Zero(d));
+  n = {hn::IfThenElse(flip, hn::Neg(n.x), n.x), hn::IfThenElse(flip, hn::Neg(n.y), n.y),
+       hn::IfThenElse(flip, hn::Neg(n.z), n.z)};
+  ns = {hn::IfThenElse(flip, hn::Neg(ns.x), ns.x), hn::IfThenElse(flip, hn::Neg(ns.y), ns.y),
+        hn::IfThenElse(flip, hn::Neg(ns.z), ns.z)};
+  hn::Store(degrees_acos(d, dot3(n, wi)), d, h->theta + i);
+  hn::Store(degrees_acos(d, dot3(ns, n)), d, h->deviation + i);
+  hn::Store(degrees_acos(d, dot3(n, wo)), d, h->view + i);
+}
+
 }  // namespace
 
 void TracePacket(const Shape& shape, const HeightFunction& height, double amplitude, bool bump,
-                 const RayPacket& rays, HitPacket* hits) {
+                 const PacketLighting& lighting, const RayPacket& rays, HitPacket* hits) {
   const D d;
   const std::size_t step = hn::Lanes(d);
   const std::size_t lanes = (rays.count + step - 1) / step * step;
@@ -260,11 +365,12 @@ void TracePacket(const Shape& shape, const HeightFunction& height, double amplit
   // displaced_normal returns the base normal itself without an amplitude.
   if (!bump || amplitude == 0.0) {
     for (std::size_t i = 0; i < lanes; i += step) copy_normals(d, hits, i);
-    return;
+  } else {
+    height_lanes(d, height, hits, lanes);
+    const double kappa1 = 1.0 / shape.radius, kappa2 = sphere ? 1.0 / shape.radius : 0.0;
+    for (std::size_t i = 0; i < lanes; i += step) bump_lanes(d, amplitude, kappa1, kappa2, hits, i);
   }
-  height_lanes(d, height, hits, lanes);
-  const double kappa1 = 1.0 / shape.radius, kappa2 = sphere ? 1.0 / shape.radius : 0.0;
-  for (std::size_t i = 0; i < lanes; i += step) bump_lanes(d, amplitude, kappa1, kappa2, hits, i);
+  for (std::size_t i = 0; i < lanes; i += step) light_lanes(d, s, sphere, lighting, rays, hits, i);
 }
 
 const char* TargetName() {
@@ -286,8 +392,8 @@ const char* packet_target() {
 }
 
 void trace_packet(const Shape& shape, const HeightFunction& height, double amplitude, bool bump,
-                  const RayPacket& rays, HitPacket* hits) {
-  HWY_DYNAMIC_DISPATCH(TracePacket)(shape, height, amplitude, bump, rays, hits);
+                  const PacketLighting& lighting, const RayPacket& rays, HitPacket* hits) {
+  HWY_DYNAMIC_DISPATCH(TracePacket)(shape, height, amplitude, bump, lighting, rays, hits);
 }
 
 bool packet_supports(const Shape& shape) {

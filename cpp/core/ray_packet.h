@@ -33,12 +33,25 @@ struct RayPacket {
   }
 };
 
+// The light as a packet's shadow rays and angles see it.
+struct PacketLighting {
+  bool distant = true;
+  Vec3 light;                 // distant: unit direction towards the light; point: its position
+  double shadow_t_min = 0.0;  // a shadow ray's hits count beyond this distance (scene units)
+};
+
 // What the rays of a packet hit, ray i in lane i: found[i] is 1 for a hit
 // with t in (0, inf) and 0 for a miss (the other fields are then undefined).
 // The geometry is the base surface's (SurfaceGeometry: p, n, t1, t2; v on a
 // cylinder); ns is the bump normal, n itself where there is no bump.
+// blocked[i] is 1 where the shadow ray from p towards the light meets the
+// shape; theta, deviation and view are the evaluator's analysis angles
+// (degrees, acos_approx) between the base normal turned towards the viewer
+// and the light, the bump normal and the viewer.
 struct HitPacket {
   alignas(64) double found[kPacketSize]{}, t[kPacketSize]{}, v[kPacketSize]{};
+  alignas(64) double blocked[kPacketSize]{};
+  alignas(64) double theta[kPacketSize]{}, deviation[kPacketSize]{}, view[kPacketSize]{};
   alignas(64) double px[kPacketSize]{}, py[kPacketSize]{}, pz[kPacketSize]{};
   alignas(64) double nx[kPacketSize]{}, ny[kPacketSize]{}, nz[kPacketSize]{};
   alignas(64) double t1x[kPacketSize]{}, t1y[kPacketSize]{}, t1z[kPacketSize]{};
@@ -60,11 +73,13 @@ struct HitPacket {
 bool packet_supports(const Shape& shape);
 
 // The first hit of each ray with t in (0, inf), like intersect(shape, ray,
-// 0, inf); and, when `bump` is true, the bump normal
-// displaced_normal(g, amplitude, evaluate_height(height, g.p)) of each hit.
-// `shape` must satisfy packet_supports and have its frame set (with_frame).
+// 0, inf); when `bump` is true, the bump normal
+// displaced_normal(g, amplitude, evaluate_height(height, g.p)) of each hit;
+// the shadow ray occluded(shape, {p, wi}, shadow_t_min, distance to the
+// light), and the angles. `shape` must satisfy packet_supports and have its
+// frame set (with_frame).
 void trace_packet(const Shape& shape, const HeightFunction& height, double amplitude, bool bump,
-                  const RayPacket& rays, HitPacket* hits);
+                  const PacketLighting& lighting, const RayPacket& rays, HitPacket* hits);
 
 // The instruction set trace_packet runs on here, as Highway names it
 // ("AVX3" is AVX-512, "EMU128" plain C++).

@@ -96,6 +96,7 @@ class BaseTracer {
   bool occluded(const ShadowRay& ray, const Vec3& wi, double distance) const {
     return penumbra::occluded(shape_, {ray.origin, wi}, t_min_, distance);
   }
+  double shadow_t_min() const { return t_min_; }
 
  private:
   const Shape& shape_;
@@ -312,6 +313,14 @@ Ray camera_ray(const Camera& camera, const Vec3& orthographic_direction, int i, 
   return {camera.position + camera.right * x0 + camera.up * y0, orthographic_direction};
 }
 
+// What a packet (core/ray_packet.h) computed for one sample, with the bits
+// SampleShader::shade would compute.
+struct PackedSample {
+  Vec3 bumped;  // what BumpNormals::at returns
+  SampleAngles angles;
+  bool blocked = false;  // the shadow ray's verdict
+};
+
 // Shades one camera sample's hit with every pass, into one PixelSums each:
 // what every tracer and both the scalar and the packet path share.
 template <typename Tracer>
@@ -340,8 +349,8 @@ class SampleShader {
   // Whether a hit's shading normal is the bump normal (BumpNormals::at).
   bool bumps() const { return displaced_shading_ && perturbed_; }
 
-  // `bumped`, when given, is what bump().at() would return for the hit.
-  void shade(const Ray& ray, const SurfaceHit& hit, const Vec3* bumped, Material* material,
+  // `packed`, when given, is what a packet computed for the hit.
+  void shade(const Ray& ray, const SurfaceHit& hit, const PackedSample* packed, Material* material,
              Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays) const;
 
  private:
@@ -356,7 +365,7 @@ class SampleShader {
 };
 
 template <typename Tracer>
-void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Vec3* bumped,
+void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const PackedSample* packed,
                                  Material* material, Pcg32* rng, PixelSums* sums,
                                  std::uint64_t* shadow_rays) const {
   const SurfaceGeometry& g = hit.geometry;
@@ -367,7 +376,7 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Ve
   if (bumps() && g.displaceable) {
     // The bump perturbs the analytic normal; on a mesh it is carried
     // over to Ni, so that Ns relates to Ni as it would to N.
-    const Vec3 b = bumped ? *bumped : bump_.at(g, ray, hit.t, material);
+    const Vec3 b = packed ? packed->bumped : bump_.at(g, ray, hit.t, material);
     facing.ns = hit.ni == g.n ? b : normalize(rotate_between(g.n, hit.ni, b));
   }
   // Two-sided: the inside of an open cylinder is seen from inside.
@@ -391,7 +400,9 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Ve
     point.visibility = height_field_visibility(scene_.height.function,
                                                facing.backfacing ? -amplitude : amplitude, g.p, n);
   // Within 1.2e-6 degrees: below what the float channels resolve.
-  const SampleAngles angles{degrees(acos_approx(dot(n, light.wi))),
+  const SampleAngles angles =
+      packed ? packed->angles
+             : SampleAngles{degrees(acos_approx(dot(n, light.wi))),
                             degrees(acos_approx(dot(ns, n))), degrees(acos_approx(dot(n, wo)))};
   int blocked = -1;  // the shadow ray, traced for the first method that needs it
   for (std::size_t k = 0; k < passes_.size(); ++k) {
@@ -410,8 +421,9 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Ve
       ++*shadow_rays;
       const ShadowRay shadow =
           hit.on_prop ? ShadowRay{hit.shading_point} : tracer_.shadow_ray(hit, facing, light.wi);
-      blocked = tracer_.occluded(shadow, light.wi, light.distance) ||
-                props_.occluded(shadow.origin, light.wi, light.distance);
+      blocked = packed ? packed->blocked
+                       : tracer_.occluded(shadow, light.wi, light.distance) ||
+                             props_.occluded(shadow.origin, light.wi, light.distance);
     }
     if (blocked == 0) s.radiance += shaded.value * light.irradiance;
   }
@@ -436,9 +448,9 @@ bool traces_packets(const Scene& scene, const SampleShader<Tracer>& shader,
 // One pixel's samples through the packet: rays, hits and bump normals a
 // packet at a time, then each hit shaded.
 template <typename Tracer>
-void shade_pixel_packets(const Scene& scene, const SampleShader<Tracer>& shader, int i, int j,
-                         Pcg32* rng, PacketBuffers* buffers, PixelSums* sums,
-                         std::uint64_t* shadow_rays) {
+void shade_pixel_packets(const Scene& scene, const PacketLighting& lighting,
+                         const SampleShader<Tracer>& shader, int i, int j, Pcg32* rng,
+                         PacketBuffers* buffers, PixelSums* sums, std::uint64_t* shadow_rays) {
   const Camera& camera = scene.camera;
   int nx, ny;
   strata(camera.spp, &nx, &ny);
@@ -454,8 +466,8 @@ void shade_pixel_packets(const Scene& scene, const SampleShader<Tracer>& shader,
       rays.set(k, camera_ray(camera, orthographic_direction, i, j, sample % nx, sample / nx, nx, ny,
                              rng));
     }
-    trace_packet(scene.shape, scene.height.function, scene.height.amplitude, shader.bumps(), rays,
-                 &hits);
+    trace_packet(scene.shape, scene.height.function, scene.height.amplitude, shader.bumps(),
+                 lighting, rays, &hits);
     for (std::size_t k = 0; k < rays.count; ++k) {
       if (hits.found[k] == 0.0) continue;
       const Hit h = hits.hit(k, scene.shape);
@@ -463,11 +475,23 @@ void shade_pixel_packets(const Scene& scene, const SampleShader<Tracer>& shader,
       hit.geometry = h.geometry;
       hit.shading_point = h.geometry.p;
       hit.ng = hit.ni = h.geometry.n;
-      const Vec3 bumped = hits.ns(k);
+      const PackedSample packed{
+          hits.ns(k), {hits.theta[k], hits.deviation[k], hits.view[k]}, hits.blocked[k] != 0.0};
       const Ray ray{{rays.ox[k], rays.oy[k], rays.oz[k]}, {rays.dx[k], rays.dy[k], rays.dz[k]}};
-      shader.shade(ray, hit, &bumped, &material, rng, sums, shadow_rays);
+      shader.shade(ray, hit, &packed, &material, rng, sums, shadow_rays);
     }
   }
+}
+
+// The scene's light for a packet, and where the tracer's shadow rays start
+// counting hits.
+template <typename Tracer>
+PacketLighting packet_lighting(const Scene& scene, const Tracer& tracer) {
+  PacketLighting lighting;
+  lighting.distant = scene.light.type == LightType::kDistant;
+  lighting.light = lighting.distant ? scene.light.direction : scene.light.position;
+  if constexpr (std::is_same_v<Tracer, BaseTracer>) lighting.shadow_t_min = tracer.shadow_t_min();
+  return lighting;
 }
 
 // One pixel's samples one at a time, in the order of the strata.
@@ -509,6 +533,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   const Props props(scene);
   const SampleShader<Tracer> shader(scene, tracer, props, passes);
   const bool packets = traces_packets(scene, shader, passes, options);
+  const PacketLighting lighting = packet_lighting(scene, tracer);
 
   std::atomic<int> rows_done{0};
   std::atomic<std::uint64_t> shadow_rays{0};
@@ -525,7 +550,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
         Pcg32 rng(mix64(camera.seed ^ mix64(pixel)));
         std::fill(sums.begin(), sums.end(), PixelSums{});
         if (packets)
-          shade_pixel_packets(scene, shader, i, j, &rng, buffers.get(), sums.data(),
+          shade_pixel_packets(scene, lighting, shader, i, j, &rng, buffers.get(), sums.data(),
                               &local_shadow_rays);
         else
           shade_pixel(scene, tracer, props, shader, i, j, &rng, sums.data(), &local_shadow_rays);

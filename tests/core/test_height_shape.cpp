@@ -8,6 +8,7 @@
 #include "core/height.h"
 #include "core/random.h"
 #include "core/shape.h"
+#include "core/sin_cos.h"
 
 namespace penumbra {
 namespace {
@@ -16,6 +17,52 @@ std::vector<HeightFunction> families() {
   const Vec3 dirs[] = {{1, 0, 0}, {0, 1, 0.3}};
   return {make_grating({1, 0.2, 0}, 8.0, 0.3), make_weave(dirs, 6.0, HeightCombine::kProduct),
           make_weave(dirs, 6.0, HeightCombine::kSum), make_noise(8, 4.0, 12.0, 7)};
+}
+
+// Error of `value` in units in the last place of the long double reference
+// rounded to double.
+double ulps(double value, long double reference) {
+  const double r = std::abs(static_cast<double>(reference));
+  const double ulp = std::nextafter(r, INFINITY) - r;
+  return static_cast<double>(std::fabs(static_cast<long double>(value) - reference)) / ulp;
+}
+
+// sin_cos (core/sin_cos.h) against glibc's long double sinl and cosl (64-bit
+// mantissa, so an error of 2^-11 ulp at most): within the 3 ulp its header
+// promises, also next to the zeros of sin and cos where the argument
+// reduction decides the relative error; the C library's own beyond it.
+TEST(SinCos, WithinThreeUlpOfLongDouble) {
+  Pcg32 rng(12);
+  double worst_sin = 0.0, worst_cos = 0.0;
+  for (int i = 0; i < 400000; ++i) {
+    const double u = 2.0 * rng.next_double() - 1.0;
+    double x = 0.0;
+    switch (i % 4) {
+      case 0:
+        x = 10.0 * u;
+        break;
+      case 1:
+        x = 1e4 * u;
+        break;
+      case 2:
+        x = 9.9e5 * u;
+        break;
+      case 3:  // next to a multiple of pi/2, where sin or cos nearly vanishes
+        x = std::round(2e4 * u) * (kPi / 2) + 1e-7 * (2.0 * rng.next_double() - 1.0);
+        break;
+    }
+    const SinCos sc = sin_cos(x);
+    worst_sin = std::max(worst_sin, ulps(sc.sin, sinl(static_cast<long double>(x))));
+    worst_cos = std::max(worst_cos, ulps(sc.cos, cosl(static_cast<long double>(x))));
+  }
+  EXPECT_LE(worst_sin, 3.0);
+  EXPECT_LE(worst_cos, 3.0);
+  for (const double x : {0.0, -0.0, 1e-300, kPi / 4, -kPi / 4})
+    EXPECT_LE(ulps(sin_cos(x).sin, sinl(static_cast<long double>(x))), 1.0) << x;
+  for (const double x : {2e6, -3.5e7, 1e300}) {
+    EXPECT_EQ(sin_cos(x).sin, std::sin(x)) << x;
+    EXPECT_EQ(sin_cos(x).cos, std::cos(x)) << x;
+  }
 }
 
 TEST(Height, AnalyticGradientMatchesCentralDifferences) {

@@ -4,11 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <hwy/targets.h>
@@ -70,18 +72,43 @@ std::vector<Ray> test_rays(const Shape& shape, std::size_t count, std::uint64_t 
   return rays;
 }
 
+// The light's direction and distance at p, as the evaluator samples it.
+std::pair<Vec3, double> towards_light(const PacketLighting& lighting, const Vec3& p) {
+  if (lighting.distant) return {lighting.light, std::numeric_limits<double>::infinity()};
+  const Vec3 to_light = lighting.light - p;
+  const double distance = std::sqrt(length_squared(to_light));
+  return {to_light / distance, distance};
+}
+
+// What the packet computes past the bump normal, from the scalar functions:
+// the shadow ray and the angles of the normals turned towards the viewer.
+void expect_lighting(const HitPacket& hits, std::size_t k, const Shape& shape, const Ray& ray,
+                     const SurfaceGeometry& g, Vec3 ns, const PacketLighting& lighting,
+                     const std::string& what) {
+  const auto [wi, distance] = towards_light(lighting, g.p);
+  const bool blocked = occluded(shape, {g.p, wi}, lighting.shadow_t_min, distance);
+  EXPECT_EQ(hits.blocked[k] != 0.0, blocked) << what << " blocked";
+  const Vec3 wo = -ray.direction;
+  Vec3 n = g.n;
+  if (dot(n, wo) < 0.0) n = -n, ns = -ns;
+  expect_bits(hits.theta[k], degrees(acos_approx(dot(n, wi))), what + " theta");
+  expect_bits(hits.deviation[k], degrees(acos_approx(dot(ns, n))), what + " deviation");
+  expect_bits(hits.view[k], degrees(acos_approx(dot(n, wo))), what + " view");
+}
+
 void expect_packet_matches_scalar(const Shape& shape, const HeightFunction& height,
-                                  double amplitude, bool bump, const std::string& label) {
+                                  double amplitude, bool bump, const PacketLighting& lighting,
+                                  const std::string& label) {
   const std::vector<Ray> all = test_rays(shape, 1000, 17);
   auto rays = std::make_unique<RayPacket>();
   auto hits = std::make_unique<HitPacket>();
-  std::size_t found = 0;
+  std::size_t found = 0, blocked = 0;
   // Packets of every fill, a lane count that is no multiple of the vector
   // width among them.
   for (std::size_t first = 0, size = 37; first < all.size(); first += size, size = kPacketSize) {
     rays->count = std::min(size, all.size() - first);
     for (std::size_t k = 0; k < rays->count; ++k) rays->set(k, all[first + k]);
-    trace_packet(shape, height, amplitude, bump, *rays, hits.get());
+    trace_packet(shape, height, amplitude, bump, lighting, *rays, hits.get());
     for (std::size_t k = 0; k < rays->count; ++k) {
       const std::string what = label + ", ray " + std::to_string(first + k);
       Hit scalar;
@@ -102,12 +129,16 @@ void expect_packet_matches_scalar(const Shape& shape, const HeightFunction& heig
       expect_bits(packet.geometry.kappa2, g.kappa2, what + " kappa2");
       const Vec3 ns = bump ? displaced_normal(g, amplitude, evaluate_height(height, g.p)) : g.n;
       expect_bits(hits->ns(k), ns, what + " ns");
+      expect_lighting(*hits, k, shape, all[first + k], g, ns, lighting, what);
+      blocked += hits->blocked[k] != 0.0;
       if (::testing::Test::HasFailure()) return;  // one ray's report is enough
     }
   }
   // Enough of both outcomes for the comparison to mean something.
   EXPECT_GT(found, 300u) << label;
   EXPECT_LT(found, 950u) << label;
+  EXPECT_GT(blocked, found / 10) << label;
+  EXPECT_LT(blocked, found - found / 10) << label;
 }
 
 HeightFunction sum_of_terms() {
@@ -142,11 +173,15 @@ TEST(RayPacket, HitsAndBumpNormalsHaveTheScalarBits) {
       const std::string name = std::string(hwy::TargetName(target)) + ", " +
                                (shape.type == ShapeType::kSphere ? "sphere" : "cylinder");
       ASSERT_TRUE(packet_supports(shape));
-      expect_packet_matches_scalar(shape, sum_of_terms(), 0.02, true, name + ", sum");
-      expect_packet_matches_scalar(shape, product_of_terms(), 0.05, true, name + ", product");
-      expect_packet_matches_scalar(shape, HeightFunction{}, 0.02, true, name + ", no terms");
-      expect_packet_matches_scalar(shape, sum_of_terms(), 0.0, true, name + ", A = 0");
-      expect_packet_matches_scalar(shape, sum_of_terms(), 0.02, false, name + ", no bump");
+      const PacketLighting distant{true, normalize(Vec3{-1, 0.3, -0.2}), 1e-7 * shape.radius};
+      const PacketLighting point{false, shape.center + Vec3{-3, 1, -2}, 1e-7 * shape.radius};
+      expect_packet_matches_scalar(shape, sum_of_terms(), 0.02, true, distant, name + ", sum");
+      expect_packet_matches_scalar(shape, product_of_terms(), 0.05, true, point,
+                                   name + ", product");
+      expect_packet_matches_scalar(shape, HeightFunction{}, 0.02, true, distant,
+                                   name + ", no terms");
+      expect_packet_matches_scalar(shape, sum_of_terms(), 0.0, true, point, name + ", A = 0");
+      expect_packet_matches_scalar(shape, sum_of_terms(), 0.02, false, distant, name + ", no bump");
     }
   hwy::SetSupportedTargetsForTest(0);
   cylinder.caps = true;
