@@ -400,18 +400,19 @@ bool packet_supports(const Shape& shape) {
   return shape.type == ShapeType::kSphere || (shape.type == ShapeType::kCylinder && !shape.caps);
 }
 
-Hit HitPacket::hit(std::size_t i, const Shape& shape) const {
-  Hit out;
-  out.t = t[i];
-  SurfaceGeometry& g = out.geometry;
-  g.p = {px[i], py[i], pz[i]};
-  g.n = {nx[i], ny[i], nz[i]};
-  g.t1 = {t1x[i], t1y[i], t1z[i]};
-  g.t2 = {t2x[i], t2y[i], t2z[i]};
-  g.v = v[i];
-  g.kappa1 = 1.0 / shape.radius;
-  g.kappa2 = shape.type == ShapeType::kSphere ? 1.0 / shape.radius : 0.0;
-  return out;
+double HitPacket::hit(std::size_t i, const Shape& shape, SurfaceGeometry* g) const {
+  // Field by field: a whole SurfaceGeometry built and copied here cost the
+  // evaluator more than the packet (stores forwarded to wider loads stall).
+  g->p = {px[i], py[i], pz[i]};
+  g->n = {nx[i], ny[i], nz[i]};
+  g->t1 = {t1x[i], t1y[i], t1z[i]};
+  g->t2 = {t2x[i], t2y[i], t2z[i]};
+  g->v = v[i];
+  g->u = 0.0;
+  g->kappa1 = 1.0 / shape.radius;
+  g->kappa2 = shape.type == ShapeType::kSphere ? g->kappa1 : 0.0;
+  g->displaceable = true;
+  return t[i];
 }
 
 }  // namespace penumbra

@@ -20,12 +20,16 @@ namespace penumbra {
 
 // Rays per packet; a multiple of every vector width (8 doubles in AVX-512).
 inline constexpr std::size_t kPacketSize = 256;
+// The length of each array: padded by a cache line so that the arrays do not
+// start 4 KiB apart, where loads from one wait on stores to another (4K
+// aliasing) and they crowd the same L1 sets.
+inline constexpr std::size_t kPacketStride = kPacketSize + 8;
 
 struct RayPacket {
   std::size_t count = 0;  // rays in use, <= kPacketSize
   // Origins and unit directions (scene units).
-  alignas(64) double ox[kPacketSize]{}, oy[kPacketSize]{}, oz[kPacketSize]{};
-  alignas(64) double dx[kPacketSize]{}, dy[kPacketSize]{}, dz[kPacketSize]{};
+  alignas(64) double ox[kPacketStride]{}, oy[kPacketStride]{}, oz[kPacketStride]{};
+  alignas(64) double dx[kPacketStride]{}, dy[kPacketStride]{}, dz[kPacketStride]{};
 
   void set(std::size_t i, const Ray& ray) {
     ox[i] = ray.origin.x, oy[i] = ray.origin.y, oz[i] = ray.origin.z;
@@ -49,22 +53,23 @@ struct PacketLighting {
 // (degrees, acos_approx) between the base normal turned towards the viewer
 // and the light, the bump normal and the viewer.
 struct HitPacket {
-  alignas(64) double found[kPacketSize]{}, t[kPacketSize]{}, v[kPacketSize]{};
-  alignas(64) double blocked[kPacketSize]{};
-  alignas(64) double theta[kPacketSize]{}, deviation[kPacketSize]{}, view[kPacketSize]{};
-  alignas(64) double px[kPacketSize]{}, py[kPacketSize]{}, pz[kPacketSize]{};
-  alignas(64) double nx[kPacketSize]{}, ny[kPacketSize]{}, nz[kPacketSize]{};
-  alignas(64) double t1x[kPacketSize]{}, t1y[kPacketSize]{}, t1z[kPacketSize]{};
-  alignas(64) double t2x[kPacketSize]{}, t2y[kPacketSize]{}, t2z[kPacketSize]{};
-  alignas(64) double nsx[kPacketSize]{}, nsy[kPacketSize]{}, nsz[kPacketSize]{};
+  alignas(64) double found[kPacketStride]{}, t[kPacketStride]{}, v[kPacketStride]{};
+  alignas(64) double blocked[kPacketStride]{};
+  alignas(64) double theta[kPacketStride]{}, deviation[kPacketStride]{}, view[kPacketStride]{};
+  alignas(64) double px[kPacketStride]{}, py[kPacketStride]{}, pz[kPacketStride]{};
+  alignas(64) double nx[kPacketStride]{}, ny[kPacketStride]{}, nz[kPacketStride]{};
+  alignas(64) double t1x[kPacketStride]{}, t1y[kPacketStride]{}, t1z[kPacketStride]{};
+  alignas(64) double t2x[kPacketStride]{}, t2y[kPacketStride]{}, t2z[kPacketStride]{};
+  alignas(64) double nsx[kPacketStride]{}, nsy[kPacketStride]{}, nsz[kPacketStride]{};
   // Work space of the height function: h, its gradient, and the sines and
   // cosines of a product's factors.
-  alignas(64) double h[kPacketSize]{}, gx[kPacketSize]{}, gy[kPacketSize]{}, gz[kPacketSize]{};
-  alignas(64) double sines[kMaxProductFactors][kPacketSize]{};
-  alignas(64) double cosines[kMaxProductFactors][kPacketSize]{};
+  alignas(64) double h[kPacketStride]{}, gx[kPacketStride]{}, gy[kPacketStride]{}, gz[kPacketStride]{};
+  alignas(64) double sines[kMaxProductFactors][kPacketStride]{};
+  alignas(64) double cosines[kMaxProductFactors][kPacketStride]{};
 
-  // The hit of ray i as intersect() writes it.
-  Hit hit(std::size_t i, const Shape& shape) const;
+  // The hit of ray i as intersect() writes it: its distance, and its
+  // geometry into the fields of *g that intersect() sets.
+  double hit(std::size_t i, const Shape& shape, SurfaceGeometry* g) const;
   Vec3 ns(std::size_t i) const { return {nsx[i], nsy[i], nsz[i]}; }
 };
 

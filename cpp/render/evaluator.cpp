@@ -470,11 +470,9 @@ void shade_pixel_packets(const Scene& scene, const PacketLighting& lighting,
                  lighting, rays, &hits);
     for (std::size_t k = 0; k < rays.count; ++k) {
       if (hits.found[k] == 0.0) continue;
-      const Hit h = hits.hit(k, scene.shape);
-      hit.t = h.t;
-      hit.geometry = h.geometry;
-      hit.shading_point = h.geometry.p;
-      hit.ng = hit.ni = h.geometry.n;
+      hit.t = hits.hit(k, scene.shape, &hit.geometry);
+      hit.shading_point = hit.geometry.p;
+      hit.ng = hit.ni = hit.geometry.n;
       const PackedSample packed{
           hits.ns(k), {hits.theta[k], hits.deviation[k], hits.view[k]}, hits.blocked[k] != 0.0};
       const Ray ray{{rays.ox[k], rays.oy[k], rays.oz[k]}, {rays.dx[k], rays.dy[k], rays.dz[k]}};

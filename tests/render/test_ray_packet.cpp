@@ -117,7 +117,8 @@ void expect_packet_matches_scalar(const Shape& shape, const HeightFunction& heig
       ASSERT_EQ(hits->found[k] != 0.0, hit_scalar) << what;
       if (!hit_scalar) continue;
       ++found;
-      const Hit packet = hits->hit(k, shape);
+      Hit packet;
+      packet.t = hits->hit(k, shape, &packet.geometry);
       const SurfaceGeometry& g = scalar.geometry;
       expect_bits(packet.t, scalar.t, what + " t");
       expect_bits(packet.geometry.p, g.p, what + " p");
