@@ -15,6 +15,13 @@ constexpr std::uint64_t mix64(std::uint64_t z) {
   return z ^ (z >> 31);
 }
 
+// Element n of the SplitMix64 sequence from `key` (Steele et al. 2014) as a
+// uniform double in [0, 1) with 53 random bits: a counter-based draw, which
+// depends on nothing drawn before it.
+constexpr double splitmix_double(std::uint64_t key, std::uint64_t n) {
+  return static_cast<double>(mix64(key + n * 0x9e3779b97f4a7c15ull) >> 11u) * 0x1.0p-53;
+}
+
 // PCG32 (O'Neill 2014, XSH-RR variant).
 class Pcg32 {
  public:

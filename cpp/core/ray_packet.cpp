@@ -356,6 +356,9 @@ void TracePacket(const Shape& shape, const HeightFunction& height, double amplit
                  hn::Set(d, 0.5 * shape.height),
                  hn::Set(d, 1.0 / shape.radius)};
   const bool sphere = shape.type == ShapeType::kSphere;
+  // As cylinder_side and sphere_at_direction set them.
+  hits->kappa1 = 1.0 / shape.radius;
+  hits->kappa2 = sphere ? 1.0 / shape.radius : 0.0;
   for (std::size_t i = 0; i < lanes; i += step) {
     if (sphere)
       sphere_lanes(d, s, rays, hits, i);
@@ -367,10 +370,32 @@ void TracePacket(const Shape& shape, const HeightFunction& height, double amplit
     for (std::size_t i = 0; i < lanes; i += step) copy_normals(d, hits, i);
   } else {
     height_lanes(d, height, hits, lanes);
-    const double kappa1 = 1.0 / shape.radius, kappa2 = sphere ? 1.0 / shape.radius : 0.0;
-    for (std::size_t i = 0; i < lanes; i += step) bump_lanes(d, amplitude, kappa1, kappa2, hits, i);
+    for (std::size_t i = 0; i < lanes; i += step)
+      bump_lanes(d, amplitude, hits->kappa1, hits->kappa2, hits, i);
   }
   for (std::size_t i = 0; i < lanes; i += step) light_lanes(d, s, sphere, lighting, rays, hits, i);
+}
+
+void CameraRays(const PacketCamera& camera, const SamplePacket& samples, RayPacket* rays) {
+  const D d;
+  const std::size_t step = hn::Lanes(d);
+  const V3 position = splat(d, camera.position), direction = splat(d, camera.direction);
+  const V3 right = splat(d, camera.right), up = splat(d, camera.up);
+  const V nx = hn::Set(d, camera.nx), ny = hn::Set(d, camera.ny), half = hn::Set(d, 0.5);
+  const V width = hn::Set(d, camera.width), height = hn::Set(d, camera.height);
+  for (std::size_t k = 0; k < rays->count; k += step) {
+    const V a = hn::Div(hn::Add(hn::Load(d, samples.sx + k), hn::Load(d, samples.jx + k)), nx);
+    const V b = hn::Div(hn::Add(hn::Load(d, samples.sy + k), hn::Load(d, samples.jy + k)), ny);
+    const V x0 = hn::Sub(hn::Div(hn::Add(hn::Load(d, samples.i + k), a), width), half);
+    const V y0 = hn::Sub(half, hn::Div(hn::Add(hn::Load(d, samples.j + k), b), height));
+    V3 origin = position, dir = direction;
+    if (camera.perspective)
+      dir = normalize3(d, add3(add3(direction, scale3(right, x0)), scale3(up, y0)));
+    else
+      origin = add3(add3(position, scale3(right, x0)), scale3(up, y0));
+    store3(d, origin, rays->ox, rays->oy, rays->oz, k);
+    store3(d, dir, rays->dx, rays->dy, rays->dz, k);
+  }
 }
 
 const char* TargetName() {
@@ -386,6 +411,11 @@ namespace penumbra {
 
 HWY_EXPORT(TracePacket);
 HWY_EXPORT(TargetName);
+HWY_EXPORT(CameraRays);
+
+void camera_rays(const PacketCamera& camera, const SamplePacket& samples, RayPacket* rays) {
+  HWY_DYNAMIC_DISPATCH(CameraRays)(camera, samples, rays);
+}
 
 const char* packet_target() {
   return HWY_DYNAMIC_DISPATCH(TargetName)();
@@ -400,7 +430,7 @@ bool packet_supports(const Shape& shape) {
   return shape.type == ShapeType::kSphere || (shape.type == ShapeType::kCylinder && !shape.caps);
 }
 
-double HitPacket::hit(std::size_t i, const Shape& shape, SurfaceGeometry* g) const {
+double HitPacket::hit(std::size_t i, SurfaceGeometry* g) const {
   // Field by field: a whole SurfaceGeometry built and copied here cost the
   // evaluator more than the packet (stores forwarded to wider loads stall).
   g->p = {px[i], py[i], pz[i]};
@@ -409,8 +439,8 @@ double HitPacket::hit(std::size_t i, const Shape& shape, SurfaceGeometry* g) con
   g->t2 = {t2x[i], t2y[i], t2z[i]};
   g->v = v[i];
   g->u = 0.0;
-  g->kappa1 = 1.0 / shape.radius;
-  g->kappa2 = shape.type == ShapeType::kSphere ? g->kappa1 : 0.0;
+  g->kappa1 = kappa1;
+  g->kappa2 = kappa2;
   g->displaceable = true;
   return t[i];
 }

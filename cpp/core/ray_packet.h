@@ -37,6 +37,29 @@ struct RayPacket {
   }
 };
 
+// A camera as it makes a packet's rays (the scene's Camera, reference
+// sheet section 6): sample (sx + jx, sy + jy) of pixel (i, j), with strata
+// sx < nx, sy < ny and jitter jx, jy in [0, 1), is at
+//   x0 = (i + (sx + jx) / nx) / width - 0.5,  y0 = 0.5 - (j + (sy + jy) / ny) / height
+// orthographic: origin = position + x0 right + y0 up, direction = direction;
+// perspective:  origin = position, direction = normalize(direction + x0 right + y0 up).
+struct PacketCamera {
+  bool perspective = false;
+  Vec3 position, direction, right, up;  // direction unit length for an orthographic camera
+  double width = 1.0, height = 1.0;     // pixels
+  double nx = 1.0, ny = 1.0;            // strata across and down a pixel
+};
+
+// The samples of a packet: pixel, stratum and jitter of each lane.
+struct SamplePacket {
+  alignas(64) double i[kPacketStride]{}, j[kPacketStride]{};
+  alignas(64) double sx[kPacketStride]{}, sy[kPacketStride]{};
+  alignas(64) double jx[kPacketStride]{}, jy[kPacketStride]{};
+};
+
+// The rays of the first rays->count samples.
+void camera_rays(const PacketCamera& camera, const SamplePacket& samples, RayPacket* rays);
+
 // The light as a packet's shadow rays and angles see it.
 struct PacketLighting {
   bool distant = true;
@@ -63,13 +86,17 @@ struct HitPacket {
   alignas(64) double nsx[kPacketStride]{}, nsy[kPacketStride]{}, nsz[kPacketStride]{};
   // Work space of the height function: h, its gradient, and the sines and
   // cosines of a product's factors.
-  alignas(64) double h[kPacketStride]{}, gx[kPacketStride]{}, gy[kPacketStride]{}, gz[kPacketStride]{};
+  alignas(64) double h[kPacketStride]{}, gx[kPacketStride]{}, gy[kPacketStride]{},
+      gz[kPacketStride]{};
   alignas(64) double sines[kMaxProductFactors][kPacketStride]{};
   alignas(64) double cosines[kMaxProductFactors][kPacketStride]{};
 
+  // The shape's principal curvatures, the same at every hit (trace_packet).
+  double kappa1 = 0.0, kappa2 = 0.0;
+
   // The hit of ray i as intersect() writes it: its distance, and its
   // geometry into the fields of *g that intersect() sets.
-  double hit(std::size_t i, const Shape& shape, SurfaceGeometry* g) const;
+  double hit(std::size_t i, SurfaceGeometry* g) const;
   Vec3 ns(std::size_t i) const { return {nsx[i], nsy[i], nsz[i]}; }
 };
 

@@ -63,6 +63,7 @@ void write_exr_file(const Image& image, const std::string& path,
   try {
     Imf::Header header(image.width, image.height);
     header.compression() = Imf::ZIP_COMPRESSION;
+    header.zipCompressionLevel() = 1;
     for (const std::string& name : image.channels)
       header.channels().insert(name, Imf::Channel(Imf::FLOAT));
     for (const auto& [key, value] : attributes) header.insert(key, Imf::StringAttribute(value));

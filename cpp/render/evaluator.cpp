@@ -6,6 +6,7 @@
 #include <cmath>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <type_traits>
 
@@ -271,8 +272,16 @@ struct BumpNormals {
 
 // A worker's packet: rays and what they hit (about 60 KiB, so on the heap).
 struct PacketBuffers {
+  SamplePacket samples;
   RayPacket rays;
   HitPacket hits;
+};
+
+// What every packet of a render shares: the camera and the light.
+struct PacketSetup {
+  PacketCamera camera;
+  int nx = 1;  // strata across a pixel
+  PacketLighting lighting;
 };
 
 struct PixelSums {
@@ -299,13 +308,27 @@ void write_pixel(const PixelSums& sums, double inv_spp, float* out) {
   }
 }
 
-// The camera ray of sample (sx, sy) of pixel (i, j), jittered within its
-// stratum by two draws from `rng` unless the camera does not jitter;
-// `orthographic_direction` is the camera's direction, normalised.
+// The jitter of sample k of a pixel within its stratum, x then y, from
+// the pixel's key: counter-based, so that where a sample lies depends on
+// nothing drawn before it (a method's random numbers while shading draw
+// from the pixel's Pcg32 stream instead), and a packet can draw its
+// samples' jitter without a chain through a generator's state.
+struct Jitter {
+  double x = 0.5, y = 0.5;  // stratum centres without jitter
+};
+Jitter sample_jitter(const Camera& camera, std::uint64_t pixel_key, int k) {
+  if (!camera.jitter) return {};
+  return {splitmix_double(pixel_key, 2 * std::uint64_t(k)),
+          splitmix_double(pixel_key, 2 * std::uint64_t(k) + 1)};
+}
+
+// The camera ray of sample (sx, sy) of pixel (i, j), at `jitter` within
+// its stratum; `orthographic_direction` is the camera's direction,
+// normalised.
 Ray camera_ray(const Camera& camera, const Vec3& orthographic_direction, int i, int j, int sx,
-               int sy, int nx, int ny, Pcg32* rng) {
-  const double a = (sx + (camera.jitter ? rng->next_double() : 0.5)) / nx;
-  const double b = (sy + (camera.jitter ? rng->next_double() : 0.5)) / ny;
+               int sy, int nx, int ny, const Jitter& jitter) {
+  const double a = (sx + jitter.x) / nx;
+  const double b = (sy + jitter.y) / ny;
   const double x0 = (i + a) / camera.width - 0.5;
   const double y0 = 0.5 - (j + b) / camera.height;
   if (camera.projection == Projection::kPerspective)
@@ -445,58 +468,142 @@ bool traces_packets(const Scene& scene, const SampleShader<Tracer>& shader,
   return std::all_of(passes.begin(), passes.end(), shares_samples);
 }
 
-// One pixel's samples through the packet: rays, hits and bump normals a
-// packet at a time, then each hit shaded.
-template <typename Tracer>
-void shade_pixel_packets(const Scene& scene, const PacketLighting& lighting,
-                         const SampleShader<Tracer>& shader, int i, int j, Pcg32* rng,
-                         PacketBuffers* buffers, PixelSums* sums, std::uint64_t* shadow_rays) {
-  const Camera& camera = scene.camera;
-  int nx, ny;
-  strata(camera.spp, &nx, &ny);
-  const Vec3 orthographic_direction = normalize(camera.direction);
-  SurfaceHit hit;
-  Material material = scene.material;
-  RayPacket& rays = buffers->rays;
-  HitPacket& hits = buffers->hits;
-  for (int first = 0; first < camera.spp; first += int(kPacketSize)) {
-    rays.count = std::min<std::size_t>(kPacketSize, std::size_t(camera.spp - first));
-    for (std::size_t k = 0; k < rays.count; ++k) {
-      const int sample = first + int(k);
-      rays.set(k, camera_ray(camera, orthographic_direction, i, j, sample % nx, sample / nx, nx, ny,
-                             rng));
+// One pixel to render: where it is, its key (its jitter and its random
+// stream derive from it) and where its samples go.
+struct PixelTask {
+  int i = 0, j = 0;
+  std::uint64_t key = 0;
+  Pcg32* rng = nullptr;       // for the methods that draw random numbers while shading
+  PixelSums* sums = nullptr;  // one per pass
+  std::uint64_t* shadow_rays = nullptr;
+};
+
+// The rows of a render through packets: rays, hits, bump normals, shadow
+// rays and angles a packet at a time, then each hit shaded. A packet runs
+// on across pixels (at 16 spp it holds 16 of them), and a pixel is written
+// once its last sample is shaded; each pixel's samples are shaded in the
+// order of the scalar path, so its sums are the same.
+class PacketRows {
+ public:
+  PacketRows(const Scene& scene, const PacketSetup& setup, const SampleShader<BaseTracer>& shader,
+             std::size_t pass_count, std::vector<Image>* images)
+      : scene_(scene),
+        setup_(setup),
+        shader_(shader),
+        pass_count_(pass_count),
+        images_(images),
+        buffers_(std::make_unique<PacketBuffers>()),
+        sums_(kSlots * pass_count) {}
+
+  void render_row(int j, std::uint64_t* shadow_rays);
+
+ private:
+  // Pixels with samples in flight: at most a packet's worth of pixels whose
+  // samples are all in, and the one whose samples are still coming.
+  static constexpr std::size_t kSlots = kPacketSize + 1;
+
+  void flush(std::uint64_t* shadow_rays);
+
+  const Scene& scene_;
+  const PacketSetup& setup_;
+  const SampleShader<BaseTracer>& shader_;
+  std::size_t pass_count_;
+  std::vector<Image>* images_;
+  std::unique_ptr<PacketBuffers> buffers_;
+  std::vector<PixelSums> sums_;  // pass_count_ per slot; pixel i in slot i % kSlots
+  std::size_t lane_slot_[kPacketSize]{};
+  std::vector<int> complete_;  // pixels of row j_ whose samples are all in the packets
+  int j_ = 0;
+};
+
+void PacketRows::render_row(int j, std::uint64_t* shadow_rays) {
+  const Camera& camera = scene_.camera;
+  SamplePacket& samples = buffers_->samples;
+  RayPacket& rays = buffers_->rays;
+  j_ = j;
+  rays.count = 0;
+  for (int i = 0; i < camera.width; ++i) {
+    const std::uint64_t key = mix64(camera.seed ^ mix64(std::uint64_t(j) * camera.width + i));
+    const std::size_t slot = std::size_t(i) % kSlots;
+    std::fill_n(sums_.begin() + std::ptrdiff_t(slot * pass_count_), pass_count_, PixelSums{});
+    // Strata in the order of the scalar path's loops, y outer.
+    for (int sample = 0, sx = 0, sy = 0; sample < camera.spp; ++sample) {
+      const std::size_t k = rays.count++;
+      samples.i[k] = i, samples.j[k] = j;
+      samples.sx[k] = sx, samples.sy[k] = sy;
+      const Jitter jitter = sample_jitter(camera, key, sample);
+      samples.jx[k] = jitter.x, samples.jy[k] = jitter.y;
+      lane_slot_[k] = slot;
+      if (++sx == setup_.nx) sx = 0, ++sy;
+      if (rays.count == kPacketSize) flush(shadow_rays);
     }
-    trace_packet(scene.shape, scene.height.function, scene.height.amplitude, shader.bumps(),
-                 lighting, rays, &hits);
-    for (std::size_t k = 0; k < rays.count; ++k) {
-      if (hits.found[k] == 0.0) continue;
-      hit.t = hits.hit(k, scene.shape, &hit.geometry);
-      hit.shading_point = hit.geometry.p;
-      hit.ng = hit.ni = hit.geometry.n;
-      const PackedSample packed{
-          hits.ns(k), {hits.theta[k], hits.deviation[k], hits.view[k]}, hits.blocked[k] != 0.0};
-      const Ray ray{{rays.ox[k], rays.oy[k], rays.oz[k]}, {rays.dx[k], rays.dy[k], rays.dz[k]}};
-      shader.shade(ray, hit, &packed, &material, rng, sums, shadow_rays);
-    }
+    complete_.push_back(i);
   }
+  flush(shadow_rays);
 }
 
-// The scene's light for a packet, and where the tracer's shadow rays start
-// counting hits.
+void PacketRows::flush(std::uint64_t* shadow_rays) {
+  RayPacket& rays = buffers_->rays;
+  HitPacket& hits = buffers_->hits;
+  if (rays.count > 0) {
+    camera_rays(setup_.camera, buffers_->samples, &rays);
+    trace_packet(scene_.shape, scene_.height.function, scene_.height.amplitude, shader_.bumps(),
+                 setup_.lighting, rays, &hits);
+  }
+  SurfaceHit hit;
+  Material material = scene_.material;
+  for (std::size_t k = 0; k < rays.count; ++k) {
+    if (hits.found[k] == 0.0) continue;
+    hit.t = hits.hit(k, &hit.geometry);
+    hit.shading_point = hit.geometry.p;
+    hit.ng = hit.ni = hit.geometry.n;
+    const PackedSample packed{
+        hits.ns(k), {hits.theta[k], hits.deviation[k], hits.view[k]}, hits.blocked[k] != 0.0};
+    const Ray ray{{rays.ox[k], rays.oy[k], rays.oz[k]}, {rays.dx[k], rays.dy[k], rays.dz[k]}};
+    // No pass draws random numbers here (traces_packets): no stream.
+    shader_.shade(ray, hit, &packed, &material, nullptr, &sums_[lane_slot_[k] * pass_count_],
+                  shadow_rays);
+  }
+  rays.count = 0;
+  const Camera& camera = scene_.camera;
+  const std::size_t channel_count = evaluator_channels().size();
+  for (const int i : complete_) {
+    const std::size_t pixel = std::size_t(j_) * camera.width + i;
+    const PixelSums* sums = &sums_[(std::size_t(i) % kSlots) * pass_count_];
+    for (std::size_t k = 0; k < pass_count_; ++k)
+      write_pixel(sums[k], 1.0 / camera.spp, &(*images_)[k].pixels[pixel * channel_count]);
+  }
+  complete_.clear();
+}
+
+// The scene's camera and light for packets, and where the tracer's shadow
+// rays start counting hits.
 template <typename Tracer>
-PacketLighting packet_lighting(const Scene& scene, const Tracer& tracer) {
-  PacketLighting lighting;
+PacketSetup packet_setup(const Scene& scene, const Tracer& tracer) {
+  PacketSetup setup;
+  const Camera& c = scene.camera;
+  int ny;
+  strata(c.spp, &setup.nx, &ny);
+  setup.camera = {c.projection == Projection::kPerspective,
+                  c.position,
+                  c.projection == Projection::kPerspective ? c.direction : normalize(c.direction),
+                  c.right,
+                  c.up,
+                  double(c.width),
+                  double(c.height),
+                  double(setup.nx),
+                  double(ny)};
+  PacketLighting& lighting = setup.lighting;
   lighting.distant = scene.light.type == LightType::kDistant;
   lighting.light = lighting.distant ? scene.light.direction : scene.light.position;
   if constexpr (std::is_same_v<Tracer, BaseTracer>) lighting.shadow_t_min = tracer.shadow_t_min();
-  return lighting;
+  return setup;
 }
 
 // One pixel's samples one at a time, in the order of the strata.
 template <typename Tracer>
 void shade_pixel(const Scene& scene, const Tracer& tracer, const Props& props,
-                 const SampleShader<Tracer>& shader, int i, int j, Pcg32* rng, PixelSums* sums,
-                 std::uint64_t* shadow_rays) {
+                 const SampleShader<Tracer>& shader, const PixelTask& pixel) {
   const Camera& camera = scene.camera;
   int nx, ny;
   strata(camera.spp, &nx, &ny);
@@ -508,12 +615,13 @@ void shade_pixel(const Scene& scene, const Tracer& tracer, const Props& props,
   Material material = scene.material;  // a filtered map sets its lobe per sample
   for (int sy = 0; sy < ny; ++sy) {
     for (int sx = 0; sx < nx; ++sx) {
-      const Ray ray = camera_ray(camera, orthographic_direction, i, j, sx, sy, nx, ny, rng);
+      const Ray ray = camera_ray(camera, orthographic_direction, pixel.i, pixel.j, sx, sy, nx, ny,
+                                 sample_jitter(camera, pixel.key, sy * nx + sx));
       hit.on_prop = false;
       material.filtered.active = false;
       const bool found = tracer.primary(ray, &hit);
       if (!(props.nearer(ray, found, &hit) || found)) continue;
-      shader.shade(ray, hit, nullptr, &material, rng, sums, shadow_rays);
+      shader.shade(ray, hit, nullptr, &material, pixel.rng, pixel.sums, pixel.shadow_rays);
     }
   }
 }
@@ -531,7 +639,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   const Props props(scene);
   const SampleShader<Tracer> shader(scene, tracer, props, passes);
   const bool packets = traces_packets(scene, shader, passes, options);
-  const PacketLighting lighting = packet_lighting(scene, tracer);
+  const PacketSetup setup = packet_setup(scene, tracer);
 
   std::atomic<int> rows_done{0};
   std::atomic<std::uint64_t> shadow_rays{0};
@@ -541,19 +649,23 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
     std::uint64_t local_shadow_rays = 0;
     std::vector<PixelSums> sums(pass_count);
-    const std::unique_ptr<PacketBuffers> buffers(packets ? new PacketBuffers : nullptr);
+    std::optional<PacketRows> packet_rows;
+    if constexpr (std::is_same_v<Tracer, BaseTracer>)
+      if (packets) packet_rows.emplace(scene, setup, shader, pass_count, images);
     for (int j = rows.begin(); j != rows.end(); ++j) {
-      for (int i = 0; i < width; ++i) {
-        const std::uint64_t pixel = std::uint64_t(j) * width + i;
-        Pcg32 rng(mix64(camera.seed ^ mix64(pixel)));
-        std::fill(sums.begin(), sums.end(), PixelSums{});
-        if (packets)
-          shade_pixel_packets(scene, lighting, shader, i, j, &rng, buffers.get(), sums.data(),
-                              &local_shadow_rays);
-        else
-          shade_pixel(scene, tracer, props, shader, i, j, &rng, sums.data(), &local_shadow_rays);
-        for (std::size_t k = 0; k < pass_count; ++k)
-          write_pixel(sums[k], inv_spp, &(*images)[k].pixels[pixel * channel_count]);
+      if (packet_rows) {
+        packet_rows->render_row(j, &local_shadow_rays);
+      } else {
+        for (int i = 0; i < width; ++i) {
+          const std::uint64_t pixel = std::uint64_t(j) * width + i;
+          const std::uint64_t key = mix64(camera.seed ^ mix64(pixel));
+          Pcg32 rng(key);
+          std::fill(sums.begin(), sums.end(), PixelSums{});
+          shade_pixel(scene, tracer, props, shader,
+                      {i, j, key, &rng, sums.data(), &local_shadow_rays});
+          for (std::size_t k = 0; k < pass_count; ++k)
+            write_pixel(sums[k], inv_spp, &(*images)[k].pixels[pixel * channel_count]);
+        }
       }
       const int done = ++rows_done;
       if (options.progress) {

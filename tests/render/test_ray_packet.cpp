@@ -118,7 +118,7 @@ void expect_packet_matches_scalar(const Shape& shape, const HeightFunction& heig
       if (!hit_scalar) continue;
       ++found;
       Hit packet;
-      packet.t = hits->hit(k, shape, &packet.geometry);
+      packet.t = hits->hit(k, &packet.geometry);
       const SurfaceGeometry& g = scalar.geometry;
       expect_bits(packet.t, scalar.t, what + " t");
       expect_bits(packet.geometry.p, g.p, what + " p");
