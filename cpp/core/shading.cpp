@@ -74,10 +74,9 @@ Shaded shade(const TerminatorSettings& t, const Material& m, const ShadingPoint&
   if (info.kind == MethodKind::kMicrofacet)
     return effective(microfacet_value(info.method, m, ng_ref, p, rng), m, p);
   const NormalAdjustment adjustment = effective_adjustment(t);
-  const AdjustedNormals a = adjust_normal(adjustment, {p.ng, p.ni, p.ns, p.wi, p.wo});
+  const AdjustedNormals a = adjust_normal(adjustment, p);
   // The factor sees the normal the diffuse lobe is shaded with.
-  const double factor =
-      terminator_factor(t.method, {ng_ref, a.ns_diffuse, p.wi, p.wo}, p.visibility);
+  const double factor = terminator_factor(t.method, ng_ref, a.ns_diffuse, p.wi, p.wo, p.visibility);
   const bool on_specular = info.lobes == FactorLobes::kAll ||
                            (info.lobes == FactorLobes::kScene && t.lobes == Lobes::kAll);
   const double value = lobe_value(m, a, p, factor, on_specular ? factor : 1.0);

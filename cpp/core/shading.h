@@ -37,12 +37,11 @@ struct TerminatorSettings {
 // The adjustment in effect: the method's own, else the scene's.
 NormalAdjustment effective_adjustment(const TerminatorSettings& t);
 
-struct ShadingPoint {
-  Vec3 ng;  // true geometric normal, on the viewer's side
-  Vec3 ni;  // interpolated smooth normal (== ng on analytic shapes)
-  Vec3 ns;  // bumped shading normal
-  Vec3 wi;  // towards the light
-  Vec3 wo;  // towards the viewer
+// ng: true geometric normal, on the viewer's side; ni: interpolated smooth
+// normal (== ng on analytic shapes); ns: bumped shading normal; wi: towards
+// the light; wo: towards the viewer. A ShadingPoint is the AdjustVectors the
+// normal adjustments take, so shade() hands them over without a copy.
+struct ShadingPoint : AdjustVectors {
   // The height field's ambient visibility (core/height.h), for the
   // micro-shadowing methods; 1 where there is no height field.
   double visibility = 1.0;

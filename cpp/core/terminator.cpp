@@ -397,32 +397,35 @@ double microshadow_brinck2016(double cos_theta, double visibility) {
   return clamp01(cos_theta + 2.0 * v * v - 1.0);
 }
 
-double terminator_factor(const MethodSettings& settings, const ShadingVectors& v,
-                         double visibility) {
+// The vectors come by reference, not in a ShadingVectors: shade() would
+// copy them out of a ShadingPoint its caller has just written, and those
+// wider loads stall on the narrower stores (a fifth of a bump render).
+double terminator_factor(const MethodSettings& settings, const Vec3& ng, const Vec3& ns,
+                         const Vec3& wi, const Vec3& wo, double visibility) {
   switch (settings.method) {
     case TerminatorMethod::kNone:
       return 1.0;
     case TerminatorMethod::kChiang2019:
-      return chiang2019(v.ng, v.ns, v.wi);
+      return chiang2019(ng, ns, wi);
     case TerminatorMethod::kChiang2019Sine:
-      return chiang2019_sine(v.ng, v.ns, v.wi);
+      return chiang2019_sine(ng, ns, wi);
     case TerminatorMethod::kEstevez2019:
-      return estevez2019(v.ng, v.ns, v.wi);
+      return estevez2019(ng, ns, wi);
     case TerminatorMethod::kEstevez2019Reciprocal: {
-      const double alpha2 = estevez2019_alpha2(v.ng, v.ns);
-      return estevez2019_g1(v.ng, v.wi, alpha2) * estevez2019_g1(v.ng, v.wo, alpha2);
+      const double alpha2 = estevez2019_alpha2(ng, ns);
+      return estevez2019_g1(ng, wi, alpha2) * estevez2019_g1(ng, wo, alpha2);
     }
     case TerminatorMethod::kDeshmukh2020:
-      return deshmukh2020(v.ng, v.ns, v.wi);
+      return deshmukh2020(ng, ns, wi);
     case TerminatorMethod::kShadingOffset:
-      return shading_offset(settings.shading_offset, v.ns, v.wi);
+      return shading_offset(settings.shading_offset, ns, wi);
     case TerminatorMethod::kCycles34:
-      return cycles34_chiang(v.ng, v.ns, v.wi);
+      return cycles34_chiang(ng, ns, wi);
     case TerminatorMethod::kCycles45:
     case TerminatorMethod::kCycles50:
-      return cycles45_conty(v.ng, v.ns, v.wi);
+      return cycles45_conty(ng, ns, wi);
     case TerminatorMethod::kMitsuba3:
-      return mitsuba3_conty(v.ng, v.ns, v.wi);
+      return mitsuba3_conty(ng, ns, wi);
     case TerminatorMethod::kMitsuba3Flip:
     case TerminatorMethod::kIray2017:
     case TerminatorMethod::kUnityHdrp:
@@ -432,9 +435,9 @@ double terminator_factor(const MethodSettings& settings, const ShadingVectors& v
     case TerminatorMethod::kSchuessler2017Walk:
       return 1.0;
     case TerminatorMethod::kMicroshadowChan2018:
-      return microshadow_chan2018(dot(v.ns, v.wi), visibility);
+      return microshadow_chan2018(dot(ns, wi), visibility);
     case TerminatorMethod::kMicroshadowBrinck2016:
-      return microshadow_brinck2016(dot(v.ns, v.wi), visibility);
+      return microshadow_brinck2016(dot(ns, wi), visibility);
   }
   return 1.0;
 }

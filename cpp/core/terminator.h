@@ -117,8 +117,12 @@ struct ShadingVectors {
 // shading.cpp evaluates them).
 // `visibility`: the height field's ambient visibility at the point, in [0,1]
 // (core/height.h); only the micro-shadowing methods read it.
-double terminator_factor(const MethodSettings& settings, const ShadingVectors& v,
-                         double visibility = 1.0);
+double terminator_factor(const MethodSettings& settings, const Vec3& ng, const Vec3& ns,
+                         const Vec3& wi, const Vec3& wo, double visibility = 1.0);
+inline double terminator_factor(const MethodSettings& settings, const ShadingVectors& v,
+                                double visibility = 1.0) {
+  return terminator_factor(settings, v.ng, v.ns, v.wi, v.wo, visibility);
+}
 
 // The individual formulas, exposed for tests, contour plots and benchmarks.
 // Each takes unit vectors and returns a value in [0,1].

@@ -336,14 +336,6 @@ Ray camera_ray(const Camera& camera, const Vec3& orthographic_direction, int i, 
   return {camera.position + camera.right * x0 + camera.up * y0, orthographic_direction};
 }
 
-// What a packet (core/ray_packet.h) computed for one sample, with the bits
-// SampleShader::shade would compute.
-struct PackedSample {
-  Vec3 bumped;  // what BumpNormals::at returns
-  SampleAngles angles;
-  bool blocked = false;  // the shadow ray's verdict
-};
-
 // Shades one camera sample's hit with every pass, into one PixelSums each:
 // what every tracer and both the scalar and the packet path share.
 template <typename Tracer>
@@ -372,9 +364,20 @@ class SampleShader {
   // Whether a hit's shading normal is the bump normal (BumpNormals::at).
   bool bumps() const { return displaced_shading_ && perturbed_; }
 
-  // `packed`, when given, is what a packet computed for the hit.
-  void shade(const Ray& ray, const SurfaceHit& hit, const PackedSample* packed, Material* material,
-             Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays) const;
+  void shade(const Ray& ray, const SurfaceHit& hit, Material* material, Pcg32* rng, PixelSums* sums,
+             std::uint64_t* shadow_rays) const;
+  // Lane k of a packet on the analytic base (BaseTracer, no props): what
+  // shade() does with the packet's values, read straight from its arrays.
+  // Copying them through a SurfaceHit first cost a tenth of the render:
+  // wider loads of a Vec3 just stored narrower wait for the store.
+  void shade_packed(const HitPacket& hits, const RayPacket& rays, std::size_t k,
+                    const Material& material, PixelSums* sums, std::uint64_t* shadow_rays) const;
+  // Every pass on one shading point, into sums; the shadow ray's verdict is
+  // asked for once, by the first pass that needs it.
+  template <typename Blocked>
+  void shade_passes(const Material& material, const ShadingPoint& point, const LightSample& light,
+                    const SampleAngles& angles, Pcg32* rng, PixelSums* sums,
+                    std::uint64_t* shadow_rays, Blocked&& blocked) const;
 
  private:
   const Scene& scene_;
@@ -388,9 +391,8 @@ class SampleShader {
 };
 
 template <typename Tracer>
-void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const PackedSample* packed,
-                                 Material* material, Pcg32* rng, PixelSums* sums,
-                                 std::uint64_t* shadow_rays) const {
+void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, Material* material,
+                                 Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays) const {
   const SurfaceGeometry& g = hit.geometry;
   const Vec3 wo = -ray.direction;
   Vec3 n = g.n;
@@ -399,7 +401,7 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Pa
   if (bumps() && g.displaceable) {
     // The bump perturbs the analytic normal; on a mesh it is carried
     // over to Ni, so that Ns relates to Ni as it would to N.
-    const Vec3 b = packed ? packed->bumped : bump_.at(g, ray, hit.t, material);
+    const Vec3 b = bump_.at(g, ray, hit.t, material);
     facing.ns = hit.ni == g.n ? b : normalize(rotate_between(g.n, hit.ni, b));
   }
   // Two-sided: the inside of an open cylinder is seen from inside.
@@ -423,13 +425,25 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Pa
     point.visibility = height_field_visibility(scene_.height.function,
                                                facing.backfacing ? -amplitude : amplitude, g.p, n);
   // Within 1.2e-6 degrees: below what the float channels resolve.
-  const SampleAngles angles =
-      packed ? packed->angles
-             : SampleAngles{degrees(acos_approx(dot(n, light.wi))),
+  const SampleAngles angles{degrees(acos_approx(dot(n, light.wi))),
                             degrees(acos_approx(dot(ns, n))), degrees(acos_approx(dot(n, wo)))};
-  int blocked = -1;  // the shadow ray, traced for the first method that needs it
+  shade_passes(*material, point, light, angles, rng, sums, shadow_rays, [&] {
+    const ShadowRay shadow =
+        hit.on_prop ? ShadowRay{hit.shading_point} : tracer_.shadow_ray(hit, facing, light.wi);
+    return tracer_.occluded(shadow, light.wi, light.distance) ||
+           props_.occluded(shadow.origin, light.wi, light.distance);
+  });
+}
+
+template <typename Tracer>
+template <typename Blocked>
+void SampleShader<Tracer>::shade_passes(const Material& material, const ShadingPoint& point,
+                                        const LightSample& light, const SampleAngles& angles,
+                                        Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays,
+                                        Blocked&& blocked) const {
+  int is_blocked = -1;  // the shadow ray, traced for the first method that needs it
   for (std::size_t k = 0; k < passes_.size(); ++k) {
-    const Shaded shaded = penumbra::shade(passes_[k], *material, point, rng);
+    const Shaded shaded = penumbra::shade(passes_[k], material, point, rng);
     PixelSums& s = sums[k];
     s.hits += 1.0;
     s.theta += angles.theta;
@@ -440,16 +454,36 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Pa
     }
     s.view += angles.view;
     if (!(shaded.value > 0.0) || light.irradiance == 0.0) continue;
-    if (blocked < 0) {
+    if (is_blocked < 0) {
       ++*shadow_rays;
-      const ShadowRay shadow =
-          hit.on_prop ? ShadowRay{hit.shading_point} : tracer_.shadow_ray(hit, facing, light.wi);
-      blocked = packed ? packed->blocked
-                       : tracer_.occluded(shadow, light.wi, light.distance) ||
-                             props_.occluded(shadow.origin, light.wi, light.distance);
+      is_blocked = blocked();
     }
-    if (blocked == 0) s.radiance += shaded.value * light.irradiance;
+    if (is_blocked == 0) s.radiance += shaded.value * light.irradiance;
   }
+}
+
+template <typename Tracer>
+void SampleShader<Tracer>::shade_packed(const HitPacket& hits, const RayPacket& rays, std::size_t k,
+                                        const Material& material, PixelSums* sums,
+                                        std::uint64_t* shadow_rays) const {
+  // As shade() for a BaseTracer hit: Ng = Ni = the base normal, Ns the
+  // packet's (the base normal where nothing bumps it), both turned towards
+  // the viewer.
+  const Vec3 wo{-rays.dx[k], -rays.dy[k], -rays.dz[k]};
+  Vec3 n{hits.nx[k], hits.ny[k], hits.nz[k]};
+  Vec3 ns{hits.nsx[k], hits.nsy[k], hits.nsz[k]};
+  const bool backfacing = dot(n, wo) < 0.0;
+  if (backfacing) n = -n, ns = -ns;
+  const Vec3 p{hits.px[k], hits.py[k], hits.pz[k]};
+  const LightSample light = sample_light(scene_.light, p);
+  ShadingPoint point{n, n, ns, light.wi, wo};
+  const double amplitude = scene_.height.amplitude;
+  if (needs_visibility_ && displaced_shading_ && amplitude != 0.0)
+    point.visibility =
+        height_field_visibility(scene_.height.function, backfacing ? -amplitude : amplitude, p, n);
+  const SampleAngles angles{hits.theta[k], hits.deviation[k], hits.view[k]};
+  shade_passes(material, point, light, angles, nullptr, sums, shadow_rays,
+               [&] { return hits.blocked[k] != 0.0; });
 }
 
 // Whether render_image traces its camera rays in packets (core/ray_packet.h):
@@ -550,20 +584,11 @@ void PacketRows::flush(std::uint64_t* shadow_rays) {
     trace_packet(scene_.shape, scene_.height.function, scene_.height.amplitude, shader_.bumps(),
                  setup_.lighting, rays, &hits);
   }
-  SurfaceHit hit;
-  Material material = scene_.material;
-  for (std::size_t k = 0; k < rays.count; ++k) {
-    if (hits.found[k] == 0.0) continue;
-    hit.t = hits.hit(k, &hit.geometry);
-    hit.shading_point = hit.geometry.p;
-    hit.ng = hit.ni = hit.geometry.n;
-    const PackedSample packed{
-        hits.ns(k), {hits.theta[k], hits.deviation[k], hits.view[k]}, hits.blocked[k] != 0.0};
-    const Ray ray{{rays.ox[k], rays.oy[k], rays.oz[k]}, {rays.dx[k], rays.dy[k], rays.dz[k]}};
-    // No pass draws random numbers here (traces_packets): no stream.
-    shader_.shade(ray, hit, &packed, &material, nullptr, &sums_[lane_slot_[k] * pass_count_],
-                  shadow_rays);
-  }
+  // No pass draws random numbers here (traces_packets): no stream.
+  for (std::size_t k = 0; k < rays.count; ++k)
+    if (hits.found[k] != 0.0)
+      shader_.shade_packed(hits, rays, k, scene_.material, &sums_[lane_slot_[k] * pass_count_],
+                           shadow_rays);
   rays.count = 0;
   const Camera& camera = scene_.camera;
   const std::size_t channel_count = evaluator_channels().size();
@@ -621,7 +646,7 @@ void shade_pixel(const Scene& scene, const Tracer& tracer, const Props& props,
       material.filtered.active = false;
       const bool found = tracer.primary(ray, &hit);
       if (!(props.nearer(ray, found, &hit) || found)) continue;
-      shader.shade(ray, hit, nullptr, &material, pixel.rng, pixel.sums, pixel.shadow_rays);
+      shader.shade(ray, hit, &material, pixel.rng, pixel.sums, pixel.shadow_rays);
     }
   }
 }
