@@ -114,7 +114,7 @@ void trace_packet(const Shape& shape, const HeightFunction& height, double ampli
                   const PacketLighting& lighting, const RayPacket& rays, HitPacket* hits);
 
 // The instruction set trace_packet runs on here, as Highway names it
-// ("AVX3" is AVX-512, "EMU128" plain C++).
+// ("AVX3" is AVX-512; Debian 12's Highway also builds AVX2, SSE4, SSSE3 and SCALAR).
 const char* packet_target();
 
 }  // namespace penumbra

@@ -53,8 +53,9 @@ struct RenderOptions {
 Image render(const Scene& scene, const RenderOptions& options = {}, RenderStats* stats = nullptr);
 
 // Whether a method's render can share its samples with other methods' in
-// render_methods: it draws no random numbers while shading (those would move
-// the next sample's jitter; MethodInfo::draws_random).
+// render_methods: it draws no random numbers while shading (MethodInfo::
+// draws_random; the draws come from the pixel's stream, in an order another
+// such method's draws would change).
 bool shares_samples(const TerminatorSettings& terminator);
 
 // `scene` rendered with each of `methods` in place of scene.terminator, in

@@ -154,7 +154,7 @@ HeightFunction product_of_terms() {
 }
 
 // On every instruction set this CPU runs that the packet was built for
-// (AVX-512, AVX2, SSE4, plain C++ on a recent x86), not only the widest.
+// (AVX-512, AVX2, SSE4, SSSE3 and plain C++ on a recent x86), not only the widest.
 TEST(RayPacket, HitsAndBumpNormalsHaveTheScalarBits) {
   Shape cylinder;
   cylinder.type = ShapeType::kCylinder;
