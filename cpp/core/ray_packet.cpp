@@ -210,7 +210,10 @@ void sine_term(D d, const SineTerm& term, const HitPacket& h, std::size_t lanes,
   const V3 k = splat(d, term.k);
   const V two_pi = hn::Set(d, 2.0 * kPi), phase = hn::Set(d, term.phase);
   for (std::size_t i = 0; i < lanes; i += hn::Lanes(d)) {
-    const V arg = hn::Add(hn::Mul(two_pi, dot3(k, load3(d, h.px, h.py, h.pz, i))), phase);
+    V arg = hn::Add(hn::Mul(two_pi, dot3(k, load3(d, h.px, h.py, h.pz, i))), phase);
+    // A missed ray's lane holds NaN; its height is never read, and a NaN
+    // would send the whole vector to the scalar fallback.
+    arg = hn::IfThenElseZero(hn::Eq(arg, arg), arg);
     const VSinCos sc = sin_cos_lanes(d, arg);
     hn::Store(sc.sin, d, sines + i);
     hn::Store(sc.cos, d, cosines + i);
