@@ -489,8 +489,8 @@ void SampleShader<Tracer>::shade_packed(const HitPacket& hits, const RayPacket& 
 // Whether render_image traces its camera rays in packets (core/ray_packet.h):
 // on the analytic base shape (BaseTracer) with no props, no image map and no
 // filter, the packet computes what the tracer and the analytic bump do, to
-// the bit; and with no method drawing random numbers between a pixel's
-// samples, drawing all their jitter first moves no sample.
+// the bit; a packet's samples are shaded without the pixel's random stream,
+// so no method may draw random numbers.
 template <typename Tracer>
 bool traces_packets(const Scene& scene, const SampleShader<Tracer>& shader,
                     const std::vector<TerminatorSettings>& passes, const RenderOptions& options) {
@@ -500,6 +500,11 @@ bool traces_packets(const Scene& scene, const SampleShader<Tracer>& shader,
   const BumpNormals& bump = shader.bump();
   if (bump.filtered || bump.normal_map || bump.height_map) return false;
   return std::all_of(passes.begin(), passes.end(), shares_samples);
+}
+
+// The key of pixel (i, j): its jitter and its random stream derive from it.
+std::uint64_t pixel_key(const Camera& camera, int i, int j) {
+  return mix64(camera.seed ^ mix64(std::uint64_t(j) * camera.width + i));
 }
 
 // One pixel to render: where it is, its key (its jitter and its random
@@ -557,7 +562,7 @@ void PacketRows::render_row(int j, std::uint64_t* shadow_rays) {
   j_ = j;
   rays.count = 0;
   for (int i = 0; i < camera.width; ++i) {
-    const std::uint64_t key = mix64(camera.seed ^ mix64(std::uint64_t(j) * camera.width + i));
+    const std::uint64_t key = pixel_key(camera, i, j);
     const std::size_t slot = std::size_t(i) % kSlots;
     std::fill_n(sums_.begin() + std::ptrdiff_t(slot * pass_count_), pass_count_, PixelSums{});
     // Strata in the order of the scalar path's loops, y outer.
@@ -683,7 +688,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
       } else {
         for (int i = 0; i < width; ++i) {
           const std::uint64_t pixel = std::uint64_t(j) * width + i;
-          const std::uint64_t key = mix64(camera.seed ^ mix64(pixel));
+          const std::uint64_t key = pixel_key(camera, i, j);
           Pcg32 rng(key);
           std::fill(sums.begin(), sums.end(), PixelSums{});
           shade_pixel(scene, tracer, props, shader,
