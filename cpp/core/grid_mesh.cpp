@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 namespace penumbra {
 
 GridResolution grid_resolution(const Shape& shape, double edge, double reach) {
@@ -39,19 +42,32 @@ struct GridWriter {
   const SurfaceMap* map;
   double amplitude;
   GridResolution res;
+  GridNormals normals;
   TriangleMesh mesh;
 
   void put(std::size_t index, const Vec3& p, const Vec3& n) {
     float* q = &mesh.positions[3 * index];
-    float* m = &mesh.normals[3 * index];
     q[0] = static_cast<float>(p.x), q[1] = static_cast<float>(p.y), q[2] = static_cast<float>(p.z);
+    if (normals == GridNormals::kOmit) return;
+    float* m = &mesh.normals[3 * index];
     m[0] = static_cast<float>(n.x), m[1] = static_cast<float>(n.y), m[2] = static_cast<float>(n.z);
   }
   // The displaced surface point and normal at (u, v).
   void vertex(std::size_t index, double u, double v) {
     const SurfaceGeometry g = surface_at(shape, u, v);
     const HeightSample h = height_at(height, map, shape, g);
-    put(index, displaced_point(g, amplitude, h), displaced_normal(g, amplitude, h));
+    put(index, displaced_point(g, amplitude, h),
+        normals == GridNormals::kOmit ? Vec3{} : displaced_normal(g, amplitude, h));
+  }
+  // Vertex (i, j) for i in [0, columns), j in [j0, j1), at row j's offset
+  // `first + (j - j0) * columns`; rows run in parallel.
+  void rows(unsigned j0, unsigned j1, unsigned columns, std::size_t first) {
+    tbb::parallel_for(tbb::blocked_range<unsigned>(j0, j1), [&](const auto& range) {
+      for (unsigned j = range.begin(); j != range.end(); ++j)
+        for (unsigned i = 0; i < columns; ++i)
+          vertex(first + std::size_t(j - j0) * columns + i, grid_u(shape, res, i),
+                 grid_v(shape, res, j));
+    });
   }
   void tri(std::size_t t, std::size_t a, std::size_t b, std::size_t c) {
     mesh.triangles[3 * t] = static_cast<unsigned>(a);
@@ -61,7 +77,7 @@ struct GridWriter {
   void resize(std::size_t vertices, std::size_t side_triangles, std::size_t triangles) {
     mesh.side_triangles = side_triangles;
     mesh.positions.resize(3 * vertices);
-    mesh.normals.resize(3 * vertices);
+    if (normals == GridNormals::kExact) mesh.normals.resize(3 * vertices);
     mesh.triangles.resize(3 * triangles);
   }
 };
@@ -74,10 +90,7 @@ void sphere_grid(GridWriter& w) {
   w.resize(vertex_count, triangles, triangles);
   w.vertex(0, 0.0, 0.0);
   w.vertex(vertex_count - 1, 0.0, kPi);
-  for (unsigned j = 1; j < nv; ++j)
-    for (unsigned i = 0; i < nu; ++i)
-      w.vertex(1 + std::size_t(j - 1) * nu + i, grid_u(w.shape, w.res, i),
-               grid_v(w.shape, w.res, j));
+  w.rows(1, nv, nu, 1);
   auto ring = [&](unsigned j, unsigned i) { return 1 + std::size_t(j - 1) * nu + (i % nu); };
   const std::size_t south = vertex_count - 1;
   for (unsigned i = 0; i < nu; ++i) {
@@ -123,9 +136,7 @@ void cylinder_grid(GridWriter& w) {
   const std::size_t side_triangles = 2 * std::size_t(nu) * nv;
   w.resize(std::size_t(nu) * (nv + 1) + (caps ? 2 * (nu + 1) : 0), side_triangles,
            side_triangles + (caps ? 2 * nu : 0));
-  for (unsigned j = 0; j <= nv; ++j)
-    for (unsigned i = 0; i < nu; ++i)
-      w.vertex(std::size_t(j) * nu + i, grid_u(w.shape, w.res, i), grid_v(w.shape, w.res, j));
+  w.rows(0, nv + 1, nu, 0);
   auto at = [&](unsigned j, unsigned i) { return std::size_t(j) * nu + (i % nu); };
   for (unsigned j = 0; j < nv; ++j)
     for (unsigned i = 0; i < nu; ++i) {
@@ -141,9 +152,7 @@ void plane_grid(GridWriter& w) {
   const unsigned nu = w.res.nu, nv = w.res.nv;
   const std::size_t triangles = 2 * std::size_t(nu) * nv;
   w.resize(std::size_t(nu + 1) * (nv + 1), triangles, triangles);
-  for (unsigned j = 0; j <= nv; ++j)
-    for (unsigned i = 0; i <= nu; ++i)
-      w.vertex(std::size_t(j) * (nu + 1) + i, grid_u(w.shape, w.res, i), grid_v(w.shape, w.res, j));
+  w.rows(0, nv + 1, nu + 1, 0);
   auto at = [&](unsigned j, unsigned i) { return std::size_t(j) * (nu + 1) + i; };
   for (unsigned j = 0; j < nv; ++j)
     for (unsigned i = 0; i < nu; ++i) {
@@ -156,8 +165,8 @@ void plane_grid(GridWriter& w) {
 }  // namespace
 
 TriangleMesh make_grid_mesh(const Shape& shape, const HeightFunction& height, double amplitude,
-                            GridResolution res, const SurfaceMap* map) {
-  GridWriter w{shape, height, map, amplitude, res, {}};
+                            GridResolution res, const SurfaceMap* map, GridNormals normals) {
+  GridWriter w{shape, height, map, amplitude, res, normals, {}};
   switch (shape.type) {
     case ShapeType::kSphere:
       sphere_grid(w);

@@ -31,9 +31,14 @@ struct GridResolution {
 // (scene units, > 0); `reach` = A max|h|.
 GridResolution grid_resolution(const Shape& shape, double edge, double reach);
 
+// Whether make_grid_mesh fills TriangleMesh::normals. The ground-truth tracer
+// takes its normals from the analytic surface, so it skips them: at the
+// finest edge they are 100 MiB it would never read.
+enum class GridNormals { kExact, kOmit };
+
 struct TriangleMesh {
   std::vector<float> positions;     // 3 per vertex, scene units
-  std::vector<float> normals;       // 3 per vertex, unit
+  std::vector<float> normals;       // 3 per vertex, unit; empty with GridNormals::kOmit
   std::vector<unsigned> triangles;  // 3 vertex indices per triangle
   std::size_t side_triangles = 0;   // triangles before the cylinder caps
   std::size_t vertex_count() const { return positions.size() / 3; }
@@ -43,9 +48,12 @@ struct TriangleMesh {
 // The displaced surface P + A h(P) N(P) (A = 0: the base surface), its
 // vertex normals the exact normals of that surface; h is the height map
 // `map` where one is given (height_at), else `height`. Shape must carry its
-// frame (with_frame).
+// frame (with_frame). Rows of vertices are computed in parallel (TBB, in the
+// caller's task arena); every vertex depends on its (u, v) alone, so the
+// bits do not depend on the thread count.
 TriangleMesh make_grid_mesh(const Shape& shape, const HeightFunction& height, double amplitude,
-                            GridResolution resolution, const SurfaceMap* map = nullptr);
+                            GridResolution resolution, const SurfaceMap* map = nullptr,
+                            GridNormals normals = GridNormals::kExact);
 
 // Grid parameters (surface_at's u and v) of vertex column i and row j (see
 // the layout above).

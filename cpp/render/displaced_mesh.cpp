@@ -75,7 +75,8 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
   const double reach = m.amplitude * bounds.max_abs;
   const GridResolution resolution = grid_resolution(m.shape, e, reach);
   m.nu = resolution.nu, m.nv = resolution.nv;
-  const TriangleMesh mesh = make_grid_mesh(m.shape, m.height, m.amplitude, resolution, m.map.get());
+  const TriangleMesh mesh =
+      make_grid_mesh(m.shape, m.height, m.amplitude, resolution, m.map.get(), GridNormals::kOmit);
   m.side_primitives = static_cast<unsigned>(mesh.side_triangles);
   vertices_ = mesh.vertex_count();
   triangles_ = mesh.triangle_count();

@@ -5,6 +5,9 @@
 #include <cmath>
 #include <vector>
 
+#include <tbb/task_arena.h>
+
+#include "core/grid_mesh.h"
 #include "core/height.h"
 #include "core/random.h"
 #include "core/shape.h"
@@ -321,6 +324,39 @@ TEST(Shape, DisplacedNormalIsFirstOrderBumpForSmallAmplitude) {
     const Vec3 first = normalize(g.n - grad_s * amplitude);
     const double error = length(displaced_normal(g, amplitude, hs) - first);
     EXPECT_LT(error, 5.0 * amplitude * amplitude * length(hs.gradient) * (1 + length(hs.gradient)));
+  }
+}
+
+// The grid's rows are built in parallel: one thread or two, with normals or
+// without, every vertex keeps its bits, and the normals it does write are
+// unit vectors.
+TEST(GridMesh, SameVerticesWhateverTheThreadsAndWithoutNormals) {
+  const HeightFunction height = families()[1];
+  for (const ShapeType type : {ShapeType::kSphere, ShapeType::kCylinder, ShapeType::kPlane}) {
+    Shape shape;
+    shape.type = type;
+    shape.caps = true;
+    shape = with_frame(shape);
+    const GridResolution res{67, 41};
+    TriangleMesh serial;
+    tbb::task_arena one(1);
+    one.execute([&] { serial = make_grid_mesh(shape, height, 0.05, res); });
+    const TriangleMesh parallel = make_grid_mesh(shape, height, 0.05, res);
+    const TriangleMesh bare = make_grid_mesh(shape, height, 0.05, res, nullptr, GridNormals::kOmit);
+    SCOPED_TRACE(static_cast<int>(type));
+    ASSERT_GT(serial.vertex_count(), std::size_t(67 * 40));
+    EXPECT_EQ(serial.positions, parallel.positions);
+    EXPECT_EQ(serial.normals, parallel.normals);
+    EXPECT_EQ(serial.triangles, parallel.triangles);
+    EXPECT_EQ(serial.positions, bare.positions);
+    EXPECT_EQ(serial.triangles, bare.triangles);
+    EXPECT_TRUE(bare.normals.empty());
+    ASSERT_EQ(serial.normals.size(), serial.positions.size());
+    for (std::size_t i = 0; i < serial.normals.size(); i += 3) {
+      const double length =
+          std::hypot(serial.normals[i], serial.normals[i + 1], serial.normals[i + 2]);
+      ASSERT_NEAR(length, 1.0, 1e-6) << "vertex " << i / 3;
+    }
   }
 }
 
