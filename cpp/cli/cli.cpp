@@ -320,8 +320,9 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       ->capture_default_str();
   run_cmd
       ->add_option("--renders-per-task", run_args.slurm.renders_per_task,
-                   "slurm: renders per array task (a variant's ground-truth convergence "
-                   "chain takes a task of its own)")
+                   "slurm: renders per array task, at most (a variant's ground-truth "
+                   "convergence chain takes a task of its own; renders that share a mesh "
+                   "share a task where they fit)")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   run_cmd->add_option("--sbatch-arg", run_args.slurm.sbatch_args,

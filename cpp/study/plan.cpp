@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "render/displaced_mesh.h"
 #include "scene/scene_json.h"
 #include "study/light_angles.h"
 #include "util/strict_json.h"
@@ -222,6 +223,16 @@ Plan plan_study(const Study& study, double max_memory_bytes) {
 
 std::string axis_value_text(const std::string& pointer, const json& value) {
   return light_direction(pointer, value) ? direction_text(vec3(value)) : value_text(value);
+}
+
+std::string render_group_key(const Job& job) {
+  if (job.renderer == RendererKind::kEvaluator &&
+      job.scene.representation == Representation::kDisplacement)
+    return "evaluator:" + displaced_mesh_key(job.scene);
+  if (job.renderer != RendererKind::kBlender) return "";
+  json mesh = job.scene_json;
+  for (const char* part : {"light", "material", "terminator"}) mesh.erase(part);
+  return "blender:" + mesh.dump();
 }
 
 }  // namespace penumbra

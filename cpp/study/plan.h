@@ -71,4 +71,14 @@ Plan plan_study(const Study& study, double max_memory_bytes);
 // (study/light_angles.h), a number as %g, anything else as compact JSON.
 std::string axis_value_text(const std::string& pointer, const nlohmann::json& value);
 
+// The key of the jobs that render one after another on one worker (a local
+// worker, or one Slurm array task): the evaluator's displacement renders of
+// one geometry (they share its mesh while the process holds it:
+// render/displaced_mesh.h; the checks of a truth, the variants that differ
+// in light or material), and Blender's renders of one scene but for its
+// light, material and method (a serving Blender keeps the mesh, and the
+// material when that is the same too: harness/blender_render.py). "" for the
+// rest.
+std::string render_group_key(const Job& job);
+
 }  // namespace penumbra

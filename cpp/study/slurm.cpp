@@ -156,7 +156,8 @@ const SlurmChain* find_chain(const SlurmChains* chains, const std::string& key) 
 }
 
 // A chain renders one check after another: an array task of its own each,
-// first; the other renders in tasks of `per`, in plan order. `tasks` lists
+// first; the other renders in tasks of up to `per`, in plan order, a mesh's
+// renders together (slurm_task_ranges). `tasks` lists
 // each task's [first, count) of `jobs`.
 void add_entries(const std::vector<Job>& jobs, const std::vector<std::size_t>& submit,
                  const SlurmChains* chains, int per, json& batch, SlurmSubmission& sub) {
@@ -173,10 +174,11 @@ void add_entries(const std::vector<Job>& jobs, const std::vector<std::size_t>& s
     batch["jobs"].push_back(std::move(entry));
     ++sub.chains;
   }
-  for (std::size_t k = 0; k < plain.size(); k += std::size_t(per)) {
-    const std::size_t count = std::min(plain.size() - k, std::size_t(per));
+  std::vector<std::string> keys;
+  for (std::size_t i : plain) keys.push_back(render_group_key(jobs[i]));
+  for (const auto& [first, count] : slurm_task_ranges(keys, per)) {
     batch["tasks"].push_back({batch["jobs"].size(), count});
-    for (std::size_t m = k; m < k + count; ++m)
+    for (std::size_t m = first; m < first + count; ++m)
       batch["jobs"].push_back(job_to_json(jobs[plain[m]]));
   }
   sub.submitted = submit.size();
@@ -282,6 +284,26 @@ Sorted sort_todo(const std::vector<Job>& jobs, const std::vector<std::size_t>& t
 }
 
 }  // namespace
+
+std::vector<std::pair<std::size_t, std::size_t>> slurm_task_ranges(
+    const std::vector<std::string>& keys, int per) {
+  const std::size_t n = keys.size(), most = std::size_t(std::max(per, 1));
+  std::vector<std::pair<std::size_t, std::size_t>> tasks;
+  std::size_t start = 0;  // of the task being filled
+  for (std::size_t i = 0; i < n;) {
+    std::size_t end = i + 1;  // of the group at i
+    if (!keys[i].empty())
+      while (end < n && keys[end] == keys[i]) ++end;
+    if (i > start && end - start > most) {  // the group starts a task of its own
+      tasks.emplace_back(start, i - start);
+      start = i;
+    }
+    for (; end - start > most; start += most) tasks.emplace_back(start, most);
+    i = end;
+  }
+  if (start < n) tasks.emplace_back(start, n - start);
+  return tasks;
+}
 
 SlurmSubmission submit_renders(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo,
                                const std::string& study_folder, const RenderCache& cache,

@@ -79,6 +79,14 @@ struct SlurmSubmission {
 // kMaxSlurmSubmissions times in one chain without a result) fail too.
 inline constexpr int kMaxSlurmSubmissions = 3;
 
+// Array tasks of at most `per` renders over renders in submission order,
+// whose group keys (render_group_key) are `keys`: a run of consecutive
+// renders with one non-empty key (renders that share a mesh) is split only
+// where it is longer than `per` itself, so that a task builds each mesh, or
+// starts each Blender scene, once. Each task is [first, count).
+std::vector<std::pair<std::size_t, std::size_t>> slurm_task_ranges(
+    const std::vector<std::string>& keys, int per);
+
 // The renders of `todo` (indices into `jobs`) are sorted into: failed in this
 // chain (their errors in `errors`), queued in an array that still runs, and
 // submitted now. A job whose key is in `chains` is submitted as that chain,

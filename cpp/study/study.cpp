@@ -10,7 +10,6 @@
 #include <fmt/format.h>
 
 #include "image/image_io.h"
-#include "render/displaced_mesh.h"
 #include "scene/scene_json.h"
 #include "study/cache.h"
 #include "study/compare.h"
@@ -88,23 +87,6 @@ std::vector<std::size_t> use_cache(const std::vector<Job>& jobs, const RenderCac
   return todo;
 }
 
-// The key of the jobs that render one after another on one worker: the
-// evaluator's displacement renders of one geometry (they share its mesh while
-// this process holds it: render/displaced_mesh.h; the checks of a truth, the
-// variants that differ in light or material), and Blender's renders of one
-// scene but for its light, material and method (a serving Blender keeps the
-// mesh, and the material when that is the same too:
-// harness/blender_render.py). "" for the rest.
-std::string group_key(const Job& job) {
-  if (job.renderer == RendererKind::kEvaluator &&
-      job.scene.representation == Representation::kDisplacement)
-    return "evaluator:" + displaced_mesh_key(job.scene);
-  if (job.renderer != RendererKind::kBlender) return "";
-  nlohmann::json mesh = job.scene_json;
-  for (const char* part : {"light", "material", "terminator"}) mesh.erase(part);
-  return "blender:" + mesh.dump();
-}
-
 // The jobs of `todo` in plan order, each group placed at its first member;
 // Blender groups sorted by method, so that renders with the same material
 // follow each other. Blender groups are groups of tasks for one worker
@@ -116,7 +98,7 @@ Order group_by_mesh(const std::vector<Job>& jobs, const std::vector<std::size_t>
   std::vector<std::string> keys(todo.size());
   std::map<std::string, std::vector<std::size_t>> groups;
   for (std::size_t k = 0; k < todo.size(); ++k) {
-    keys[k] = group_key(jobs[todo[k]]);
+    keys[k] = render_group_key(jobs[todo[k]]);
     if (!keys[k].empty()) groups[keys[k]].push_back(todo[k]);
   }
   Order order;

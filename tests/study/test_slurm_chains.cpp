@@ -12,8 +12,10 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -177,6 +179,38 @@ TEST_F(SlurmChains, AFailedCheckEndsItsChainUnconvergedAndEveryReportJobMovesOn)
     }
   }
   EXPECT_EQ(failed, 1u);
+}
+
+// Renders that share a mesh go to one array task unless there are more of
+// them than a task takes; every render lands in exactly one task, in order,
+// and no task is larger than asked.
+TEST(SlurmTasks, RendersOfOneMeshShareATaskUnlessTheyOutnumberIt) {
+  const std::vector<std::string> keys = {"", "a", "a", "a", "", "b", "b", "b", "b", "b", "c", "c"};
+  using Ranges = std::vector<std::pair<std::size_t, std::size_t>>;
+  EXPECT_EQ(slurm_task_ranges(keys, 3), (Ranges{{0, 1}, {1, 3}, {4, 1}, {5, 3}, {8, 2}, {10, 2}}));
+  EXPECT_EQ(slurm_task_ranges(std::vector<std::string>(7, ""), 3), (Ranges{{0, 3}, {3, 3}, {6, 1}}))
+      << "renders without a mesh fill tasks as before";
+  EXPECT_TRUE(slurm_task_ranges({}, 3).empty());
+  for (int per = 1; per <= 13; ++per) {
+    const Ranges tasks = slurm_task_ranges(keys, per);
+    std::size_t next = 0;
+    std::vector<std::size_t> task_of(keys.size());
+    for (std::size_t t = 0; t < tasks.size(); ++t) {
+      EXPECT_EQ(tasks[t].first, next) << "per " << per;
+      EXPECT_GE(tasks[t].second, 1u);
+      EXPECT_LE(tasks[t].second, std::size_t(per));
+      for (std::size_t k = 0; k < tasks[t].second; ++k) task_of[next + k] = t;
+      next += tasks[t].second;
+    }
+    EXPECT_EQ(next, keys.size()) << "per " << per;
+    for (const auto& [key, size] : {std::pair{"a", 3}, {"b", 5}, {"c", 2}}) {
+      if (size > per) continue;
+      std::set<std::size_t> used;
+      for (std::size_t i = 0; i < keys.size(); ++i)
+        if (keys[i] == key) used.insert(task_of[i]);
+      EXPECT_EQ(used.size(), 1u) << key << ", per " << per;
+    }
+  }
 }
 
 }  // namespace
