@@ -32,39 +32,60 @@ def _cells(var, renderers):
     return cols, rows
 
 
+# Inches: a cell, the margins for the row and column heads, the gap
+# between cells (a fraction of a cell).
+CELL_W, CELL_H, HEAD_W, HEAD_H, GAP = 1.7, 1.75, 0.9, 0.9, 0.02
+
+
+def _extent(shape, i, j, cw, ch):
+    """Where an image of `shape` (rows, columns) goes in cell (i, j) of the
+    grid axes (one unit per cell, rows downwards): as large as the cell
+    allows at the image's own aspect ratio, centred."""
+    rows, cols = shape[0], shape[1]
+    w, h = 1.0 - 2 * GAP, 1.0 - 2 * GAP
+    if cols * ch * h > rows * cw * w:  # wider than the cell
+        h = w * cw * rows / (cols * ch)
+    else:
+        w = h * ch * cols / (rows * cw)
+    x0, y0 = j + 0.5 - w / 2, i + 0.5 - h / 2
+    return (x0, x0 + w, y0 + h, y0)
+
+
 def grid_figure(var, out, src, renderers, figdir):
     """figures/grid-<variant>.{png,pdf}; returns the paths written ([]
     when the variant has no images)."""
     cols, rows = _cells(var, renderers)
     if not rows:
         return []
-    # Fixed margins rather than a constrained layout, which costs seconds
-    # over this many axes; save() trims the figure to what was drawn.
-    fig, axs = plt.subplots(len(rows), len(cols), squeeze=False,
-                            figsize=(1.7 * len(cols) + 0.9,
-                                     1.75 * len(rows) + 0.9),
-                            gridspec_kw=dict(wspace=0.04, hspace=0.04,
-                                             left=0.07, right=0.99,
-                                             bottom=0.01, top=0.92))
+    # One axes in cell units for the whole grid: an axes per cell costs
+    # seconds per variant (each builds its own ticks), and a study draws
+    # one grid per variant. save() trims the figure to what was drawn.
+    nr, nc = len(rows), len(cols)
+    fig = plt.figure(figsize=(CELL_W * nc + HEAD_W, CELL_H * nr + HEAD_H))
+    ax = fig.add_axes((HEAD_W / fig.get_figwidth(), 0.0,
+                       CELL_W * nc / fig.get_figwidth(),
+                       CELL_H * nr / fig.get_figheight()))
+    ax.set_axis_off()
+    ax.set_xlim(0, nc)
+    ax.set_ylim(nr, 0)
+    for j, name in enumerate(cols):
+        ax.text(j + 0.5, -GAP, name.replace(' (', '\n('), ha='center',
+                va='bottom', fontsize=8)
     for i, (head, paths) in enumerate(rows):
+        ax.text(-GAP, i + 0.5, head, ha='right', va='center', fontsize=8,
+                rotation=90, multialignment='center')
         for j, rel in enumerate(paths):
-            ax = axs[i][j]
-            ax.set_xticks([])
-            ax.set_yticks([])
-            for side in ax.spines.values():
-                side.set_visible(False)
             if rel is not None:
                 ctx = f'variant {var.get("id")}: image'
-                ax.imshow(mpimg.imread(inside(out, rel, src, ctx)),
-                          interpolation='nearest')
+                img = mpimg.imread(inside(out, rel, src, ctx))
+                ax.imshow(img, interpolation='nearest', aspect='auto',
+                          extent=_extent(img.shape, i, j, CELL_W, CELL_H))
             elif not head.endswith('difference'):
-                ax.text(0.5, 0.5, 'not\nprovided', ha='center',
-                        va='center', fontsize=7, color='0.5',
-                        transform=ax.transAxes)
-            if j == 0:
-                ax.set_ylabel(head, fontsize=8)
-            if i == 0:
-                ax.set_title(cols[j].replace(' (', '\n('), fontsize=8)
+                ax.text(j + 0.5, i + 0.5, 'not\nprovided', ha='center',
+                        va='center', fontsize=7, color='0.5')
+    ax.set_xlim(0, nc)  # imshow resets the limits to its last image
+    ax.set_ylim(nr, 0)
     fig.suptitle(str(var.get('label', var.get('id'))), fontsize=9,
-                 wrap=True)
+                 wrap=True, va='bottom',
+                 y=(CELL_H * nr + 0.5) / fig.get_figheight())
     return save(fig, figdir, f'grid-{stem(var.get("id"))}', ('png', 'pdf'))
