@@ -57,25 +57,52 @@ struct TermPhase {
   double sin_arg = 0.0, cos_arg = 1.0;
 };
 
-// The height A (h(p + d t_j) - h(p)) at the steps t_j = j dt, j = 1..steps,
-// into `rise`, by the angle-addition recurrence: per term one sincos per
-// direction instead of one per step (rounding grows by about one ulp a step).
-void march_heights(const HeightFunction& f, std::span<const TermPhase> at_p, const Vec3& d,
-                   double dt, double h_p, double amplitude, std::span<double> rise) {
-  const bool sum = f.combine == HeightCombine::kSum;
-  for (double& r : rise) r = sum ? 0.0 : 1.0;
-  for (std::size_t i = 0; i < at_p.size(); ++i) {
-    const double delta = 2.0 * kPi * dot(f.terms[i].k, d) * dt;
-    const double cos_delta = std::cos(delta), sin_delta = std::sin(delta);
-    double s = at_p[i].sin_arg, c = at_p[i].cos_arg;
-    for (double& r : rise) {
-      const double s_next = s * cos_delta + c * sin_delta;
-      c = c * cos_delta - s * sin_delta;
-      s = s_next;
-      r = sum ? r + f.terms[i].weight * s : r * s;
+// The march directions' (cos phi, sin phi), phi = 2 pi (a + 1/2) / azimuths:
+// computed once, with the same std::cos and std::sin calls as per point.
+struct AzimuthTable {
+  double cos_phi[kVisibilityAzimuths], sin_phi[kVisibilityAzimuths];
+  AzimuthTable() {
+    for (int a = 0; a < kVisibilityAzimuths; ++a) {
+      const double phi = 2.0 * kPi * (a + 0.5) / kVisibilityAzimuths;
+      cos_phi[a] = std::cos(phi), sin_phi[a] = std::sin(phi);
     }
   }
-  for (double& r : rise) r = amplitude * (r - h_p);
+};
+
+// rise[j][a] = A (h(p + d_a t_j) - h(p)) at the steps t_j = (j + 1) dt, by
+// the angle-addition recurrence: per term and direction one sincos instead
+// of one per step (rounding grows by about one ulp a step). The directions
+// run side by side in the innermost loop: each lane performs the same IEEE
+// operations in the same order as a march of its own would (the project
+// builds with -ffp-contract=off), so the bits are those of one direction
+// at a time, while the eight independent recurrences hide each other's
+// latency and fill the vector units.
+using Rise = double[kVisibilitySteps][kVisibilityAzimuths];
+void march_heights(const HeightFunction& f, std::span<const TermPhase> at_p,
+                   const Vec3 (&d)[kVisibilityAzimuths], double dt, double h_p, double amplitude,
+                   Rise& rise) {
+  constexpr int kA = kVisibilityAzimuths;
+  const bool sum = f.combine == HeightCombine::kSum;
+  for (auto& row : rise)
+    for (double& r : row) r = sum ? 0.0 : 1.0;
+  for (std::size_t i = 0; i < at_p.size(); ++i) {
+    double cos_delta[kA], sin_delta[kA], s[kA], c[kA];
+    for (int a = 0; a < kA; ++a) {
+      const double delta = 2.0 * kPi * dot(f.terms[i].k, d[a]) * dt;
+      cos_delta[a] = std::cos(delta), sin_delta[a] = std::sin(delta);
+      s[a] = at_p[i].sin_arg, c[a] = at_p[i].cos_arg;
+    }
+    const double weight = f.terms[i].weight;
+    for (auto& row : rise)
+      for (int a = 0; a < kA; ++a) {
+        const double s_next = s[a] * cos_delta[a] + c[a] * sin_delta[a];
+        c[a] = c[a] * cos_delta[a] - s[a] * sin_delta[a];
+        s[a] = s_next;
+        row[a] = sum ? row[a] + weight * s[a] : row[a] * s[a];
+      }
+  }
+  for (auto& row : rise)
+    for (double& r : row) r = amplitude * (r - h_p);
 }
 
 }  // namespace
@@ -102,21 +129,27 @@ double height_field_visibility(const HeightFunction& f, double amplitude, const 
     const double arg = 2.0 * kPi * dot(f.terms[i].k, p) + f.terms[i].phase;
     at_p[i] = {std::sin(arg), std::cos(arg)};
   }
-  double rise[kVisibilitySteps];
-  double open = 0.0;
-  for (int a = 0; a < kVisibilityAzimuths; ++a) {
-    const double phi = 2.0 * kPi * (a + 0.5) / kVisibilityAzimuths;
-    const Vec3 d = frame.s * std::cos(phi) + frame.t * std::sin(phi);
-    march_heights(f, at_p, d, dt, here.h, amplitude, rise);
-    // The steepest rise seen from the displaced point, as a tangent; the
-    // slope at the point itself is its limit for t -> 0, which the first
-    // step would miss on a flank.
-    double tan_horizon = std::max(0.0, amplitude * dot(here.gradient, d));
-    for (int j = 1; j <= kVisibilitySteps; ++j)
-      tan_horizon = std::max(tan_horizon, rise[j - 1] / (dt * j));
-    // Cosine-weighted share above a horizon at elevation alpha: cos^2 alpha.
-    open += 1.0 / (1.0 + tan_horizon * tan_horizon);
+  static const AzimuthTable azimuths;
+  Vec3 d[kVisibilityAzimuths];
+  for (int a = 0; a < kVisibilityAzimuths; ++a)
+    d[a] = frame.s * azimuths.cos_phi[a] + frame.t * azimuths.sin_phi[a];
+  Rise rise;
+  march_heights(f, at_p, d, dt, here.h, amplitude, rise);
+  // The steepest rise seen from the displaced point, as a tangent; the
+  // slope at the point itself is its limit for t -> 0, which the first
+  // step would miss on a flank. Directions side by side again: eight
+  // independent divisions in flight instead of one after another.
+  double tan_horizon[kVisibilityAzimuths];
+  for (int a = 0; a < kVisibilityAzimuths; ++a)
+    tan_horizon[a] = std::max(0.0, amplitude * dot(here.gradient, d[a]));
+  for (int j = 1; j <= kVisibilitySteps; ++j) {
+    const double t = dt * j;
+    for (int a = 0; a < kVisibilityAzimuths; ++a)
+      tan_horizon[a] = std::max(tan_horizon[a], rise[j - 1][a] / t);
   }
+  // Cosine-weighted share above a horizon at elevation alpha: cos^2 alpha.
+  double open = 0.0;
+  for (const double tan_a : tan_horizon) open += 1.0 / (1.0 + tan_a * tan_a);
   return open / kVisibilityAzimuths;
 }
 

@@ -216,6 +216,68 @@ TEST(Height, VisibilityMarchEqualsStepByStepEvaluation) {
   EXPECT_GT(occluded, 400);  // the comparison is not between two ones
 }
 
+// The march, one direction at a time, as it was written before the
+// directions ran side by side (height.cpp): the visibility must keep its
+// bits, which the micro-shadowing methods' renders and the study's cache
+// depend on.
+double visibility_one_direction_at_a_time(const HeightFunction& f, double amplitude, const Vec3& p,
+                                          const Vec3& n) {
+  double shortest_k = 0.0;
+  for (const SineTerm& term : f.terms) {
+    const double k = length(term.k);
+    if (k > 0.0 && (shortest_k == 0.0 || k < shortest_k)) shortest_k = k;
+  }
+  const double dt = 2.0 / shortest_k / kVisibilitySteps;
+  const Frame frame = Frame::from_z(n);
+  const HeightSample here = evaluate_height(f, p);
+  const bool sum = f.combine == HeightCombine::kSum;
+  const std::size_t m =
+      sum ? f.terms.size() : std::min<std::size_t>(f.terms.size(), kMaxProductFactors);
+  double open = 0.0;
+  for (int a = 0; a < kVisibilityAzimuths; ++a) {
+    const double phi = 2.0 * kPi * (a + 0.5) / kVisibilityAzimuths;
+    const Vec3 d = frame.s * std::cos(phi) + frame.t * std::sin(phi);
+    double rise[kVisibilitySteps];
+    for (double& r : rise) r = sum ? 0.0 : 1.0;
+    for (std::size_t i = 0; i < m; ++i) {
+      const double arg = 2.0 * kPi * dot(f.terms[i].k, p) + f.terms[i].phase;
+      double s = std::sin(arg), c = std::cos(arg);
+      const double delta = 2.0 * kPi * dot(f.terms[i].k, d) * dt;
+      const double cos_delta = std::cos(delta), sin_delta = std::sin(delta);
+      for (double& r : rise) {
+        const double s_next = s * cos_delta + c * sin_delta;
+        c = c * cos_delta - s * sin_delta;
+        s = s_next;
+        r = sum ? r + f.terms[i].weight * s : r * s;
+      }
+    }
+    double tan_horizon = std::max(0.0, amplitude * dot(here.gradient, d));
+    for (int j = 1; j <= kVisibilitySteps; ++j)
+      tan_horizon = std::max(tan_horizon, amplitude * (rise[j - 1] - here.h) / (dt * j));
+    open += 1.0 / (1.0 + tan_horizon * tan_horizon);
+  }
+  return open / kVisibilityAzimuths;
+}
+
+TEST(Height, VisibilityHasTheBitsOfOneDirectionAtATime) {
+  const Vec3 dirs[] = {{1, 0, 0}, {0, 1, 0}, {0.6, 0.8, 0.0}};
+  const HeightFunction fs[] = {
+      make_grating({1, 2, 0.5}, 7.0, 0.3), make_weave(dirs, 9.0, HeightCombine::kProduct),
+      make_weave(dirs, 9.0, HeightCombine::kSum), make_noise(24, 4.0, 16.0, 5)};
+  Pcg32 rng(43);
+  int occluded = 0;
+  for (const HeightFunction& f : fs)
+    for (int i = 0; i < 500; ++i) {
+      const Vec3 p{rng.next_double(), rng.next_double(), rng.next_double()};
+      const Vec3 n = normalize(Vec3{rng.next_double() - 0.5, rng.next_double() - 0.5, 1.0});
+      const double amplitude = (i % 2 ? -0.03 : 0.03) * rng.next_double();
+      const double v = height_field_visibility(f, amplitude, p, n);
+      ASSERT_EQ(v, visibility_one_direction_at_a_time(f, amplitude, p, n)) << "case " << i;
+      occluded += v < 0.999;
+    }
+  EXPECT_GT(occluded, 1000);
+}
+
 TEST(Vec, AcosApproximationStaysWithinItsStatedBound) {
   double worst = 0.0;
   for (int k = 0; k <= 2'000'000; ++k) {
