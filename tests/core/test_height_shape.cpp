@@ -12,6 +12,7 @@
 #include "core/random.h"
 #include "core/shape.h"
 #include "core/sin_cos.h"
+#include "core/surface_map.h"
 
 namespace penumbra {
 namespace {
@@ -376,8 +377,8 @@ TEST(Shape, DisplacedNormalIsFirstOrderBumpForSmallAmplitude) {
 }
 
 // The grid's rows are built in parallel: one thread or two, with normals or
-// without, every vertex keeps its bits, and the normals it does write are
-// unit vectors.
+// without, every vertex keeps its bits and its place in the layout, and the
+// normals it does write are unit vectors.
 TEST(GridMesh, SameVerticesWhateverTheThreadsAndWithoutNormals) {
   const HeightFunction height = families()[1];
   for (const ShapeType type : {ShapeType::kSphere, ShapeType::kCylinder, ShapeType::kPlane}) {
@@ -399,6 +400,20 @@ TEST(GridMesh, SameVerticesWhateverTheThreadsAndWithoutNormals) {
     EXPECT_EQ(serial.positions, bare.positions);
     EXPECT_EQ(serial.triangles, bare.triangles);
     EXPECT_TRUE(bare.normals.empty());
+    // Each vertex where the documented layout (core/grid_mesh.h) puts it:
+    // the displaced point of its own (u, v), every 7th column and 5th row.
+    const bool sphere = type == ShapeType::kSphere, plane = type == ShapeType::kPlane;
+    const unsigned columns = plane ? res.nu + 1 : res.nu;
+    for (unsigned j = sphere ? 1 : 0; j < (sphere ? res.nv : res.nv + 1); j += 5)
+      for (unsigned i = 0; i < columns; i += 7) {
+        const std::size_t index =
+            sphere ? 1 + std::size_t(j - 1) * res.nu + i : std::size_t(j) * columns + i;
+        const SurfaceGeometry g = surface_at(shape, grid_u(shape, res, i), grid_v(shape, res, j));
+        const Vec3 q = displaced_point(g, 0.05, height_at(height, nullptr, shape, g));
+        const float* v = &parallel.positions[3 * index];
+        ASSERT_TRUE(v[0] == float(q.x) && v[1] == float(q.y) && v[2] == float(q.z))
+            << "vertex (" << i << ", " << j << ")";
+      }
     ASSERT_EQ(serial.normals.size(), serial.positions.size());
     for (std::size_t i = 0; i < serial.normals.size(); i += 3) {
       const double length =
