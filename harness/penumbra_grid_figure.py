@@ -66,8 +66,6 @@ def grid_figure(var, out, src, renderers, figdir):
                        CELL_W * nc / fig.get_figwidth(),
                        CELL_H * nr / fig.get_figheight()))
     ax.set_axis_off()
-    ax.set_xlim(0, nc)
-    ax.set_ylim(nr, 0)
     for j, name in enumerate(cols):
         ax.text(j + 0.5, -GAP, name.replace(' (', '\n('), ha='center',
                 va='bottom', fontsize=8)
@@ -83,7 +81,7 @@ def grid_figure(var, out, src, renderers, figdir):
             elif not head.endswith('difference'):
                 ax.text(j + 0.5, i + 0.5, 'not\nprovided', ha='center',
                         va='center', fontsize=7, color='0.5')
-    ax.set_xlim(0, nc)  # imshow resets the limits to its last image
+    ax.set_xlim(0, nc)  # after imshow, which sets them to each image's extent
     ax.set_ylim(nr, 0)
     fig.suptitle(str(var.get('label', var.get('id'))), fontsize=9,
                  wrap=True, va='bottom',
