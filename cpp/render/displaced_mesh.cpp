@@ -29,6 +29,8 @@ struct DisplacedMesh::Impl {
   double u_at(unsigned i) const { return grid_u(shape, {nu, nv}, i); }
   double v_at(unsigned j) const { return grid_v(shape, {nu, nv}, j); }
 
+  MeshHit decode(const Ray& ray, const TriangleHit& triangle) const;
+
   // (u, v) of the three corners of a side primitive, in Embree's vertex order.
   void corners(unsigned prim, double u[3], double v[3]) const {
     if (shape.type != ShapeType::kSphere) {  // cylinder side and plane: the same quads
@@ -89,18 +91,16 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
 
 DisplacedMesh::~DisplacedMesh() = default;
 
-std::optional<MeshHit> DisplacedMesh::intersect(const Ray& ray) const {
-  const Impl& m = *impl_;
-  const auto triangle = m.bvh->intersect(ray);
-  if (!triangle) return std::nullopt;
+// The hit of `ray` on primitive triangle.triangle, from its barycentrics.
+MeshHit DisplacedMesh::Impl::decode(const Ray& ray, const TriangleHit& triangle) const {
   MeshHit hit;
-  hit.t = triangle->t;
-  const unsigned prim = triangle->triangle;
-  if (prim >= m.side_primitives) {  // a flat cap
+  hit.t = triangle.t;
+  const unsigned prim = triangle.triangle;
+  if (prim >= side_primitives) {  // a flat cap
     const Vec3 p = ray.origin + ray.direction * hit.t;
-    const bool top = prim >= m.side_primitives + m.nu;
+    const bool top = prim >= side_primitives + nu;
     SurfaceGeometry& g = hit.geometry;
-    g.n = m.shape.axis * (top ? 1.0 : -1.0);
+    g.n = shape.axis * (top ? 1.0 : -1.0);
     g.p = p;
     const Frame f = Frame::from_z(g.n);
     g.t1 = f.s, g.t2 = f.t;
@@ -108,15 +108,34 @@ std::optional<MeshHit> DisplacedMesh::intersect(const Ray& ray) const {
     return hit;
   }
   double u[3], v[3];
-  m.corners(prim, u, v);
-  const double b1 = triangle->b1, b2 = triangle->b2, b0 = 1.0 - b1 - b2;
+  corners(prim, u, v);
+  const double b1 = triangle.b1, b2 = triangle.b2, b0 = 1.0 - b1 - b2;
   hit.geometry =
-      surface_at(m.shape, b0 * u[0] + b1 * u[1] + b2 * u[2], b0 * v[0] + b1 * v[1] + b2 * v[2]);
+      surface_at(shape, b0 * u[0] + b1 * u[1] + b2 * u[2], b0 * v[0] + b1 * v[1] + b2 * v[2]);
   return hit;
+}
+
+std::optional<MeshHit> DisplacedMesh::intersect(const Ray& ray) const {
+  const auto triangle = impl_->bvh->intersect(ray);
+  if (!triangle) return std::nullopt;
+  return impl_->decode(ray, *triangle);
+}
+
+void DisplacedMesh::intersect_packet(const Ray* rays, std::size_t n, MeshHit* hits,
+                                     bool* found) const {
+  TriangleHit triangles[kPacketRays];
+  impl_->bvh->intersect_packet(rays, n, triangles, found);
+  for (std::size_t k = 0; k < n; ++k)
+    if (found[k]) hits[k] = impl_->decode(rays[k], triangles[k]);
 }
 
 bool DisplacedMesh::occluded(const Ray& ray, double t_max) const {
   return impl_->bvh->occluded(ray, 0.0, t_max);
+}
+
+void DisplacedMesh::occluded_packet(const Ray* rays, const double* t_max, std::size_t n,
+                                    bool* blocked) const {
+  impl_->bvh->occluded_packet(rays, t_max, n, blocked);
 }
 
 std::string displaced_mesh_key(const Scene& scene) {

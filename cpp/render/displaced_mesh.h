@@ -13,6 +13,7 @@
 #include <string>
 
 #include "core/shape.h"
+#include "render/embree_mesh.h"
 #include "scene/scene.h"
 
 namespace penumbra {
@@ -31,7 +32,13 @@ class DisplacedMesh {
   DisplacedMesh& operator=(const DisplacedMesh&) = delete;
 
   std::optional<MeshHit> intersect(const Ray& ray) const;
+  // intersect() of n <= kPacketRays rays at once (one Embree packet); the
+  // same hits, found[k] saying whether hits[k] was set.
+  static constexpr std::size_t kPacketRays = EmbreeMesh::kPacketRays;
+  void intersect_packet(const Ray* rays, std::size_t n, MeshHit* hits, bool* found) const;
   bool occluded(const Ray& ray, double t_max) const;
+  // occluded() of n <= kPacketRays rays at once.
+  void occluded_packet(const Ray* rays, const double* t_max, std::size_t n, bool* blocked) const;
 
   std::size_t triangle_count() const { return triangles_; }
   std::size_t vertex_count() const { return vertices_; }

@@ -41,6 +41,15 @@ RTCRay to_embree(const Ray& ray, double t_min, double t_max) {
   return r;
 }
 
+// Lane k of a packet as to_embree() sets a single ray.
+void set_lane(const Ray& ray, double t_min, double t_max, std::size_t k, RTCRay8* r) {
+  const RTCRay one = to_embree(ray, t_min, t_max);
+  r->org_x[k] = one.org_x, r->org_y[k] = one.org_y, r->org_z[k] = one.org_z;
+  r->dir_x[k] = one.dir_x, r->dir_y[k] = one.dir_y, r->dir_z[k] = one.dir_z;
+  r->tnear[k] = one.tnear, r->tfar[k] = one.tfar;
+  r->time[k] = one.time, r->mask[k] = one.mask, r->id[k] = one.id, r->flags[k] = one.flags;
+}
+
 }  // namespace
 
 struct EmbreeMesh::Impl {
@@ -109,6 +118,27 @@ std::optional<TriangleHit> EmbreeMesh::intersect(const Ray& ray) const {
   return TriangleHit{rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v};
 }
 
+void EmbreeMesh::intersect_packet(const Ray* rays, std::size_t n, TriangleHit* hits,
+                                  bool* found) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(32) RTCRayHit8 rh;
+  alignas(32) int valid[kPacketRays];
+  for (std::size_t k = 0; k < kPacketRays; ++k) {
+    valid[k] = k < n ? -1 : 0;
+    set_lane(rays[k < n ? k : 0], 0.0, std::numeric_limits<double>::infinity(), k, &rh.ray);
+    rh.ray.tfar[k] = std::numeric_limits<float>::infinity();  // as intersect()
+    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+  }
+  rtcIntersect8(valid, impl_->scene, &context, &rh);
+  for (std::size_t k = 0; k < n; ++k) {
+    found[k] = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+    if (found[k]) hits[k] = {rh.ray.tfar[k], rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k]};
+  }
+}
+
 bool EmbreeMesh::occluded(const Ray& ray, double t_min, double t_max, std::uint32_t skip) const {
   SkipContext context;
   rtcInitIntersectContext(&context.context);
@@ -116,6 +146,21 @@ bool EmbreeMesh::occluded(const Ray& ray, double t_min, double t_max, std::uint3
   RTCRay r = to_embree(ray, t_min, t_max);
   rtcOccluded1(impl_->scene, &context.context, &r);
   return r.tfar < 0.0f;
+}
+
+void EmbreeMesh::occluded_packet(const Ray* rays, const double* t_max, std::size_t n,
+                                 bool* blocked) const {
+  SkipContext context;
+  rtcInitIntersectContext(&context.context);
+  context.context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(32) RTCRay8 r;
+  alignas(32) int valid[kPacketRays];
+  for (std::size_t k = 0; k < kPacketRays; ++k) {
+    valid[k] = k < n ? -1 : 0;
+    set_lane(rays[k < n ? k : 0], 0.0, t_max[k < n ? k : 0], k, &r);
+  }
+  rtcOccluded8(valid, impl_->scene, &context.context, &r);
+  for (std::size_t k = 0; k < n; ++k) blocked[k] = r.tfar[k] < 0.0f;
 }
 
 }  // namespace penumbra

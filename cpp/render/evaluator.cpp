@@ -119,15 +119,17 @@ class MeshTracer {
   bool primary(const Ray& ray, SurfaceHit* out) const {
     const auto hit = mesh_.intersect(ray);
     if (!hit) return false;
-    out->t = hit->t;
-    out->geometry = hit->geometry;
-    out->ng = out->ni = hit->geometry.n;
-    if (hit->geometry.displaceable)
-      out->shading_point = displaced_point(hit->geometry, amplitude_,
-                                           height_at(height_, map_, shape_, hit->geometry));
-    else
-      out->shading_point = hit->geometry.p;
+    set_hit(*hit, out);
     return true;
+  }
+  // primary() of n <= kPacketRays rays at once: one Embree packet, which
+  // traverses the BVH faster than n single rays when they are coherent.
+  static constexpr std::size_t kPacketRays = DisplacedMesh::kPacketRays;
+  void primary_packet(const Ray* rays, std::size_t n, SurfaceHit* out, bool* found) const {
+    MeshHit hits[kPacketRays];
+    mesh_.intersect_packet(rays, n, hits, found);
+    for (std::size_t k = 0; k < n; ++k)
+      if (found[k]) set_hit(hits[k], &out[k]);
   }
   ShadowRay shadow_ray(const SurfaceHit& hit, const FacingNormals& n, const Vec3&) const {
     return {hit.shading_point + n.ns * mesh_.shadow_offset()};
@@ -135,8 +137,24 @@ class MeshTracer {
   bool occluded(const ShadowRay& ray, const Vec3& wi, double distance) const {
     return mesh_.occluded({ray.origin, wi}, distance);
   }
+  // occluded() of n <= kPacketRays shadow rays at once.
+  void occluded_packet(const Ray* rays, const double* distance, std::size_t n,
+                       bool* blocked) const {
+    mesh_.occluded_packet(rays, distance, n, blocked);
+  }
 
  private:
+  void set_hit(const MeshHit& hit, SurfaceHit* out) const {
+    out->t = hit.t;
+    out->geometry = hit.geometry;
+    out->ng = out->ni = hit.geometry.n;
+    if (hit.geometry.displaceable)
+      out->shading_point =
+          displaced_point(hit.geometry, amplitude_, height_at(height_, map_, shape_, hit.geometry));
+    else
+      out->shading_point = hit.geometry.p;
+  }
+
   const DisplacedMesh& mesh_;
   double amplitude_;
   const HeightFunction& height_;
@@ -289,6 +307,22 @@ struct PixelSums {
          view = 0.0;
 };
 
+// A pass the light reaches at a sample, and the radiance it adds unless the
+// shadow ray is blocked.
+struct LitPass {
+  std::size_t pass = 0;
+  double radiance = 0.0;
+};
+
+// A sample's shadow ray waiting to be traced with others (shade_deferred):
+// its passes' contributions are lit[first, last).
+struct PendingShadow {
+  ShadowRay ray;
+  Vec3 wi;
+  double distance = 0.0;
+  std::size_t first = 0, last = 0;
+};
+
 // The parts of a sample every method sees alike, in the channels' units.
 struct SampleAngles {
   double theta = 0.0, deviation = 0.0, view = 0.0;  // degrees
@@ -366,20 +400,39 @@ class SampleShader {
 
   void shade(const Ray& ray, const SurfaceHit& hit, Material* material, Pcg32* rng, PixelSums* sums,
              std::uint64_t* shadow_rays) const;
+  // shade() but for the radiance of the passes the light reaches, which
+  // waits for the shadow ray's verdict: its contributions are appended to
+  // *lit, and the ray to trace is returned (nullopt: no pass needs it).
+  // Adding them later, in the order of the samples, gives shade()'s sums.
+  std::optional<PendingShadow> shade_deferred(const Ray& ray, const SurfaceHit& hit,
+                                              Material* material, Pcg32* rng, PixelSums* sums,
+                                              std::vector<LitPass>* lit) const;
   // Lane k of a packet on the analytic base (BaseTracer, no props): what
   // shade() does with the packet's values, read straight from its arrays.
   // Copying them through a SurfaceHit first cost a tenth of the render:
   // wider loads of a Vec3 just stored narrower wait for the store.
   void shade_packed(const HitPacket& hits, const RayPacket& rays, std::size_t k,
                     const Material& material, PixelSums* sums, std::uint64_t* shadow_rays) const;
-  // Every pass on one shading point, into sums; the shadow ray's verdict is
-  // asked for once, by the first pass that needs it.
-  template <typename Blocked>
+  // Every pass on one shading point, into sums, but for the radiance of
+  // the passes the light reaches: lit(pass, radiance) decides on those.
+  template <typename Lit>
   void shade_passes(const Material& material, const ShadingPoint& point, const LightSample& light,
-                    const SampleAngles& angles, Pcg32* rng, PixelSums* sums,
-                    std::uint64_t* shadow_rays, Blocked&& blocked) const;
+                    const SampleAngles& angles, Pcg32* rng, PixelSums* sums, Lit&& lit) const;
 
  private:
+  // What shade() computes before the passes.
+  struct Prepared {
+    FacingNormals facing;
+    LightSample light;
+    ShadingPoint point;
+    SampleAngles angles;
+  };
+  Prepared prepare(const Ray& ray, const SurfaceHit& hit, Material* material) const;
+  ShadowRay shadow_ray(const SurfaceHit& hit, const Prepared& p) const {
+    return hit.on_prop ? ShadowRay{hit.shading_point}
+                       : tracer_.shadow_ray(hit, p.facing, p.light.wi);
+  }
+
   const Scene& scene_;
   const Tracer& tracer_;
   const Props& props_;
@@ -391,8 +444,9 @@ class SampleShader {
 };
 
 template <typename Tracer>
-void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, Material* material,
-                                 Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays) const {
+typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray& ray,
+                                                                      const SurfaceHit& hit,
+                                                                      Material* material) const {
   const SurfaceGeometry& g = hit.geometry;
   const Vec3 wo = -ray.direction;
   Vec3 n = g.n;
@@ -427,21 +481,45 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, Material
   // Within 1.2e-6 degrees: below what the float channels resolve.
   const SampleAngles angles{degrees(acos_approx(dot(n, light.wi))),
                             degrees(acos_approx(dot(ns, n))), degrees(acos_approx(dot(n, wo)))};
-  shade_passes(*material, point, light, angles, rng, sums, shadow_rays, [&] {
-    const ShadowRay shadow =
-        hit.on_prop ? ShadowRay{hit.shading_point} : tracer_.shadow_ray(hit, facing, light.wi);
-    return tracer_.occluded(shadow, light.wi, light.distance) ||
-           props_.occluded(shadow.origin, light.wi, light.distance);
+  return {facing, light, point, angles};
+}
+
+template <typename Tracer>
+void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, Material* material,
+                                 Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays) const {
+  const Prepared p = prepare(ray, hit, material);
+  int is_blocked = -1;  // the shadow ray, traced for the first pass that needs it
+  shade_passes(*material, p.point, p.light, p.angles, rng, sums, [&](std::size_t k, double value) {
+    if (is_blocked < 0) {
+      ++*shadow_rays;
+      const ShadowRay shadow = shadow_ray(hit, p);
+      is_blocked = tracer_.occluded(shadow, p.light.wi, p.light.distance) ||
+                   props_.occluded(shadow.origin, p.light.wi, p.light.distance);
+    }
+    if (is_blocked == 0) sums[k].radiance += value;
   });
 }
 
 template <typename Tracer>
-template <typename Blocked>
+std::optional<PendingShadow> SampleShader<Tracer>::shade_deferred(const Ray& ray,
+                                                                  const SurfaceHit& hit,
+                                                                  Material* material, Pcg32* rng,
+                                                                  PixelSums* sums,
+                                                                  std::vector<LitPass>* lit) const {
+  const Prepared p = prepare(ray, hit, material);
+  const std::size_t first = lit->size();
+  shade_passes(*material, p.point, p.light, p.angles, rng, sums, [&](std::size_t k, double value) {
+    lit->push_back({k, value});
+  });
+  if (lit->size() == first) return std::nullopt;
+  return PendingShadow{shadow_ray(hit, p), p.light.wi, p.light.distance, first, lit->size()};
+}
+
+template <typename Tracer>
+template <typename Lit>
 void SampleShader<Tracer>::shade_passes(const Material& material, const ShadingPoint& point,
                                         const LightSample& light, const SampleAngles& angles,
-                                        Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays,
-                                        Blocked&& blocked) const {
-  int is_blocked = -1;  // the shadow ray, traced for the first method that needs it
+                                        Pcg32* rng, PixelSums* sums, Lit&& lit) const {
   for (std::size_t k = 0; k < passes_.size(); ++k) {
     const Shaded shaded = penumbra::shade(passes_[k], material, point, rng);
     PixelSums& s = sums[k];
@@ -454,11 +532,7 @@ void SampleShader<Tracer>::shade_passes(const Material& material, const ShadingP
     }
     s.view += angles.view;
     if (!(shaded.value > 0.0) || light.irradiance == 0.0) continue;
-    if (is_blocked < 0) {
-      ++*shadow_rays;
-      is_blocked = blocked();
-    }
-    if (is_blocked == 0) s.radiance += shaded.value * light.irradiance;
+    lit(k, shaded.value * light.irradiance);
   }
 }
 
@@ -482,8 +556,11 @@ void SampleShader<Tracer>::shade_packed(const HitPacket& hits, const RayPacket& 
     point.visibility =
         height_field_visibility(scene_.height.function, backfacing ? -amplitude : amplitude, p, n);
   const SampleAngles angles{hits.theta[k], hits.deviation[k], hits.view[k]};
-  shade_passes(material, point, light, angles, nullptr, sums, shadow_rays,
-               [&] { return hits.blocked[k] != 0.0; });
+  bool counted = false;  // the packet traced the shadow ray; count it once, as shade() does
+  shade_passes(material, point, light, angles, nullptr, sums, [&](std::size_t pass, double value) {
+    if (!counted) ++*shadow_rays, counted = true;
+    if (hits.blocked[k] == 0.0) sums[pass].radiance += value;
+  });
 }
 
 // Whether render_image traces its camera rays in packets (core/ray_packet.h):
@@ -630,13 +707,68 @@ PacketSetup packet_setup(const Scene& scene, const Tracer& tracer) {
   return setup;
 }
 
-// One pixel's samples one at a time, in the order of the strata.
+// One pixel's samples kPacketRays at a time, camera rays and then shadow
+// rays in packets of the tracer's: the samples are shaded in the order of
+// the strata, and the radiance the shadow rays let through is added in that
+// order too, so the sums are shade_pixel's one sample at a time.
+template <typename Tracer>
+void shade_pixel_packets(const Scene& scene, const Tracer& tracer, const Props& props,
+                         const SampleShader<Tracer>& shader, const PixelTask& pixel, int nx,
+                         int ny) {
+  constexpr std::size_t kRays = Tracer::kPacketRays;
+  const Camera& camera = scene.camera;
+  const Vec3 orthographic_direction = normalize(camera.direction);
+  Material material = scene.material;
+  Ray rays[kRays], shadow_rays[kRays];
+  SurfaceHit hits[kRays];
+  PendingShadow pending[kRays];
+  double distances[kRays];
+  bool found[kRays], blocked[kRays];
+  std::vector<LitPass> lit;
+  const int count = nx * ny;
+  for (int first = 0; first < count; first += int(kRays)) {
+    const std::size_t n = std::min<std::size_t>(kRays, count - first);
+    for (std::size_t k = 0; k < n; ++k) {
+      const int s = first + int(k);
+      rays[k] = camera_ray(camera, orthographic_direction, pixel.i, pixel.j, s % nx, s / nx, nx, ny,
+                           sample_jitter(camera, pixel.key, s));
+    }
+    tracer.primary_packet(rays, n, hits, found);
+    lit.clear();
+    std::size_t waiting = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      hits[k].on_prop = false;
+      material.filtered.active = false;
+      if (!(props.nearer(rays[k], found[k], &hits[k]) || found[k])) continue;
+      if (const auto p =
+              shader.shade_deferred(rays[k], hits[k], &material, pixel.rng, pixel.sums, &lit)) {
+        shadow_rays[waiting] = {p->ray.origin, p->wi};
+        distances[waiting] = p->distance;
+        pending[waiting++] = *p;
+      }
+    }
+    if (waiting > 0) tracer.occluded_packet(shadow_rays, distances, waiting, blocked);
+    for (std::size_t k = 0; k < waiting; ++k) {
+      const PendingShadow& p = pending[k];
+      ++*pixel.shadow_rays;
+      if (blocked[k] || props.occluded(p.ray.origin, p.wi, p.distance)) continue;
+      for (std::size_t c = p.first; c < p.last; ++c)
+        pixel.sums[lit[c].pass].radiance += lit[c].radiance;
+    }
+  }
+}
+
+// One pixel's samples one at a time, in the order of the strata; through
+// the tracer's packets (shade_pixel_packets) where it has them and `packets`.
 template <typename Tracer>
 void shade_pixel(const Scene& scene, const Tracer& tracer, const Props& props,
-                 const SampleShader<Tracer>& shader, const PixelTask& pixel) {
+                 const SampleShader<Tracer>& shader, const PixelTask& pixel, bool packets) {
   const Camera& camera = scene.camera;
   int nx, ny;
   strata(camera.spp, &nx, &ny);
+  if constexpr (requires { Tracer::kPacketRays; }) {
+    if (packets) return shade_pixel_packets(scene, tracer, props, shader, pixel, nx, ny);
+  }
   const Vec3 orthographic_direction = normalize(camera.direction);
   // One per pixel, not per sample: value-initialising it (a mesh hit
   // included) took 9% of a bump render. Every tracer sets all the
@@ -692,7 +824,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
           Pcg32 rng(key);
           std::fill(sums.begin(), sums.end(), PixelSums{});
           shade_pixel(scene, tracer, props, shader,
-                      {i, j, key, &rng, sums.data(), &local_shadow_rays});
+                      {i, j, key, &rng, sums.data(), &local_shadow_rays}, options.packets);
           for (std::size_t k = 0; k < pass_count; ++k)
             write_pixel(sums[k], inv_spp, &(*images)[k].pixels[pixel * channel_count]);
         }
@@ -712,7 +844,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   if (stats) {
     stats->camera_samples = std::uint64_t(width) * height * camera.spp;
     stats->shadow_rays = shadow_rays;
-    stats->packets = packets;
+    stats->packets = packets || (requires { Tracer::kPacketRays; } && options.packets);
   }
 }
 

@@ -210,6 +210,24 @@ TEST(Render, PacketsGiveTheScalarPathsBits) {
         "/light={\"type\":\"point\",\"position\":[-6,1,-2],\"intensity\":40}"},
        true},
       {"sphere-noise.json", {"/terminator/method=\"microshadow-chan2018\""}, true},
+      // Displacement: the mesh's camera and shadow rays in Embree packets.
+      // The first is the scene and ray on which rtcOccluded16 never returned
+      // (render/embree_mesh.h): 8 x 8 pixels, 1 spp.
+      {"sphere-grating.json",
+       {"/representation=\"displacement\"", "/displacement/edge_length=0.003", "/camera/width=8",
+        "/camera/height=8", "/camera/spp=1"},
+       true},
+      {"sphere-weave.json",
+       {"/representation=\"displacement\"", "/displacement/edge_length=0.02",
+        "/camera/projection=\"perspective\"", "/camera/jitter=true",
+        "/light={\"type\":\"point\",\"position\":[-6,1,-2],\"intensity\":40}",
+        "/props=[{\"type\":\"sphere\",\"center\":[-0.6,0.5,-0.9],\"radius\":0.3}]"},
+       true},  // point light (finite shadow rays), props, 9 samples: a packet and a lone ray
+      {"cylinder-noise.json",
+       {"/representation=\"displacement\"", "/displacement/edge_length=0.02", "/shape/caps=true",
+        "/camera/position=[0,4,-4]", "/camera/direction=[0,-1,1]", "/camera/up=[0,1.8,1.8]",
+        "/camera/spp=20"},
+       true},  // the caps, seen from above
       {"cylinder-grating.json", {"/shape/caps=true"}, false},
       {"sphere-grating.json", {"/terminator/method=\"schuessler2017-walk\""}, false}};
   for (const Case& c : cases) {
