@@ -77,7 +77,7 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
   const double reach = m.amplitude * bounds.max_abs;
   const GridResolution resolution = grid_resolution(m.shape, e, reach);
   m.nu = resolution.nu, m.nv = resolution.nv;
-  const TriangleMesh mesh =
+  TriangleMesh mesh =
       make_grid_mesh(m.shape, m.height, m.amplitude, resolution, m.map.get(), GridNormals::kOmit);
   m.side_primitives = static_cast<unsigned>(mesh.side_triangles);
   vertices_ = mesh.vertex_count();
@@ -86,7 +86,7 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
       1.0 / std::max(m.shape.radius - reach, 1e-12) + m.amplitude * bounds.max_hessian;
   shadow_offset_ = e * e * kappa / 8.0 + 1e-9 * m.shape.radius;
 
-  m.bvh = std::make_unique<EmbreeMesh>(mesh);
+  m.bvh = std::make_unique<EmbreeMesh>(std::move(mesh), bvh_build_for(triangles_));
 }
 
 DisplacedMesh::~DisplacedMesh() = default;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
@@ -52,13 +54,30 @@ void set_lane(const Ray& ray, double t_min, double t_max, std::size_t k, RTCRay8
 
 }  // namespace
 
+BvhBuild bvh_build_for(std::size_t triangles) {
+  return triangles >= kFastBuildTriangles ? BvhBuild::kFastBuild : BvhBuild::kFastTrace;
+}
+
 struct EmbreeMesh::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
+  // Embree's shared buffers: they outlive the scene (members go after ~Impl).
+  std::vector<float> positions;
+  std::vector<unsigned> triangles;
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
 };
 
-EmbreeMesh::EmbreeMesh(const TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
+EmbreeMesh::EmbreeMesh(TriangleMesh mesh, BvhBuild build) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
+  // Embree may read the last vertex with a 16-byte load: one spare float
+  // (make_grid_mesh reserves it, so this does not reallocate).
+  const std::size_t vertex_count = mesh.vertex_count(), triangle_count = mesh.triangle_count();
+  m.positions = std::move(mesh.positions);
+  m.positions.push_back(0.0f);
+  m.triangles = std::move(mesh.triangles);
   m.device = rtcNewDevice(nullptr);
   if (!m.device) throw std::runtime_error("Embree: cannot create a device");
   m.scene = rtcNewScene(m.device);
@@ -68,29 +87,20 @@ EmbreeMesh::EmbreeMesh(const TriangleMesh& mesh) : impl_(std::make_unique<Impl>(
   // with the same image bits: the leaves load the same floats into the same
   // intersector.
   rtcSetSceneFlags(m.scene, RTCSceneFlags(RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_COMPACT));
-  RTCGeometry geometry = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* positions = static_cast<float*>(
-      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                              3 * sizeof(float), mesh.vertex_count()));
-  auto* indices = static_cast<unsigned*>(
-      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                              3 * sizeof(unsigned), mesh.triangle_count()));
-  if (!positions || !indices) {
-    rtcReleaseGeometry(geometry);
-    throw std::runtime_error(
-        fmt::format("Embree: cannot allocate the buffers of {} triangles", mesh.triangle_count()));
-  }
+  if (build == BvhBuild::kFastBuild) rtcSetSceneBuildQuality(m.scene, RTC_BUILD_QUALITY_LOW);
   // Embree aborts the process on non-finite geometry; the scene reader bounds
   // every input, and this turns anything that still slips through into an
   // error, once per mesh rather than per ray.
-  if (!std::all_of(mesh.positions.begin(), mesh.positions.end(),
-                   [](float v) { return std::isfinite(v); })) {
-    rtcReleaseGeometry(geometry);
+  if (!std::all_of(m.positions.begin(), m.positions.end(),
+                   [](float v) { return std::isfinite(v); }))
     throw std::runtime_error(
         "Embree: a mesh vertex is not finite in float (scene values out of range)");
-  }
-  std::copy(mesh.positions.begin(), mesh.positions.end(), positions);
-  std::copy(mesh.triangles.begin(), mesh.triangles.end(), indices);
+  RTCGeometry geometry = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  if (build == BvhBuild::kFastBuild) rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_LOW);
+  rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                             m.positions.data(), 0, 3 * sizeof(float), vertex_count);
+  rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                             m.triangles.data(), 0, 3 * sizeof(unsigned), triangle_count);
   rtcSetGeometryOccludedFilterFunction(geometry, skip_filter);
   rtcCommitGeometry(geometry);
   rtcAttachGeometry(m.scene, geometry);
@@ -98,13 +108,10 @@ EmbreeMesh::EmbreeMesh(const TriangleMesh& mesh) : impl_(std::make_unique<Impl>(
   rtcCommitScene(m.scene);
   if (rtcGetDeviceError(m.device) != RTC_ERROR_NONE)
     throw std::runtime_error(fmt::format(
-        "Embree could not build the BVH of {} triangles: out of memory?", mesh.triangle_count()));
+        "Embree could not build the BVH of {} triangles: out of memory?", triangle_count));
 }
 
-EmbreeMesh::~EmbreeMesh() {
-  if (impl_->scene) rtcReleaseScene(impl_->scene);
-  if (impl_->device) rtcReleaseDevice(impl_->device);
-}
+EmbreeMesh::~EmbreeMesh() = default;
 
 std::optional<TriangleHit> EmbreeMesh::intersect(const Ray& ray) const {
   RTCIntersectContext context;

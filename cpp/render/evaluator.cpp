@@ -724,7 +724,8 @@ void shade_pixel_packets(const Scene& scene, const Tracer& tracer, const Props& 
   PendingShadow pending[kRays];
   double distances[kRays];
   bool found[kRays], blocked[kRays];
-  std::vector<LitPass> lit;
+  // Kept per thread: one allocation per pixel was 2 % of a 16-spp truth.
+  thread_local std::vector<LitPass> lit;
   const int count = nx * ny;
   for (int first = 0; first < count; first += int(kRays)) {
     const std::size_t n = std::min<std::size_t>(kRays, count - first);

@@ -6,7 +6,7 @@ LowPolyMesh::LowPolyMesh(const Shape& shape, const Tessellation& tessellation)
     : shape_(shape),
       tessellation_(tessellation),
       mesh_(tessellate(shape, tessellation)),
-      bvh_(mesh_) {}
+      bvh_(mesh_, bvh_build_for(mesh_.triangle_count())) {}
 
 Vec3 LowPolyMesh::position(unsigned vertex) const {
   const float* p = &mesh_.positions[3 * std::size_t(vertex)];

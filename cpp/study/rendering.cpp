@@ -180,20 +180,28 @@ Image render_into_cache(const Job& job, const RenderCache& cache, double timeout
   const double wall_seconds =
       shared ? run.seconds
              : std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  cache.store(
-      job.key, run.image,
-      {{"penumbra:version", kPenumbraVersion},
-       {kCostWallAttribute, fmt::format("{:.3f}", wall_seconds)},
-       {kCostThreadsAttribute,
-        std::to_string(threads > 0 && !shared ? threads
-                                              : std::max(1u, std::thread::hardware_concurrency()))},
-       {"penumbra:host", host_tag()},
-       {"penumbra:renderer", to_string(job.renderer)},
-       {"penumbra:renderer_version", renderers.versions.at(job.renderer)},
-       {"penumbra:scene", job.scene_json.dump()},
-       {"penumbra:method", job.method},
-       {"penumbra:representation", to_string(job.representation)},
-       {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
+  std::vector<std::pair<std::string, std::string>> attributes{
+      {"penumbra:version", kPenumbraVersion},
+      {kCostWallAttribute, fmt::format("{:.3f}", wall_seconds)},
+      {kCostThreadsAttribute,
+       std::to_string(threads > 0 && !shared ? threads
+                                             : std::max(1u, std::thread::hardware_concurrency()))},
+      {"penumbra:host", host_tag()},
+      {"penumbra:renderer", to_string(job.renderer)},
+      {"penumbra:renderer_version", renderers.versions.at(job.renderer)},
+      {"penumbra:scene", job.scene_json.dump()},
+      {"penumbra:method", job.method},
+      {"penumbra:representation", to_string(job.representation)},
+      {"penumbra:radiance_unit", "W m^-2 sr^-1"}};
+  // What a truth's cost is made of: the mesh build, or none when the
+  // process's mesh cache held it (render/displaced_mesh.h).
+  if (job.renderer == RendererKind::kEvaluator && run.stats.triangles > 0) {
+    attributes.emplace_back(
+        "penumbra:mesh_build_seconds",
+        fmt::format("{:.3f}", run.stats.mesh_reused ? 0.0 : run.stats.build_seconds));
+    attributes.emplace_back("penumbra:mesh_triangles", std::to_string(run.stats.triangles));
+  }
+  cache.store(job.key, run.image, attributes);
   if (job.renderer == RendererKind::kEvaluator) fs::remove(settings.log_path, ignored);
   return std::move(run.image);
 }
