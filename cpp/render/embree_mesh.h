@@ -27,8 +27,9 @@ struct TriangleHit {
 // different ones of the two, which are the same surface point to float
 // rounding (tests/render/test_embree_mesh.cpp).
 // - kFastBuild: Embree's Morton builder (RTC_BUILD_QUALITY_LOW). On the
-//   default sphere at edge 0.0015 (17.9 M triangles, 2 cores) it builds in
-//   5.0 CPU-s against 8.9, and peaks at 1.64 GB against 1.24;
+//   default sphere at edge 0.0015 (17.9 M triangles, 2 cores, with the
+//   shared buffers below) it builds in 5.1 to 6.1 CPU-s against 8.8 to 12.9,
+//   and peaks at 1.33 GB against 1.24;
 // - kFastTrace: the binned SAH builder (Embree's default), whose rays run
 //   about 10 % faster.
 // A truth meets few rays per triangle (128x128 at 64 to 1024 spp: 0.06 to

@@ -95,10 +95,11 @@ TEST(EmbreeMesh, PacketsSeeWhatSingleRaysSee) {
 // A displaced sphere's grid, as the truth builds it, under both builds. The
 // BVH decides which triangles a ray visits first; where two triangles answer
 // a ray at the same t (a ray through a shared vertex or edge: aimed at one,
-// as here; of 10.9 M parallel rays that hit this sphere at random points, 5),
-// the first one found keeps the hit. So a ray aimed inside a triangle must get the same hit, bit
-// for bit, from both builds; one aimed at a vertex or an edge the same point of the surface, up to
-// float rounding of the barycentrics; every occlusion verdict must agree.
+// as here; of 10.9 M parallel rays that hit this sphere at random points,
+// 5), the first one found keeps the hit. So a ray aimed inside a triangle
+// must get the same hit, bit for bit, from both builds; one aimed at a
+// vertex or an edge the same point of the surface, up to float rounding of
+// the barycentrics; every occlusion verdict must agree.
 TEST(EmbreeMesh, BothBuildsFindTheSameSurfacePoints) {
   Shape shape;
   shape.type = ShapeType::kSphere;
