@@ -6,6 +6,8 @@
 #include <numeric>
 #include <random>
 
+#include "analysis/mt19937_64_block.h"
+
 namespace penumbra {
 
 std::size_t uniform_index(std::mt19937_64& rng, std::size_t n) {
@@ -20,22 +22,60 @@ double quantile(const std::vector<double>& sorted, double q) {
   return sorted[i] + (pos - static_cast<double>(i)) * (sorted[j] - sorted[i]);
 }
 
+namespace {
+
+// The indices of one resample of n values: uniform_index's arithmetic on
+// the generator's next n outputs (below 2^53 and below n, the signed
+// conversions give the unsigned ones' values), cloned for AVX-512 and AVX2
+// so that the generator's loops run vectorised; integer and exact
+// operations only, so every clone gives the same indices.
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void resample_indices(
+    Mt19937_64Block& rng, std::uint64_t* bits, std::uint32_t* indices, std::size_t n) {
+  rng.fill(bits, n);
+  const double scale = static_cast<double>(static_cast<std::int64_t>(n));
+  const std::int64_t last = static_cast<std::int64_t>(n) - 1;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double u = static_cast<double>(static_cast<std::int64_t>(bits[k] >> 11)) * 0x1.0p-53;
+    indices[k] = static_cast<std::uint32_t>(std::min(last, static_cast<std::int64_t>(u * scale)));
+  }
+}
+
+// quantile() of the values sorted, with partial sorts: the two order
+// statistics it reads are the same values.
+double quantile_unsorted(std::vector<double>& values, double q) {
+  const double pos = q * static_cast<double>(values.size() - 1);
+  const std::size_t i = static_cast<std::size_t>(std::floor(pos));
+  std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(i), values.end());
+  const double low = values[i];
+  const double high = i + 1 < values.size()
+                          ? *std::min_element(values.begin() + std::ptrdiff_t(i) + 1, values.end())
+                          : low;
+  return low + (pos - static_cast<double>(i)) * (high - low);
+}
+
+}  // namespace
+
 Interval bootstrap_mean_interval(const std::vector<double>& values, double confidence,
                                  int resamples, std::uint64_t seed) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   if (values.empty()) return {nan, nan};
   if (values.size() == 1) return {values[0], values[0]};
-  std::mt19937_64 rng(seed);
+  // The draws of std::mt19937_64(seed) through uniform_index, a resample's
+  // worth at a time.
+  Mt19937_64Block rng(seed);
+  const std::size_t n = values.size();
+  std::vector<std::uint64_t> bits(n);
+  std::vector<std::uint32_t> indices(n);
   std::vector<double> means(static_cast<std::size_t>(resamples));
   for (double& mean : means) {
+    resample_indices(rng, bits.data(), indices.data(), n);
     double sum = 0.0;
-    for (std::size_t k = 0; k < values.size(); ++k)
-      sum += values[uniform_index(rng, values.size())];
-    mean = sum / static_cast<double>(values.size());
+    for (std::size_t k = 0; k < n; ++k) sum += values[indices[k]];
+    mean = sum / static_cast<double>(n);
   }
-  std::sort(means.begin(), means.end());
   const double tail = 0.5 * (1.0 - confidence);
-  return {quantile(means, tail), quantile(means, 1.0 - tail)};
+  const double low = quantile_unsorted(means, tail);
+  return {low, quantile_unsorted(means, 1.0 - tail)};
 }
 
 double sign_test_p(std::size_t positive, std::size_t negative) {

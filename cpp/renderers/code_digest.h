@@ -10,7 +10,9 @@
 //   filtering  the bump-filtering experiment and the math it reads (the
 //              filtering section of a study, study/filtering_study.h);
 //   comparison the metrics of one comparison of two images (kept between a
-//              study's runs, study/comparison_store.h).
+//              study's runs, study/comparison_store.h);
+//   previews   the drawing of a study's preview and difference PNGs (kept
+//              between a study's runs, study/previews.h).
 #pragma once
 
 namespace penumbra {
@@ -21,6 +23,7 @@ struct CodeDigests {
   const char* blender;
   const char* filtering;
   const char* comparison;
+  const char* previews;
 };
 
 const CodeDigests& build_code_digests();

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <functional>
 #include <map>
 #include <optional>
@@ -12,53 +11,28 @@
 #include "util/parallel.h"
 
 namespace penumbra {
-namespace fs = std::filesystem;
 
 namespace {
-
-// Signed difference test - reference in units of albedo*E/pi, on a diverging
-// map saturating at +-0.25: red brighter, blue darker, white equal; grey
-// where either image has no object.
-void write_difference_png(const Image& test, const Image& reference, double scale,
-                          const std::string& path) {
-  std::vector<unsigned char> rgb(std::size_t(test.width) * test.height * 3);
-  const int a1 = test.channel_index("A"), a2 = reference.channel_index("A");
-  const int r1 = test.channel_index("R"), r2 = reference.channel_index("R");
-  for (int y = 0; y < test.height; ++y)
-    for (int x = 0; x < test.width; ++x) {
-      unsigned char* p = &rgb[(std::size_t(y) * test.width + x) * 3];
-      if (test.at(x, y, a1) < 0.5f || reference.at(x, y, a2) < 0.5f) {
-        p[0] = p[1] = p[2] = 96;
-        continue;
-      }
-      const double d = (test.at(x, y, r1) - reference.at(x, y, r2)) / scale;
-      const double v = std::clamp(d / 0.25, -1.0, 1.0);
-      const auto c = [](double t) { return static_cast<unsigned char>(std::lround(255.0 * t)); };
-      if (v >= 0)
-        p[0] = 255, p[1] = c(1 - v), p[2] = c(1 - v);
-      else
-        p[0] = c(1 + v), p[1] = c(1 + v), p[2] = 255;
-    }
-  write_png_rgb8(path, test.width, test.height, rgb);
-}
 
 const char* truth_name(SectionKind kind) {
   return kind == SectionKind::kBump ? "displacement" : "analytic";
 }
 
-RenderRow render_row(const Plan& plan, const RenderedImages& r, std::size_t i,
-                     const fs::path& out) {
+RenderRow render_row(const Plan& plan, const RenderedImages& r,
+                     const std::vector<std::uint64_t>& digests, std::size_t i,
+                     PreviewFolder& pictures) {
   const Job& job = plan.jobs[i];
   const double scale = radiance_scale(job.scene);
   RenderRow row;
   row.job = i;
   const std::string stem = file_safe(job.label);
   row.image = "images/" + stem + ".png";
-  write_preview_png(r.images[i], (out / row.image).string());
+  pictures.preview(r.images[i], digests[i], row.image);
   const long truth = plan.truth(job.variant, job.renderer);
   if (!job.truth && truth >= 0 && r.done[truth]) {
     row.difference = "images/" + stem + "-diff.png";
-    write_difference_png(r.images[i], r.images[truth], scale, (out / row.difference).string());
+    pictures.difference(r.images[i], digests[i], r.images[truth], digests[truth], scale,
+                        row.difference);
   }
   row.profile = terminator_profile(r.images[i], scale, ProfileOptions{});
   return row;
@@ -76,7 +50,7 @@ std::vector<std::uint64_t> pixel_digests(const RenderedImages& r, int jobs) {
 // Where the images of the rows come from, and where their metrics are kept.
 struct Measurer {
   const RenderedImages& renders;
-  const std::vector<std::uint64_t>& digests;  // empty without a store
+  const std::vector<std::uint64_t>& digests;
   ComparisonStore* store;
 
   ComparisonMetrics operator()(std::size_t test, std::size_t reference, double scale,
@@ -177,9 +151,8 @@ std::vector<RankEntry> rank_rows(const Plan& plan, const std::vector<ComparisonR
 
 }  // namespace
 
-Comparisons compare_study(const Plan& plan, const RenderedImages& renders,
-                          const std::string& study_folder, int jobs, ComparisonStore* store) {
-  const fs::path out(study_folder);
+Comparisons compare_study(const Plan& plan, const RenderedImages& renders, PreviewFolder& pictures,
+                          int jobs, ComparisonStore* store) {
   // Each job's rows in its own slot, joined in job order afterwards: the
   // report is the same for any number of threads (every bootstrap has its
   // own fixed seed).
@@ -192,12 +165,11 @@ Comparisons compare_study(const Plan& plan, const RenderedImages& renders,
     for (std::size_t i : v.jobs)
       if (renders.done[i]) order.push_back(i);
   std::vector<JobRows> slots(order.size());
-  const std::vector<std::uint64_t> digests =
-      store ? pixel_digests(renders, jobs) : std::vector<std::uint64_t>{};
+  const std::vector<std::uint64_t> digests = pixel_digests(renders, jobs);
   const Measurer measure{renders, digests, store};
   run_parallel(jobs, order.size(), [&](std::size_t k) {
     const std::size_t i = order[k];
-    slots[k].render = render_row(plan, renders, i, out);
+    slots[k].render = render_row(plan, renders, digests, i, pictures);
     if (!plan.jobs[i].truth) add_comparisons(plan, measure, i, slots[k].rows);
     add_agreement(plan, measure, i, slots[k].rows);
   });

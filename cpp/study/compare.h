@@ -13,6 +13,7 @@
 #include "image/image.h"
 #include "study/comparison_store.h"
 #include "study/plan.h"
+#include "study/previews.h"
 
 namespace penumbra {
 
@@ -62,13 +63,12 @@ struct Comparisons {
   std::size_t nonfinite = 0;                    // NaN or Inf values seen (a failure)
 };
 
-// Compares every done test job with its truths and writes the preview and
-// difference PNGs into `study_folder`/images, `jobs` jobs at a time (the
-// result does not depend on it). With a store, a comparison of two images
-// it holds is taken from it, and every new one is added.
-Comparisons compare_study(const Plan& plan, const RenderedImages& renders,
-                          const std::string& study_folder, int jobs,
-                          ComparisonStore* store = nullptr);
+// Compares every done test job with its truths and draws the preview and
+// difference PNGs through `pictures` (those unchanged since the last run are
+// kept), `jobs` jobs at a time (the result does not depend on it). With a store, a comparison of
+// two images it holds is taken from it, and every new one is added.
+Comparisons compare_study(const Plan& plan, const RenderedImages& renders, PreviewFolder& pictures,
+                          int jobs, ComparisonStore* store = nullptr);
 
 // One method's mean over the rows a ranking selects.
 struct RankEntry {

@@ -93,19 +93,20 @@ ComparisonMetrics measure_comparison(const Image& test, const Image& reference, 
 }
 
 std::uint64_t pixel_digest(const Image& image) {
-  // One hash per channel, folded in name order.
+  // One hash per channel, folded in name order. The channels' hashes are
+  // independent chains, advanced side by side in one pass over the pixels.
   const std::size_t nc = image.channels.size();
   const std::size_t pixels = std::size_t(image.width) * image.height;
-  std::vector<std::pair<std::string, std::uint64_t>> channels;
-  for (std::size_t c = 0; c < nc; ++c) {
-    std::uint64_t h = kFnvOffset;
-    for (std::size_t i = 0; i < pixels; ++i) {
+  std::vector<std::uint64_t> hashes(nc, kFnvOffset);
+  const float* p = image.pixels.data();
+  for (std::size_t i = 0; i < pixels; ++i, p += nc)
+    for (std::size_t c = 0; c < nc; ++c) {
       std::uint32_t bits;
-      std::memcpy(&bits, &image.pixels[i * nc + c], sizeof bits);
-      h = (h ^ bits) * kFnvPrime;
+      std::memcpy(&bits, p + c, sizeof bits);
+      hashes[c] = (hashes[c] ^ bits) * kFnvPrime;
     }
-    channels.emplace_back(image.channels[c], h);
-  }
+  std::vector<std::pair<std::string, std::uint64_t>> channels;
+  for (std::size_t c = 0; c < nc; ++c) channels.emplace_back(image.channels[c], hashes[c]);
   std::sort(channels.begin(), channels.end());
   std::uint64_t h = fnv1a(fmt::format("{}x{}", image.width, image.height));
   for (const auto& [name, channel_hash] : channels) {

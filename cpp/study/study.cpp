@@ -378,13 +378,16 @@ Comparisons compare_renders(const Plan& plan, const RenderedImages& images, cons
   std::string warning;
   ComparisonStore store((out / "cache" / "comparisons.bin").string(), &warning);
   if (!warning.empty()) warn(options, stats, warning);
-  Comparisons c = compare_study(plan, images, out.string(), options.jobs, &store);
+  PreviewFolder pictures(out);
+  Comparisons c = compare_study(plan, images, pictures, options.jobs, &store);
   store.save();
+  pictures.save();
   stats.comparisons_measured = store.inserted();
   stats.comparisons_kept = store.found();
   if (options.log)
-    options.log(fmt::format("comparisons: {} measured, {} kept from earlier runs", store.inserted(),
-                            store.found()));
+    options.log(fmt::format(
+        "comparisons: {} measured, {} kept from earlier runs; pictures: {} drawn, {} kept",
+        store.inserted(), store.found(), pictures.drawn(), pictures.kept()));
   return c;
 }
 

@@ -1,10 +1,13 @@
 // The statistics behind rankings, on inputs whose answers are known exactly.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <vector>
 
+#include "analysis/mt19937_64_block.h"
 #include "analysis/statistics.h"
 
 namespace penumbra {
@@ -37,6 +40,61 @@ TEST(Bootstrap, DegenerateDataGiveDegenerateIntervalsAndTheSameBitsEveryTime) {
   EXPECT_EQ(a.high, b.high);
   EXPECT_TRUE(a.contains(4.5));
   EXPECT_TRUE(std::isnan(bootstrap_mean_interval({}).low));
+}
+
+TEST(Mt19937_64Block, GivesTheStandardEnginesSequence) {
+  // Chunks that end before, at and after each 312-word refill.
+  const std::vector<std::size_t> chunks{1, 7, 304, 312, 313, 1, 311, 624, 2, 1000};
+  for (std::uint64_t seed : {0ull, 1ull, 5489ull, 0xffffffffffffffffull}) {
+    std::mt19937_64 standard(seed);
+    Mt19937_64Block block(seed);
+    std::size_t drawn = 0;
+    for (std::size_t n : chunks) {
+      std::vector<std::uint64_t> out(n);
+      block.fill(out.data(), n);
+      for (std::size_t k = 0; k < n; ++k, ++drawn)
+        ASSERT_EQ(out[k], standard()) << "seed " << seed << ", output " << drawn;
+    }
+  }
+  // The standard's own check: the 10000th output of the default seed.
+  Mt19937_64Block block(5489);
+  std::vector<std::uint64_t> out(10000);
+  block.fill(out.data(), out.size());
+  EXPECT_EQ(out.back(), 9981545732273789042ull);
+}
+
+// The interval as first written: std::mt19937_64, one uniform_index per
+// draw, all the means sorted. The block generator and partial sorts must
+// give its bits.
+Interval sorted_bootstrap(const std::vector<double>& values, double confidence, int resamples,
+                          std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<double> means;
+  for (int r = 0; r < resamples; ++r) {
+    double sum = 0.0;
+    for (std::size_t k = 0; k < values.size(); ++k)
+      sum += values[uniform_index(rng, values.size())];
+    means.push_back(sum / double(values.size()));
+  }
+  std::sort(means.begin(), means.end());
+  const double tail = 0.5 * (1.0 - confidence);
+  return {quantile(means, tail), quantile(means, 1.0 - tail)};
+}
+
+TEST(Bootstrap, GivesTheBitsOfTheOneDrawAtATimeSortedForm) {
+  std::mt19937_64 data(11);
+  std::lognormal_distribution<double> skewed(0.0, 1.0);
+  for (std::size_t n : {2u, 3u, 12u, 48u, 311u, 313u, 1000u})
+    for (int resamples : {1, 2, 999, 10000})
+      for (double confidence : {0.95, 0.5})
+        for (std::uint64_t seed : {1ull, 42ull}) {
+          std::vector<double> x(n);
+          for (double& v : x) v = skewed(data) - 1.0;
+          const Interval want = sorted_bootstrap(x, confidence, resamples, seed);
+          const Interval got = bootstrap_mean_interval(x, confidence, resamples, seed);
+          EXPECT_EQ(got.low, want.low) << n << " values, " << resamples << " resamples";
+          EXPECT_EQ(got.high, want.high) << n << " values, " << resamples << " resamples";
+        }
 }
 
 // For normal data the 95 % interval of the mean is about 2 x 1.96 sigma /

@@ -3,6 +3,7 @@
 // its key sees every pixel bit but not the order of the channels.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <string>
@@ -14,6 +15,7 @@
 #include "study/comparison_store.h"
 #include "temp_dir_test.h"
 #include "util/files.h"
+#include "util/hash.h"
 
 namespace penumbra {
 namespace {
@@ -144,6 +146,31 @@ TEST(PixelDigest, SeesEveryBitButNotTheOrderOfTheChannels) {
   Image renamed = image;
   renamed.channels[0] = "X";
   EXPECT_NE(pixel_digest(renamed), digest);
+}
+
+// The definition, one channel plane at a time: each plane's 32-bit words
+// through FNV-1a, then the size and the (name, plane hash) pairs in name
+// order. The digest keys the comparisons kept on disk, so its value must
+// not change with the way it is computed.
+TEST(PixelDigest, IsEachChannelPlaneHashedThenFoldedInNameOrder) {
+  const Image image = render_sphere("bump");
+  const std::size_t nc = image.channels.size(), pixels = std::size_t(image.width) * image.height;
+  std::vector<std::pair<std::string, std::uint64_t>> planes;
+  for (std::size_t c = 0; c < nc; ++c) {
+    std::vector<std::uint32_t> plane(pixels);
+    for (std::size_t i = 0; i < pixels; ++i)
+      std::memcpy(&plane[i], &image.pixels[i * nc + c], sizeof(std::uint32_t));
+    std::uint64_t h = kFnvOffset;
+    for (std::uint32_t word : plane) h = (h ^ word) * kFnvPrime;
+    planes.emplace_back(image.channels[c], h);
+  }
+  std::sort(planes.begin(), planes.end());
+  std::uint64_t want = fnv1a(std::to_string(image.width) + "x" + std::to_string(image.height));
+  for (const auto& [name, h] : planes) {
+    want = fnv1a(name + "\n", want);
+    want = fnv1a(&h, sizeof h, want);
+  }
+  EXPECT_EQ(pixel_digest(image), want);
 }
 
 }  // namespace

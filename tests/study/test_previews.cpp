@@ -1,0 +1,130 @@
+// A study's preview and difference PNGs (study/previews.h): a picture drawn
+// from the same pixels is kept, byte for byte what drawing it again would
+// give; anything else that feeds it, and a picture that is gone, draws it
+// again; a run stopped while drawing keeps nothing.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "image/image_io.h"
+#include "study/comparison_store.h"
+#include "study/previews.h"
+#include "temp_dir_test.h"
+#include "util/files.h"
+
+namespace penumbra {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A 6x4 RGBA image: a ramp over an object in the middle columns.
+Image ramp(float gain) {
+  Image image;
+  image.width = 6, image.height = 4;
+  image.channels = {"R", "G", "B", "A"};
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const float v = gain * float(x + y) / 8.0f, a = (x > 0 && x < 5) ? 1.0f : 0.0f;
+      image.pixels.insert(image.pixels.end(), {v * a, v * a, v * a, a});
+    }
+  return image;
+}
+
+class PreviewFolderTest : public TempDirTest {
+ protected:
+  void SetUp() override {
+    TempDirTest::SetUp();
+    fs::create_directories(dir_ / "images");
+  }
+  // Draws the preview of `test` and its difference from `reference`; returns
+  // how many pictures were drawn.
+  std::size_t draw(const Image& test, const Image& reference, double scale, bool save = true) {
+    PreviewFolder folder(dir_);
+    folder.preview(test, pixel_digest(test), "images/t.png");
+    folder.difference(test, pixel_digest(test), reference, pixel_digest(reference), scale,
+                      "images/t-diff.png");
+    EXPECT_EQ(folder.drawn() + folder.kept(), 2u);
+    if (save) folder.save();
+    return folder.drawn();
+  }
+  void mark(const std::string& relative) const {
+    std::ofstream(dir_ / relative, std::ios::binary) << "kept";
+  }
+  std::string text(const std::string& relative) const { return read_file(path(relative)); }
+  // The bytes of the pictures drawn afresh, outside the folder.
+  std::string fresh_preview(const Image& image) const {
+    write_preview_png(image, path("fresh.png"));
+    return text("fresh.png");
+  }
+  std::string fresh_difference(const Image& test, const Image& reference, double scale) const {
+    write_difference_png(test, reference, scale, path("fresh-diff.png"));
+    return text("fresh-diff.png");
+  }
+};
+
+TEST_F(PreviewFolderTest, KeepsWhatWasDrawnFromTheSamePixels) {
+  const Image test = ramp(1.0f), truth = ramp(0.9f);
+  EXPECT_EQ(draw(test, truth, 0.25), 2u);
+  EXPECT_EQ(text("images/t.png"), fresh_preview(test));
+  EXPECT_EQ(text("images/t-diff.png"), fresh_difference(test, truth, 0.25));
+  // Marked files show whether the second run drew them again.
+  mark("images/t.png"), mark("images/t-diff.png");
+  EXPECT_EQ(draw(test, truth, 0.25), 0u);
+  EXPECT_EQ(text("images/t.png"), "kept");
+  EXPECT_EQ(text("images/t-diff.png"), "kept");
+  // The same pixels in another Image (as a later run reads them back) count too.
+  const Image copy = ramp(1.0f);
+  EXPECT_EQ(draw(copy, truth, 0.25), 0u);
+}
+
+TEST_F(PreviewFolderTest, DrawsAgainWhatChanged) {
+  const Image test = ramp(1.0f), truth = ramp(0.9f);
+  draw(test, truth, 0.25);
+  mark("images/t.png"), mark("images/t-diff.png");
+
+  Image changed = test;  // one bit of one pixel
+  std::uint32_t bits;
+  std::memcpy(&bits, &changed.pixels[13], sizeof bits);
+  bits ^= 1u;
+  std::memcpy(&changed.pixels[13], &bits, sizeof bits);
+  EXPECT_EQ(draw(changed, truth, 0.25), 2u) << "the test's pixels feed both pictures";
+  EXPECT_EQ(text("images/t.png"), fresh_preview(changed));
+  EXPECT_EQ(text("images/t-diff.png"), fresh_difference(changed, truth, 0.25));
+
+  mark("images/t.png"), mark("images/t-diff.png");
+  EXPECT_EQ(draw(changed, ramp(0.8f), 0.25), 1u) << "the truth feeds the difference only";
+  EXPECT_EQ(text("images/t.png"), "kept");
+  EXPECT_EQ(text("images/t-diff.png"), fresh_difference(changed, ramp(0.8f), 0.25));
+
+  mark("images/t-diff.png");
+  EXPECT_EQ(draw(changed, ramp(0.8f), 0.5), 1u) << "so does the scale";
+  EXPECT_EQ(text("images/t-diff.png"), fresh_difference(changed, ramp(0.8f), 0.5));
+}
+
+TEST_F(PreviewFolderTest, DrawsAgainWhatIsGoneOrEmpty) {
+  const Image test = ramp(1.0f), truth = ramp(0.9f);
+  draw(test, truth, 0.25);
+  fs::remove(dir_ / "images/t.png");
+  std::ofstream(dir_ / "images/t-diff.png", std::ios::trunc);
+  EXPECT_EQ(draw(test, truth, 0.25), 2u);
+  EXPECT_EQ(text("images/t.png"), fresh_preview(test));
+  EXPECT_EQ(text("images/t-diff.png"), fresh_difference(test, truth, 0.25));
+}
+
+TEST_F(PreviewFolderTest, ARunStoppedWhileDrawingOrADamagedStampKeepsNothing) {
+  const Image test = ramp(1.0f), truth = ramp(0.9f);
+  draw(test, truth, 0.25);
+  draw(test, truth, 0.25, /*save=*/false);  // as if stopped before the stamp
+  EXPECT_FALSE(fs::exists(dir_ / "images/.inputs"));
+  EXPECT_EQ(draw(test, truth, 0.25), 2u);
+
+  std::ofstream(dir_ / "images/.inputs", std::ios::app) << "not a key images/x.png\n";
+  EXPECT_EQ(draw(test, truth, 0.25), 2u);
+  EXPECT_EQ(draw(test, truth, 0.25), 0u);
+}
+
+}  // namespace
+}  // namespace penumbra
