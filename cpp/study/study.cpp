@@ -384,6 +384,8 @@ Comparisons compare_renders(const Plan& plan, const RenderedImages& images, cons
   pictures.save();
   stats.comparisons_measured = store.inserted();
   stats.comparisons_kept = store.found();
+  stats.pictures_drawn = pictures.drawn();
+  stats.pictures_kept = pictures.kept();
   if (options.log)
     options.log(fmt::format(
         "comparisons: {} measured, {} kept from earlier runs; pictures: {} drawn, {} kept",

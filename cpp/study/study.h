@@ -70,6 +70,8 @@ struct StudyRunStats {
   // Comparisons measured by this run, and those taken from the study's
   // comparison store (study/comparison_store.h).
   std::size_t comparisons_measured = 0, comparisons_kept = 0;
+  // Preview and difference PNGs drawn, and kept from the last run (study/previews.h).
+  std::size_t pictures_drawn = 0, pictures_kept = 0;
   // Passes that rendered several methods of one variant at once
   // (study/rendering.h, MethodBatches), and the renders they held.
   std::size_t method_batches = 0, batched_renders = 0;

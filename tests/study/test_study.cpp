@@ -135,8 +135,8 @@ TEST_F(Study, InterruptedAndResumedEqualsCleanWithNoRenderDoneTwice) {
             std::string::npos);
 }
 
-// A rerun takes every comparison from the study's comparison store and
-// writes the same report; a damaged store is measured again, with a warning,
+// A rerun takes every comparison from the study's comparison store, keeps
+// every picture, and writes the same report; a damaged store is measured again, with a warning,
 // to the same report; a render that changes is compared again, alone.
 TEST_F(Study, ComparisonsAreKeptBetweenRunsAndGiveTheSameReport) {
   json j = tiny();
@@ -147,11 +147,16 @@ TEST_F(Study, ComparisonsAreKeptBetweenRunsAndGiveTheSameReport) {
   ASSERT_TRUE(first.complete());
   EXPECT_EQ(first.comparisons_kept, 0u);
   EXPECT_EQ(first.comparisons_measured, 2u * 3);  // 3 methods x 2 variants
+  // Every render's preview, and each test render's difference from its truth.
+  EXPECT_EQ(first.pictures_drawn, 2u * (1 + 3 + 3));
+  EXPECT_EQ(first.pictures_kept, 0u);
   const std::string report = read_text(path("out/report.json"));
   const std::string csv = read_text(path("out/metrics.csv"));
   const StudyRunStats second = run_study(study, o);
   EXPECT_EQ(second.comparisons_measured, 0u);
   EXPECT_EQ(second.comparisons_kept, first.comparisons_measured);
+  EXPECT_EQ(second.pictures_drawn, 0u);
+  EXPECT_EQ(second.pictures_kept, first.pictures_drawn);
   EXPECT_EQ(read_text(path("out/report.json")), report);
   EXPECT_EQ(read_text(path("out/metrics.csv")), csv);
 
@@ -186,6 +191,8 @@ TEST_F(Study, ComparisonsAreKeptBetweenRunsAndGiveTheSameReport) {
   const StudyRunStats changed = run_study(study, o);
   EXPECT_EQ(changed.comparisons_measured, 1u);
   EXPECT_EQ(changed.comparisons_kept, first.comparisons_measured - 1);
+  EXPECT_EQ(changed.pictures_drawn, 2u) << "its preview and its difference";
+  EXPECT_EQ(changed.pictures_kept, first.pictures_drawn - 2);
 }
 
 // The evaluator renders the methods of a variant in one pass; each cache
