@@ -418,6 +418,12 @@ def _sweep_scene_task(task):
     return _sweep_scene(*task)
 
 
+def _call(task):
+    """task = (function, arguments): for a pool of unlike figures."""
+    function, arguments = task
+    return function(*arguments)
+
+
 def _variant_figures(task):
     """A variant's profile figure and composed image grid (run in a worker
     process: each figure depends on its inputs alone, so the bytes are the
@@ -439,11 +445,13 @@ def report_figures(report):
     os.makedirs(figdir, exist_ok=True)
     colors = report_colors(report)
     progress('ranking and statistics figures')
-    written = ranking_figure(report.ranking, colors, figdir)
+    with worker_pool(2) as pool:
+        written, stats = list(pool.imap(_call, [
+            (ranking_figure, (report.ranking, colors, figdir)),
+            (statistics_figure, (obj(report.doc.get('statistics')), colors,
+                                 figdir))]))
     figs = {'ranking': written[0] if written else None, 'profiles': [],
             'sweeps': [], 'lowpoly': None}
-    stats = statistics_figure(obj(report.doc.get('statistics')), colors,
-                              figdir)
     figs['statistics'] = stats[0] if stats else None
     written += stats
     figs['grids'] = []

@@ -12,7 +12,7 @@ import matplotlib.ticker
 import numpy as np
 
 from penumbra_data import LP_PANELS, LP_SIDE, LP_TRUTH, REF, num, stem
-from penumbra_plot import method_colors, plt, save
+from penumbra_plot import method_colors, plt, save, worker_pool
 
 MARKERS = 'osD^vPX*<>p'
 RENDERER_DASHES = ['-', (0, (5, 2)), (0, (6, 2, 1, 2)), (0, (2, 1.5))]
@@ -89,34 +89,47 @@ def line_style(lp, colors, own):
     return style
 
 
+# What every drawing task shares, set before the pool forks: the workers
+# inherit it instead of receiving the whole section with each task.
+_SHARED = {}
+
+
+def _draw_task(task):
+    kind, group, title, series, panels, own = task
+    lp, colors, figdir = _SHARED['lowpoly']
+    return lines_figure(
+        f'lowpoly-{kind}-{stem(group)}', f'{group}: {title}', lp, series,
+        panels, line_style(lp, colors, own), figdir)
+
+
 def lowpoly_figures(lp, figdir):
     """Every low-poly figure: per group the convergence and external
-    figures, then per group with a cast shadow the shadow figure. Returns
+    figures, then per group with a cast shadow the shadow figure (drawn in
+    worker processes, collected in that order). Returns
     {'convergence'|'external'|'shadow': {group: (PNG, floors)}, 'written':
     [every path]}, floors as lines_figure gives them."""
-    colors = method_colors(lp.offsets)
     figs = {'convergence': {}, 'external': {}, 'shadow': {}, 'written': []}
-
-    def draw(kind, group, title, series, panels, own):
-        paths, floors = lines_figure(
-            f'lowpoly-{kind}-{stem(group)}', f'{group}: {title}', lp, series,
-            panels, line_style(lp, colors, own), figdir)
-        figs[kind][group] = (paths[0], floors)
-        figs['written'].extend(paths)
-    shadow_groups = []
+    tasks, shadow_groups = [], []
     for group in lp.groups:
         own, ext = lp.series(group, False), lp.series(group, True)
         if lp.cast_shadow_pixels(group):
             shadow_groups.append((group, own, ext))
         if own:
-            draw('convergence', group, f'{REF} offsets vs {REF}:{LP_TRUTH}',
-                 own, LP_PANELS, False)
+            tasks.append(('convergence', group,
+                          f'{REF} offsets vs {REF}:{LP_TRUTH}', own,
+                          LP_PANELS, False))
         if ext:
-            draw('external', group,
-                 'external renderers vs their own analytic render', ext,
-                 LP_PANELS, True)
+            tasks.append(('external', group,
+                          'external renderers vs their own analytic render',
+                          ext, LP_PANELS, True))
     for group, own, ext in shadow_groups:
-        draw('shadow', group,
-             'cast-shadow side effects vs the analytic render',
-             {**own, **ext}, LP_SIDE[:2], bool(ext))
+        tasks.append(('shadow', group,
+                      'cast-shadow side effects vs the analytic render',
+                      {**own, **ext}, LP_SIDE[:2], bool(ext)))
+    _SHARED['lowpoly'] = (lp, method_colors(lp.offsets), figdir)
+    with worker_pool(len(tasks)) as pool:
+        for task, (paths, floors) in zip(tasks, pool.imap(_draw_task, tasks)):
+            kind, group = task[0], task[1]
+            figs[kind][group] = (paths[0], floors)
+            figs['written'].extend(paths)
     return figs
