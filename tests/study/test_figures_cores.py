@@ -20,6 +20,8 @@ import subprocess
 import sys
 import tempfile
 
+from small_sections import small_lowpoly
+
 BINARY, SOURCE = sys.argv[1], sys.argv[2]
 
 
@@ -39,13 +41,7 @@ def study():
         'ground_truth': {'max_edge_refinements': 0, 'max_spp_refinements': 0},
         'plots': [{'metric': 'profile.rmse_terminator', 'x': '/height/amplitude',
                    'y': '/light/direction', 'kind': 'heatmap'}],
-        'lowpoly': {
-            'scenes': [os.path.join(scenes, 'lowpoly', 'sphere.json')],
-            'set': small,
-            'axes': [{'pointer': '/shape/tessellation/segments', 'values': [8, 16]}],
-            'convergence': '/shape/tessellation/segments',
-            'offsets': ['none', {'id': 'epsilon', 'parameters': {'distance': 0.01}}],
-            'renderers': ['evaluator']}}
+        'lowpoly': small_lowpoly(scenes, small)}
 
 
 def report(folder, cores):

@@ -26,6 +26,8 @@ import subprocess
 import sys
 import tempfile
 
+from small_sections import small_lowpoly
+
 try:
     import jsonschema
 except ImportError:
@@ -57,13 +59,7 @@ def tiny_study(with_povray):
         'methods': ['none', {'id': 'shading-offset', 'parameters': {'s': 0.3}}],
         'renderers': ['evaluator', 'povray'] if with_povray else ['evaluator'],
         'ground_truth': {'max_edge_refinements': 0, 'max_spp_refinements': 0},
-        'lowpoly': {
-            'scenes': [os.path.join(scene, 'lowpoly', 'sphere.json')],
-            'set': small,
-            'axes': [{'pointer': '/shape/tessellation/segments', 'values': [8, 16]}],
-            'convergence': '/shape/tessellation/segments',
-            'offsets': ['none', {'id': 'epsilon', 'parameters': {'distance': 0.01}}],
-            'renderers': ['evaluator']},
+        'lowpoly': small_lowpoly(scene, small),
         'filtering': {
             'maps': [{'name': 'noise', 'bake': os.path.join(scene, 'cylinder-noise.json'),
                       'size': 32}],
