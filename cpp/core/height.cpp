@@ -69,46 +69,54 @@ struct AzimuthTable {
   }
 };
 
+// One value per march direction, as a GCC vector: element-wise IEEE
+// operations at whatever width the clone compiles them to. Written out,
+// because the vectoriser's choices for the plain loops changed with
+// unrelated edits, down to scalar divisions.
+using Lanes = double __attribute__((vector_size(kVisibilityAzimuths * sizeof(double))));
+
 // rise[j][a] = A (h(p + d_a t_j) - h(p)) at the steps t_j = (j + 1) dt, by
 // the angle-addition recurrence: per term and direction one sincos instead
 // of one per step (rounding grows by about one ulp a step). The directions
-// run side by side in the innermost loop: each lane performs the same IEEE
-// operations in the same order as a march of its own would (the project
-// builds with -ffp-contract=off), so the bits are those of one direction
-// at a time, while the eight independent recurrences hide each other's
-// latency and fill the vector units.
-using Rise = double[kVisibilitySteps][kVisibilityAzimuths];
-void march_heights(const HeightFunction& f, std::span<const TermPhase> at_p,
-                   const Vec3 (&d)[kVisibilityAzimuths], double dt, double h_p, double amplitude,
-                   Rise& rise) {
-  constexpr int kA = kVisibilityAzimuths;
+// are the lanes: each performs the same IEEE operations in the same order
+// as a march of its own would (the project builds with -ffp-contract=off),
+// so the bits are those of one direction at a time.
+using Rise = Lanes[kVisibilitySteps];
+// Inlined into height_field_visibility's clones, so that it is compiled for
+// each clone's vector width.
+[[gnu::always_inline]] inline void march_heights(const HeightFunction& f,
+                                                 std::span<const TermPhase> at_p,
+                                                 const Vec3 (&d)[kVisibilityAzimuths], double dt,
+                                                 double h_p, double amplitude, Rise& rise) {
   const bool sum = f.combine == HeightCombine::kSum;
-  for (auto& row : rise)
-    for (double& r : row) r = sum ? 0.0 : 1.0;
+  for (Lanes& row : rise) row = Lanes{} + (sum ? 0.0 : 1.0);
   for (std::size_t i = 0; i < at_p.size(); ++i) {
-    double cos_delta[kA], sin_delta[kA], s[kA], c[kA];
-    for (int a = 0; a < kA; ++a) {
+    Lanes cos_delta, sin_delta;
+    for (int a = 0; a < kVisibilityAzimuths; ++a) {
       const double delta = 2.0 * kPi * dot(f.terms[i].k, d[a]) * dt;
       cos_delta[a] = std::cos(delta), sin_delta[a] = std::sin(delta);
-      s[a] = at_p[i].sin_arg, c[a] = at_p[i].cos_arg;
     }
+    Lanes s = Lanes{} + at_p[i].sin_arg, c = Lanes{} + at_p[i].cos_arg;
     const double weight = f.terms[i].weight;
-    for (auto& row : rise)
-      for (int a = 0; a < kA; ++a) {
-        const double s_next = s[a] * cos_delta[a] + c[a] * sin_delta[a];
-        c[a] = c[a] * cos_delta[a] - s[a] * sin_delta[a];
-        s[a] = s_next;
-        row[a] = sum ? row[a] + weight * s[a] : row[a] * s[a];
-      }
+    for (Lanes& row : rise) {
+      const Lanes s_next = s * cos_delta + c * sin_delta;
+      c = c * cos_delta - s * sin_delta;
+      s = s_next;
+      row = sum ? row + weight * s : row * s;
+    }
   }
-  for (auto& row : rise)
-    for (double& r : row) r = amplitude * (r - h_p);
+  for (Lanes& row : rise) row = amplitude * (row - h_p);
 }
 
 }  // namespace
 
-double height_field_visibility(const HeightFunction& f, double amplitude, const Vec3& p,
-                               const Vec3& n) {
+// Cloned for AVX-512 and AVX2 so that the eight directions' recurrences
+// and horizon divisions run in vector registers (the baseline build keeps
+// them scalar). Element-wise IEEE operations without contraction
+// (-ffp-contract=off) and the same libm calls: every clone gives the same
+// bits.
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) double
+height_field_visibility(const HeightFunction& f, double amplitude, const Vec3& p, const Vec3& n) {
   if (f.terms.empty() || amplitude == 0.0) return 1.0;
   double shortest_k = 0.0;
   for (const SineTerm& term : f.terms) {
@@ -137,19 +145,21 @@ double height_field_visibility(const HeightFunction& f, double amplitude, const 
   march_heights(f, at_p, d, dt, here.h, amplitude, rise);
   // The steepest rise seen from the displaced point, as a tangent; the
   // slope at the point itself is its limit for t -> 0, which the first
-  // step would miss on a flank. Directions side by side again: eight
-  // independent divisions in flight instead of one after another.
-  double tan_horizon[kVisibilityAzimuths];
+  // step would miss on a flank. The directions are the lanes of one
+  // vector: the compiler left the eight divisions per step scalar.
+  Lanes tan_horizon;
   for (int a = 0; a < kVisibilityAzimuths; ++a)
     tan_horizon[a] = std::max(0.0, amplitude * dot(here.gradient, d[a]));
   for (int j = 1; j <= kVisibilitySteps; ++j) {
-    const double t = dt * j;
-    for (int a = 0; a < kVisibilityAzimuths; ++a)
-      tan_horizon[a] = std::max(tan_horizon[a], rise[j - 1][a] / t);
+    const Lanes tan_step = rise[j - 1] / (dt * j);
+    // std::max(tan_horizon, tan_step), lane by lane.
+    tan_horizon = tan_horizon < tan_step ? tan_step : tan_horizon;
   }
-  // Cosine-weighted share above a horizon at elevation alpha: cos^2 alpha.
+  // Cosine-weighted share above a horizon at elevation alpha: cos^2 alpha,
+  // summed in the directions' order.
+  const Lanes open_share = 1.0 / (1.0 + tan_horizon * tan_horizon);
   double open = 0.0;
-  for (const double tan_a : tan_horizon) open += 1.0 / (1.0 + tan_a * tan_a);
+  for (int a = 0; a < kVisibilityAzimuths; ++a) open += open_share[a];
   return open / kVisibilityAzimuths;
 }
 
