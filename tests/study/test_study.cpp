@@ -16,7 +16,9 @@
 #include <string>
 
 #include <map>
+#include <set>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "analysis/contour.h"
@@ -26,6 +28,7 @@
 #include "scene/scene_json.h"
 #include "study/cache.h"
 #include "study/figures.h"
+#include "study/plan.h"
 #include "study/report_files.h"
 #include "study/study.h"
 #include "util/process.h"
@@ -531,6 +534,34 @@ TEST_F(Study, BlenderRendersOfOneMeshFollowEachOtherOnOneWorker) {
 // How the study file is named on the command line (relative, absolute, with
 // "./") does not change report.json: a warm run that names it otherwise
 // keeps the figures rather than redrawing them for a path.
+// Every study file the project ships plans; the quick study is a sample of
+// the default one: each of its renders is one the default study makes too
+// (the same scene, renderer and method), so that its numbers are the
+// default study's numbers for those variants and the two share a cache.
+TEST(ShippedStudies, EachPlansAndTheQuickStudyIsASampleOfTheDefault) {
+  constexpr double kMemory = 8.0 * (1ull << 30);
+  std::map<std::string, Plan> plans;
+  for (const fs::directory_entry& e : fs::directory_iterator(kSource + "/scenes/studies")) {
+    if (e.path().extension() != ".json") continue;
+    // Throws (InputError) on a file or scene it cannot plan; filtering.json
+    // has a filtering section only, and no renders in the plan.
+    plans.emplace(e.path().stem().string(), plan_study(load_study(e.path().string()), kMemory));
+  }
+  ASSERT_TRUE(plans.count("default") && plans.count("quick"));
+  auto identity = [](const Job& j) {
+    return fmt::format("{} {} {} {}", static_cast<int>(j.renderer),
+                       static_cast<int>(j.representation), j.method, j.scene_json.dump());
+  };
+  std::set<std::string> in_default;
+  for (const Job& j : plans.at("default").jobs) in_default.insert(identity(j));
+  const Plan& quick = plans.at("quick");
+  std::size_t bump_variants = 0;
+  for (const Variant& v : quick.variants) bump_variants += v.section == SectionKind::kBump;
+  EXPECT_EQ(bump_variants, 8u);  // 2 scenes x 2 amplitudes x 2 light directions
+  for (const Job& j : quick.jobs) EXPECT_TRUE(in_default.count(identity(j))) << j.label;
+  EXPECT_LT(quick.jobs.size(), plans.at("default").jobs.size() / 4);
+}
+
 TEST_F(Study, TheStudyFilesSpellingDoesNotChangeTheReport) {
   write("named.json", tiny_evaluator("none"));
   const fs::path cwd = fs::current_path();
