@@ -373,6 +373,12 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   CLI::App* bench = app.add_subcommand("bench", "print evaluator throughput figures");
   bench->add_option("--size", bench_size, "image size in pixels")->check(CLI::Range(16, 4096));
   bench->add_option("--spp", bench_spp, "samples per pixel")->check(CLI::Range(1, 1024));
+  int bench_povray_rounds = 0;
+  bench
+      ->add_option("--povray", bench_povray_rounds,
+                   "instead of the table: the evaluator against POV-Ray on the same scene, CPU "
+                   "seconds per render, this many paired rounds (needs POV-Ray)")
+      ->check(CLI::Range(1, 100));
 
   PyramidArgs pyramid_args;
   CLI::App* pyramid_cmd = add_pyramid_command(app, pyramid_args);
@@ -410,7 +416,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     if (*batch_cmd) return command_run_batch(batch_args, out, err);
     if (*status_cmd) return command_status(status_folder, out);
     if (*contour_cmd) return command_contour(contour_methods, contour_step, contour_output, out);
-    if (*bench) return command_bench(bench_size, bench_spp, out);
+    if (*bench) return command_bench(bench_size, bench_spp, bench_povray_rounds, out);
     if (*pyramid_cmd) return command_pyramid(pyramid_args, out);
     if (*filtering_cmd) return command_filtering(filtering_args, out, err);
     if (*bake_cmd) return command_bake(bake_args, out);

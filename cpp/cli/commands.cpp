@@ -1390,9 +1390,77 @@ void bench_method(const MethodInfo& m, int size, int spp, bool packets, std::ost
   bench_line(m.id, stats.seconds, cpu, double(stats.camera_samples) / 1e6, stats.packets, out);
 }
 
+// CPU seconds of this process and of the children it waited for (an
+// external renderer's processes), so far.
+double cpu_seconds_with_children() {
+  rusage children{};
+  getrusage(RUSAGE_CHILDREN, &children);
+  const auto seconds = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
+  return process_cpu_seconds() + seconds(children.ru_utime) + seconds(children.ru_stime);
+}
+
+// One render of the bench scene as `penumbra render` makes it (render_with,
+// then the EXR with the scene in its header) into `folder`: the CPU seconds
+// it took, an external renderer's own processes included.
+double render_cpu_seconds(RendererKind renderer, const json& document, const fs::path& folder) {
+  const Scene scene = scene_from_json(document, "<bench>");
+  RenderSettings settings;
+  settings.log_path = (folder / (std::string(to_string(renderer)) + ".log")).string();
+  settings.progress.progress = [](double) {
+    if (g_interrupted.load()) throw RenderCancelled("interrupted");
+  };
+  const double before = cpu_seconds_with_children();
+  const RendererRun run = render_with(renderer, scene, settings);
+  write_exr(run.image, (folder / (std::string(to_string(renderer)) + ".exr")).string(),
+            {{"penumbra:renderer", to_string(renderer)}, {"penumbra:scene", document.dump()}});
+  return cpu_seconds_with_children() - before;
+}
+
+// The evaluator against POV-Ray on the bench scene, a render of each per
+// round, the two alternating so that both see the machine alike.
+int bench_povray(int size, int spp, int rounds, std::ostream& out) {
+  const StopSignals stop;  // Ctrl-C ends POV-Ray too; the folder is removed below
+  const json document = bench_scene(size, spp);
+  const fs::path folder = fs::temp_directory_path() / fmt::format("penumbra-bench-{}", ::getpid());
+  fs::create_directories(folder);
+  out << fmt::format(
+      "penumbra bench --povray: {0}x{0}, {1} spp, bump cylinder (grating, A = 0.01), method none; "
+      "CPU seconds per render, the EXR written (POV-Ray: its processes too, parsing included), {2} "
+      "threads\n{3:<6} {4:>10} {5:>10} {6:>8}\n",
+      size, spp, tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
+      "round", "evaluator", "povray", "ratio");
+  std::vector<double> ratios;
+  try {
+    for (int r = 1; r <= rounds; ++r) {
+      const double evaluator = render_cpu_seconds(RendererKind::kEvaluator, document, folder);
+      const double povray = render_cpu_seconds(RendererKind::kPovray, document, folder);
+      if (!(evaluator > 0.0))
+        throw UsageError(fmt::format(
+            "bench --povray: the evaluator's render took no measurable CPU time at {0}x{0}, {1} "
+            "spp; give a larger --size or --spp",
+            size, spp));
+      ratios.push_back(povray / evaluator);
+      out << fmt::format("{:<6} {:>10.3f} {:>10.3f} {:>7.1f}x\n", r, evaluator, povray,
+                         ratios.back());
+    }
+  } catch (...) {
+    fs::remove_all(folder);
+    throw;
+  }
+  fs::remove_all(folder);
+  std::sort(ratios.begin(), ratios.end());
+  const std::size_t n = ratios.size();
+  const double median = n % 2 ? ratios[n / 2] : 0.5 * (ratios[n / 2 - 1] + ratios[n / 2]);
+  out << fmt::format(
+      "POV-Ray's CPU time over the evaluator's: {:.1f}x to {:.1f}x, median {:.1f}x\n",
+      ratios.front(), ratios.back(), median);
+  return kExitOk;
+}
+
 }  // namespace
 
-int command_bench(int size, int spp, std::ostream& out) {
+int command_bench(int size, int spp, int povray_rounds, std::ostream& out) {
+  if (povray_rounds > 0) return bench_povray(size, spp, povray_rounds, out);
   out << fmt::format(
       "penumbra bench: {}x{}, {} spp, bump cylinder (grating, A = 0.01), {} threads, packets on "
       "{}\n",

@@ -143,7 +143,9 @@ int command_report(const std::string& folder, bool self_contained, std::ostream&
                    std::ostream& err);
 int command_contour(const std::vector<std::string>& ids, double step, const std::string& output,
                     std::ostream& out);
-int command_bench(int size, int spp, std::ostream& out);
+// The throughput table; with povray_rounds > 0 instead the evaluator
+// against POV-Ray on the same scene, paired, that many rounds.
+int command_bench(int size, int spp, int povray_rounds, std::ostream& out);
 int command_pyramid(const PyramidArgs& a, std::ostream& out);
 int command_bake(const BakeArgs& a, std::ostream& out);
 int command_filtering(const FilteringArgs& a, std::ostream& out, std::ostream& err);

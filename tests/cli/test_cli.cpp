@@ -4,9 +4,12 @@
 #include "cli_test.h"
 #include "temp_dir_test.h"
 
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -53,6 +56,43 @@ class Cli : public TempDirTest {
           kExitOk);
   }
 };
+
+// bench --povray: one line per round whose ratio is POV-Ray's CPU seconds
+// over the evaluator's, then their range and median; its renders go to a
+// folder under TMPDIR that is gone afterwards. Times are not checked.
+TEST_F(Cli, BenchAgainstPovrayPrintsPairedRoundsAndLeavesNothing) {
+  const char* old_tmpdir = std::getenv("TMPDIR");
+  const std::string saved = old_tmpdir ? old_tmpdir : "";
+  ::setenv("TMPDIR", dir_.c_str(), 1);
+  const Result r = run({"bench", "--povray", "3", "--size", "128", "--spp", "4"});
+  if (old_tmpdir)
+    ::setenv("TMPDIR", saved.c_str(), 1);
+  else
+    ::unsetenv("TMPDIR");
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  expect_only({});
+  const std::regex round_line(R"((\d+) +([0-9.]+) +([0-9.]+) +([0-9.]+)x)");
+  std::vector<double> ratios;
+  std::istringstream lines(r.out);
+  for (std::string line; std::getline(lines, line);) {
+    std::smatch m;
+    if (!std::regex_match(line, m, round_line)) continue;
+    EXPECT_EQ(std::stoi(m[1]), int(ratios.size()) + 1);
+    const double evaluator = std::stod(m[2]), povray = std::stod(m[3]);
+    ratios.push_back(std::stod(m[4]));
+    EXPECT_GT(evaluator, 0.0);
+    // Printed to 3 decimals and the ratio to 1: within what the rounding allows.
+    EXPECT_NEAR(ratios.back(), povray / evaluator,
+                0.05 + 0.0005 * (povray + ratios.back()) / evaluator);
+  }
+  ASSERT_EQ(ratios.size(), 3u) << r.out;
+  std::sort(ratios.begin(), ratios.end());
+  EXPECT_NE(r.out.find(
+                fmt::format("{:.1f}x to {:.1f}x, median {:.1f}x", ratios[0], ratios[2], ratios[1])),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(run({"bench", "--povray", "0"}).code, kExitBadInput);
+}
 
 TEST_F(Cli, MethodsListsEveryIdAsTextAndJson) {
   const Result text = run({"methods"});
