@@ -1318,10 +1318,11 @@ double peak_rss_mib() {
   return double(usage.ru_maxrss) / 1024.0;  // Linux reports KiB
 }
 
-// User and system CPU time of this process so far (all threads).
-double process_cpu_seconds() {
+// User and system CPU time so far of this process (all threads), or of
+// the children it waited for (RUSAGE_CHILDREN).
+double cpu_seconds(int who = RUSAGE_SELF) {
   rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
+  getrusage(who, &usage);
   const auto seconds = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
   return seconds(usage.ru_utime) + seconds(usage.ru_stime);
 }
@@ -1369,9 +1370,9 @@ void bench_shared_pass(int size, int spp, bool packets, std::ostream& out) {
   RenderStats stats;
   RenderOptions options;
   options.packets = packets;
-  const double cpu_before = process_cpu_seconds();
+  const double cpu_before = cpu_seconds();
   render_methods(scene, methods, options, &stats);
-  const double cpu = process_cpu_seconds() - cpu_before;
+  const double cpu = cpu_seconds() - cpu_before;
   bench_line(fmt::format("{} methods, one pass", methods.size()), stats.seconds, cpu,
              double(stats.camera_samples) * double(methods.size()) / 1e6, stats.packets, out);
 }
@@ -1384,19 +1385,16 @@ void bench_method(const MethodInfo& m, int size, int spp, bool packets, std::ost
   RenderStats stats;
   RenderOptions options;
   options.packets = packets;
-  const double cpu_before = process_cpu_seconds();
+  const double cpu_before = cpu_seconds();
   render(scene, options, &stats);
-  const double cpu = process_cpu_seconds() - cpu_before;
+  const double cpu = cpu_seconds() - cpu_before;
   bench_line(m.id, stats.seconds, cpu, double(stats.camera_samples) / 1e6, stats.packets, out);
 }
 
 // CPU seconds of this process and of the children it waited for (an
 // external renderer's processes), so far.
 double cpu_seconds_with_children() {
-  rusage children{};
-  getrusage(RUSAGE_CHILDREN, &children);
-  const auto seconds = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
-  return process_cpu_seconds() + seconds(children.ru_utime) + seconds(children.ru_stime);
+  return cpu_seconds() + cpu_seconds(RUSAGE_CHILDREN);
 }
 
 // One render of the bench scene as `penumbra render` makes it (render_with,
@@ -1404,15 +1402,16 @@ double cpu_seconds_with_children() {
 // it took, an external renderer's own processes included.
 double render_cpu_seconds(RendererKind renderer, const json& document, const fs::path& folder) {
   const Scene scene = scene_from_json(document, "<bench>");
+  const std::string name = to_string(renderer);
   RenderSettings settings;
-  settings.log_path = (folder / (std::string(to_string(renderer)) + ".log")).string();
+  settings.log_path = (folder / (name + ".log")).string();
   settings.progress.progress = [](double) {
     if (g_interrupted.load()) throw RenderCancelled("interrupted");
   };
   const double before = cpu_seconds_with_children();
   const RendererRun run = render_with(renderer, scene, settings);
-  write_exr(run.image, (folder / (std::string(to_string(renderer)) + ".exr")).string(),
-            {{"penumbra:renderer", to_string(renderer)}, {"penumbra:scene", document.dump()}});
+  write_exr(run.image, (folder / (name + ".exr")).string(),
+            {{"penumbra:renderer", name}, {"penumbra:scene", document.dump()}});
   return cpu_seconds_with_children() - before;
 }
 
@@ -1433,12 +1432,12 @@ int bench_povray(int size, int spp, int rounds, std::ostream& out) {
   try {
     for (int r = 1; r <= rounds; ++r) {
       const double evaluator = render_cpu_seconds(RendererKind::kEvaluator, document, folder);
-      const double povray = render_cpu_seconds(RendererKind::kPovray, document, folder);
       if (!(evaluator > 0.0))
         throw UsageError(fmt::format(
             "bench --povray: the evaluator's render took no measurable CPU time at {0}x{0}, {1} "
             "spp; give a larger --size or --spp",
             size, spp));
+      const double povray = render_cpu_seconds(RendererKind::kPovray, document, folder);
       ratios.push_back(povray / evaluator);
       out << fmt::format("{:<6} {:>10.3f} {:>10.3f} {:>7.1f}x\n", r, evaluator, povray,
                          ratios.back());
