@@ -55,6 +55,22 @@ std::string matrix(const Placement& p) {
                      num(p.z.y), num(p.z.z), num(p.origin.x), num(p.origin.y), num(p.origin.z));
 }
 
+// POV-Ray's function VM folds nothing, and an isosurface evaluates its
+// function tens of millions of times: the SDL leaves out what changes no bit
+// (a factor 1, a term 0 * x, a phase + 0; a + (+-0) is a for every a, and the
+// sign of a zero never reaches F or the bump pattern).
+std::string times(double factor, const std::string& expression) {
+  return factor == 1.0 ? expression : num(factor) + "*" + expression;
+}
+std::string linear_sdl(const Vec3& k, double constant) {
+  std::string out;
+  const std::pair<double, const char*> terms[] = {{k.x, "x"}, {k.y, "y"}, {k.z, "z"}};
+  for (const auto& [factor, name] : terms)
+    if (factor != 0.0) out += (out.empty() ? "" : " + ") + times(factor, name);
+  if (constant != 0.0 || out.empty()) out += (out.empty() ? "" : " + ") + num(constant);
+  return out;
+}
+
 // The height function in canonical coordinates: with world P = M q + c,
 // dot(k, P) = dot(M^T k, q) + dot(k, c).
 std::string height_function(const HeightFunction& f, const Placement& p) {
@@ -63,10 +79,9 @@ std::string height_function(const HeightFunction& f, const Placement& p) {
     const Vec3 k{dot(t.k, p.x), dot(t.k, p.y), dot(t.k, p.z)};
     const double w = 2.0 * kPi;
     const std::string factor =
-        fmt::format("sin({}*x + {}*y + {}*z + {})", num(w * k.x), num(w * k.y), num(w * k.z),
-                    num(t.phase + w * dot(t.k, p.origin)));
+        fmt::format("sin({})", linear_sdl(w * k, t.phase + w * dot(t.k, p.origin)));
     if (!body.empty()) body += f.combine == HeightCombine::kSum ? "\n    + " : "\n    * ";
-    body += f.combine == HeightCombine::kSum ? fmt::format("{}*{}", num(t.weight), factor) : factor;
+    body += f.combine == HeightCombine::kSum ? times(t.weight, factor) : factor;
   }
   return body.empty() ? "0" : body;
 }
@@ -252,15 +267,25 @@ std::string rho_sdl(const SdlContext& c) {
                     : "max(sqrt(x*x + y*y + z*z), " + num(1e-9 * c.r) + ")";
 }
 
-// h at the base point under q (radial projection onto the base surface):
-// constant along the normal, so POV-Ray's 3D pattern gradient is the
-// surface gradient the evaluator uses, and the isosurface is P + A h N.
-std::string projected_h_sdl(const SdlContext& c) {
+// h at the base point under q (radial projection onto the base surface),
+// with `rho` the name of |q|'s value: constant along the normal, so POV-Ray's
+// 3D pattern gradient is the surface gradient the evaluator uses, and the
+// isosurface is P + A h N.
+std::string h_at_base_sdl(const SdlContext& c, const std::string& rho) {
   if (c.scene.shape.type == ShapeType::kPlane) return "Penumbra_H(x, 0, z)";
-  const std::string rho = rho_sdl(c);
-  return c.cylinder ? fmt::format("Penumbra_H({0} * x / {1}, y, {0} * z / {1})", num(c.r), rho)
-                    : fmt::format("Penumbra_H({0} * x / {1}, {0} * y / {1}, {0} * z / {1})",
-                                  num(c.r), rho);
+  auto projected = [&](const char* axis) { return times(c.r, axis) + " / " + rho; };
+  return c.cylinder ? fmt::format("Penumbra_H({}, y, {})", projected("x"), projected("z"))
+                    : fmt::format("Penumbra_H({}, {}, {})", projected("x"), projected("y"),
+                                  projected("z"));
+}
+
+// A function of (x, y, z) declared as `name` from `body`, a function of x, y,
+// z and Crho = |q| (rho_sdl): its call computes |q| once, not once per use
+// (the VM would compute each use again).
+std::string with_rho_sdl(const SdlContext& c, const std::string& name, std::string body,
+                         std::string* call) {
+  *call = fmt::format("{}(x, y, z, {})", name, rho_sdl(c));
+  return fmt::format("#declare {} = function(x, y, z, Crho) {{ {} }}\n", name, body);
 }
 
 // True displacement: the isosurface |q| = R + A h(base point of q).
@@ -273,25 +298,29 @@ std::string isosurface_sdl(const SdlContext& c) {
                                    std::max(1.0, stretch),
                                2));
   const double outer = c.r + 1.01 * c.reach + 1e-6 * c.r;
-  const std::string function =
-      fmt::format("{} - {} - {} * {}", rho_sdl(c), num(c.r), num(c.amplitude), projected_h_sdl(c));
+  std::string function;
+  const std::string declaration = with_rho_sdl(
+      c, "Penumbra_F",
+      fmt::format("Crho - {} - {} * {}", num(c.r), num(c.amplitude), h_at_base_sdl(c, "Crho")),
+      &function);
   const std::string container =
       c.cylinder ? fmt::format("box {{ <{0}, {1}, {0}>, <{2}, {3}, {2}> }}", num(-outer),
                                num(-c.half), num(outer), num(c.half))
                  : fmt::format("sphere {{ <0, 0, 0>, {} }}", num(outer));
-  return fmt::format(
-      "// True displacement: the surface |q| = R + A h(base point of q).\n"
-      "// max_gradient = sqrt(1 + (A max|grad h| R/(R - A max|h|))^2) * 1.05, an upper bound\n"
-      "// of |grad F| near the surface plus 5% for rounding.\n"
-      "// accuracy 1e-6 and max_trace 2: a hit lies up to `accuracy` inside the surface,\n"
-      "// and at grazing light a shadow ray from it finds the surface's own skin first;\n"
-      "// with max_trace 1 that root either shadows the point (darker cast-shadow\n"
-      "// edges) or, nearer than 1e-4, is dropped with the real occluder behind it\n"
-      "// (light leaks). Measured in the README, \"POV-Ray's isosurface\".\n"
-      "isosurface {{\n  function {{ {} }}\n  contained_by {{ {} }}\n  threshold 0\n"
-      "  accuracy 1e-6\n  max_trace 2\n  max_gradient {}\n{}{}  {}\n}}\n",
-      function, container, num(1.05 * gradient),
-      c.cylinder && !c.scene.shape.caps ? "  open\n" : "", c.texture, matrix(c.place));
+  return declaration +
+         fmt::format(
+             "// True displacement: the surface |q| = R + A h(base point of q).\n"
+             "// max_gradient = sqrt(1 + (A max|grad h| R/(R - A max|h|))^2) * 1.05:\n"
+             "// an upper bound of |grad F| near the surface, plus 5% for rounding.\n"
+             "// accuracy 1e-6 and max_trace 2: a hit lies up to `accuracy` inside the surface,\n"
+             "// and at grazing light a shadow ray from it finds the surface's own skin first;\n"
+             "// with max_trace 1 that root either shadows the point (darker cast-shadow\n"
+             "// edges) or, nearer than 1e-4, is dropped with the real occluder behind it\n"
+             "// (light leaks). Measured in the README, \"POV-Ray's isosurface\".\n"
+             "isosurface {{\n  function {{ {} }}\n  contained_by {{ {} }}\n  threshold 0\n"
+             "  accuracy 1e-6\n  max_trace 2\n  max_gradient {}\n{}{}  {}\n}}\n",
+             function, container, num(1.05 * gradient),
+             c.cylinder && !c.scene.shape.caps ? "  open\n" : "", c.texture, matrix(c.place));
 }
 
 // The plane's corners in canonical coordinates (y along its normal), closed:
@@ -311,26 +340,29 @@ std::string plane_corners(const SdlContext& c) {
 
 // The analytic primitive, with POV-Ray's bump for the bump representation.
 std::string primitive_sdl(const SdlContext& c) {
-  std::string normal;
+  std::string normal, declaration;
   if (c.scene.representation == Representation::kBump && c.has_height) {
     // POV-Ray: Ns = normalize(N - (2/15) bump_size grad f). With
     // f = 0.5 + C h, bump_size = 7.5 A / C gives N - A grad h; C keeps f in
     // (0.1, 0.9), away from the pattern's wrap at 1.
     const double k = 0.4 / c.max_h;
+    std::string h = h_at_base_sdl(c, "Crho");  // the plane's needs no Crho
+    if (c.scene.shape.type != ShapeType::kPlane) declaration = with_rho_sdl(c, "Penumbra_B", h, &h);
     normal = fmt::format(
         "  normal {{\n    function {{ 0.5 + {} * {} }}\n"
         "    bump_size {}\n    accuracy 1e-4\n  }}\n",
-        num(k), projected_h_sdl(c), num(7.5 * c.amplitude / k));
+        num(k), h, num(7.5 * c.amplitude / k));
   }
   if (c.scene.shape.type == ShapeType::kPlane)
-    return fmt::format("polygon {{\n  5, {}\n{}{}  {}\n}}\n", plane_corners(c), c.texture, normal,
-                       matrix(c.place));
+    return declaration + fmt::format("polygon {{\n  5, {}\n{}{}  {}\n}}\n", plane_corners(c),
+                                     c.texture, normal, matrix(c.place));
   if (c.cylinder)
-    return fmt::format("cylinder {{\n  <0, {}, 0>, <0, {}, 0>, {}\n{}{}{}  {}\n}}\n", num(-c.half),
-                       num(c.half), num(c.r), c.scene.shape.caps ? "" : "  open\n", c.texture,
-                       normal, matrix(c.place));
-  return fmt::format("sphere {{\n  <0, 0, 0>, {}\n{}{}  {}\n}}\n", num(c.r), c.texture, normal,
-                     matrix(c.place));
+    return declaration + fmt::format("cylinder {{\n  <0, {}, 0>, <0, {}, 0>, {}\n{}{}{}  {}\n}}\n",
+                                     num(-c.half), num(c.half), num(c.r),
+                                     c.scene.shape.caps ? "" : "  open\n", c.texture, normal,
+                                     matrix(c.place));
+  return declaration + fmt::format("sphere {{\n  <0, 0, 0>, {}\n{}{}  {}\n}}\n", num(c.r),
+                                   c.texture, normal, matrix(c.place));
 }
 
 // ---- image height maps ------------------------------------------------------
