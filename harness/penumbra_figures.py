@@ -19,7 +19,8 @@ from penumbra_filtering import filtering_figures
 from penumbra_grid_figure import grid_figure
 from penumbra_lowpoly_figures import lowpoly_figures
 from penumbra_plot import (
-    contour_lines, method_colors, plt, progress, save, worker_pool)
+    contour_lines, fitted_title, method_colors, plt, progress, save,
+    worker_pool)
 
 L_LABEL = 'L / (albedo·E/π)'
 
@@ -257,8 +258,8 @@ def profile_figure(var, colors, region, figdir):
     # tight bounding box of save() takes it in.
     fig.legend(handles.values(), handles.keys(), loc='upper left',
                bbox_to_anchor=(1.0, 0.95))
-    fig.suptitle(f'terminator profiles: {var.get("label", var.get("id"))}',
-                 wrap=True)
+    fig.suptitle(fitted_title(
+        fig, f'terminator profiles: {var.get("label", var.get("id"))}'))
     return save(fig, figdir, f'profiles-{stem(var.get("id"))}')
 
 
@@ -368,8 +369,9 @@ def _sweep_scene(k, plot, scene, grids, xs, ys, labels, numeric, figdir):
         written += save(f1, figdir, f'plot-{k}-{stem(scene)}-{stem(metric)}-'
                         f'{stem(m)}')
     fig.colorbar(im, ax=axs.ravel().tolist(), label=label)
-    fig.suptitle(f'{metric_label(metric).replace(FRACTION, "% of albedo·E/π")}'
-                 f': {note} (mean over other axes)', wrap=True)
+    fig.suptitle(fitted_title(
+        fig, f'{metric_label(metric).replace(FRACTION, "% of albedo·E/π")}'
+        f': {note} (mean over other axes)'))
     paths = save(fig, figdir, f'plot-{k}-{stem(scene)}')
     return paths, written + paths
 
