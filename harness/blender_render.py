@@ -30,11 +30,7 @@ albedo, a sum or product of sines h(P) or an image map beside the job (a
 height map or a tangent-space normal map, sampled at per-corner UVs from a
 fourth raw file, float32 u v per triangle corner), a shading mode: "smooth",
 "bump-displacement", "bump-node" or "mesh", and the object's shading and
-geometry ("shadow terminator") offsets.  Smooth normals become custom split
-normals, except in mode "mesh" with both offsets 0 (a displaced surface),
-where only the Diffuse BSDF reads them: there they reach its Normal input
-through a point attribute, which shades alike and builds in a fraction of
-the time (exact_normals_as_attribute).
+geometry ("shadow terminator") offsets.
 
 The job is data only: it is validated strictly (unknown keys, wrong types and
 out-of-range values are errors naming the JSON path) and only its numbers and
@@ -241,22 +237,6 @@ def read_raw(folder, name, dtype, count, path):
     return np.fromfile(fn, dtype=dtype, count=count)
 
 
-# The point attribute that carries a "mesh" job's vertex normals.
-NORMALS_ATTRIBUTE = "penumbra_normal"
-
-
-def exact_normals_as_attribute(job):
-    """Whether the job's smooth normals reach the shading through an
-    attribute rather than as custom split normals: in mode "mesh" (the
-    displaced surface itself) with both offsets 0, nothing but the Diffuse
-    BSDF reads them, and its Normal input can take them.  Custom normals
-    make Blender compute split normals, and Cycles split the mesh by them
-    (object sync), which took 4.3 s of a 1.1 M-triangle render."""
-    sh = job["shading"]
-    return (sh["mode"] == "mesh" and job["mesh"]["faces"] == "smooth"
-            and sh["shading_offset"] == 0.0 and sh["geometry_offset"] == 0.0)
-
-
 def build_mesh(job, folder):
     jm = job["mesh"]
     n, m = jm["vertex_count"], jm["triangle_count"]
@@ -300,13 +280,7 @@ def build_mesh(job, folder):
             raise JobError("/mesh/uvs: NaN or infinity")
         layer = me.uv_layers.new(name="penumbra_uv")
         layer.data.foreach_set("uv", uvs)
-    if smooth and exact_normals_as_attribute(job):
-        # The displaced surface's normals, for the material to shade with
-        # (build_material): custom split normals would cost most of the
-        # render (README, Speed), and the shading is the same (tested).
-        layer = me.attributes.new(NORMALS_ATTRIBUTE, "FLOAT_VECTOR", "POINT")
-        layer.data.foreach_set("vector", nrm.ravel())
-    elif smooth:
+    if smooth:
         # Custom split normals: Cycles then shades with these vertex normals.
         # Up to 4.0 they count only with auto smooth on (an angle of pi marks
         # no edge sharp); 4.1 removed the option (4.1 API change log,
@@ -352,7 +326,6 @@ def mesh_digest(job, folder):
              if k not in ("light", "height", "material", "shading")}
     parts["shading"] = {k: v for k, v in job["shading"].items()
                         if k != "mode"}
-    parts["normals_as_attribute"] = exact_normals_as_attribute(job)
     return digest(parts, folder, [(f"/mesh/{k}", jm[k]) for k in
                                   ("positions", "normals", "triangles", "uvs")
                                   if k in jm])
@@ -360,10 +333,9 @@ def mesh_digest(job, folder):
 
 def material_digest(job, folder):
     """What build_material builds from: the mode, /height (and its image
-    file), /material, where the normals come from."""
+    file), /material."""
     image = job["height"].get("image")
-    return digest([job["shading"]["mode"], job["height"], job["material"],
-                   exact_normals_as_attribute(job)],
+    return digest([job["shading"]["mode"], job["height"], job["material"]],
                   folder, [("/height/image/file", image["file"])] if image
                   else [])
 
@@ -433,31 +405,6 @@ def map_height_socket(nt, job, folder):
     return sep.outputs[0]
 
 
-def attribute_normal(nt):
-    """The normals attribute, interpolated, normalised and turned to the
-    viewer's side as Cycles turns its smooth normal (N = -N on a back face);
-    returns the output socket."""
-    nodes, links = nt.nodes, nt.links
-    attr = nodes.new("ShaderNodeAttribute")
-    configure(attr, "ShaderNodeAttribute", attribute_type="GEOMETRY",
-              attribute_name=NORMALS_ATTRIBUTE)
-    geometry = nodes.new("ShaderNodeNewGeometry")
-    sign = nodes.new("ShaderNodeMath")  # 1 - 2 * backfacing
-    configure(sign, "ShaderNodeMath", operation="MULTIPLY_ADD",
-              use_clamp=False)
-    links.new(geometry.outputs["Backfacing"], sign.inputs[0])
-    sign.inputs[1].default_value = -2.0
-    sign.inputs[2].default_value = 1.0
-    turned = nodes.new("ShaderNodeVectorMath")
-    configure(turned, "ShaderNodeVectorMath", operation="SCALE")
-    links.new(attr.outputs["Vector"], turned.inputs[0])
-    links.new(sign.outputs["Value"], turned.inputs["Scale"])
-    unit = nodes.new("ShaderNodeVectorMath")
-    configure(unit, "ShaderNodeVectorMath", operation="NORMALIZE")
-    links.new(turned.outputs["Vector"], unit.inputs[0])
-    return unit.outputs["Vector"]
-
-
 def build_material(job, ob, folder):
     mat = bpy.data.materials.new("penumbra_material")
     mat.use_nodes = True
@@ -478,8 +425,6 @@ def build_material(job, ob, folder):
     else:
         configure(mat, "Material", displacement_method="BUMP")
     mode, amp = job["shading"]["mode"], job["height"]["amplitude"]
-    if exact_normals_as_attribute(job):
-        nt.links.new(attribute_normal(nt), bsdf.inputs["Normal"])
     image = job["height"].get("image")
     if image and image["kind"] == "normal":
         if mode != "bump-node":
@@ -753,18 +698,11 @@ def render_job(job_path, out_path, threads, serving=False):
                 os.remove(name)
 
 
-def normals_note(job):
-    if job["mesh"]["faces"] != "smooth":
-        return ""
-    return (" (normals as an attribute)" if exact_normals_as_attribute(job)
-            else " (custom normals)")
-
-
 def summary(job, ob, scene):
     """What was rendered, for the job's log."""
     return (f"{len(ob.data.vertices)} vertices, "
-            f"{len(ob.data.polygons)} {job['mesh']['faces']} triangles"
-            f"{normals_note(job)}, mode {job['shading']['mode']}, geometry offset "
+            f"{len(ob.data.polygons)} {job['mesh']['faces']} triangles, mode "
+            f"{job['shading']['mode']}, geometry offset "
             f"{ob.cycles.shadow_terminator_geometry_offset:g}, "
             f"{scene.cycles.samples} samples, "
             f"{scene.render.resolution_x}x{scene.render.resolution_y}, "
