@@ -120,8 +120,8 @@ TEST_F(Renderers, PovraySdlIsInertWhateverTheSceneName) {
 // POV-Ray's function VM folds nothing and an isosurface calls its function
 // tens of millions of times: the SDL computes |q| once per call and writes
 // no factor that changes no bit (a zero coefficient, a weight 1, a phase 0).
-// That it renders the same bits as the unreduced functions was checked with
-// cmp-equal renders of every scene in scenes/ (README, POV-Ray's isosurface);
+// That it renders the same pixels as the unreduced functions was checked on
+// every scene in scenes/ (idiff max error 0; README, POV-Ray's isosurface);
 // the calibration checks it against the evaluator.
 TEST(PovrayExport, FunctionsComputeTheRadiusOnceAndNoVoidTerms) {
   for (const char* representation : {"displacement", "bump"}) {
