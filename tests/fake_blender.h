@@ -7,6 +7,13 @@
 
 namespace penumbra {
 
+// A fake's answer with `image` as the real script gives it: written beside
+// and renamed into place, since Penumbra reads render.exr as soon as it
+// appears (a plain cp was read half-written on a loaded machine).
+inline std::string fake_blender_answer(const std::string& image) {
+  return "cp '" + image + "' render.exr.part && mv render.exr.part render.exr";
+}
+
 // The text of a fake Blender. For each request it changes into the folder of
 // the request's output (the render's work folder, where Penumbra expects
 // render.exr) and runs `body` there: `exit 1` ends the whole fake, as a crash

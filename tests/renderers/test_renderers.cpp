@@ -328,8 +328,8 @@ TEST_F(Renderers, ServingBlenderIsKeptAfterAFailedJobAndReplacedAfterACrash) {
   std::ofstream(settings.executable) << fake_blender_text(
       "n=$(cat '" + count + "' 2>/dev/null || echo 0); n=$((n+1)); echo $n > '" + count +
       "'\ncase $n in 1) echo 'blender_render.py: bad job' > render.exr.error;; 2) exit 1;; "
-      "*) cp '" +
-      path("good.exr") + "' render.exr;; esac");
+      "*) " +
+      fake_blender_answer(path("good.exr")) + ";; esac");
   ::chmod(settings.executable.c_str(), 0755);
   BlenderSessions sessions(dir_.string());
   settings.blender_sessions = &sessions;
@@ -355,8 +355,7 @@ TEST_F(Renderers, ServingBlenderIsKeptAfterAFailedJobAndReplacedAfterACrash) {
 // use (and fail with) the dead one.
 TEST_F(Renderers, ServingBlenderOfAThreadThatEndedIsNotReused) {
   RenderSettings settings = fake_serving_blender_settings();
-  std::ofstream(settings.executable)
-      << fake_blender_text("cp '" + path("good.exr") + "' render.exr");
+  std::ofstream(settings.executable) << fake_blender_text(fake_blender_answer(path("good.exr")));
   ::chmod(settings.executable.c_str(), 0755);
   BlenderSessions sessions(dir_.string());
   settings.blender_sessions = &sessions;

@@ -171,10 +171,10 @@ TEST_F(Faults, GarbageImageIsAFailedRender) {
 
 TEST_F(Faults, NanImageIsNeverCachedAndARerunRendersItAgain) {
   const std::string nan = rgba_exr("nan.exr", std::numeric_limits<float>::quiet_NaN());
-  fake_blender("cp '" + nan + "' render.exr");
+  fake_blender(fake_blender_answer(nan));
   expect_blender_failed(run_study(study(), options("out")), "out", "NaN or Inf");
   // The renderer is fixed: exactly the two failed renders are done again.
-  fake_blender("cp '" + rgba_exr("good.exr", 0.25f) + "' render.exr");
+  fake_blender(fake_blender_answer(rgba_exr("good.exr", 0.25f)));
   const StudyRunStats again = run_study(study(), options("out"));
   EXPECT_TRUE(again.complete());
   EXPECT_EQ(again.cached, 2u);
@@ -314,7 +314,7 @@ TEST_F(SignalledRun, KilledRunLeavesNoRendererAndResumesWhereItStopped) {
     work_left |= e.path().filename().string().rfind(".penumbra-work.", 0) == 0;
   EXPECT_TRUE(work_left);  // kill -9 leaves it; the next run removes it
 
-  fake_blender("cp '" + rgba_exr("good.exr", 0.25f) + "' render.exr");
+  fake_blender(fake_blender_answer(rgba_exr("good.exr", 0.25f)));
   const StudyRunStats resumed = run_study(study(), options("out"));
   EXPECT_TRUE(resumed.complete());
   EXPECT_EQ(resumed.cached, 2u);    // the evaluator's, finished before the kill

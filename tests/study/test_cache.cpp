@@ -112,7 +112,7 @@ class CacheInvalidation : public TempDirTest {
     im.pixels.assign(16 * 16 * 4, 0.25f);
     write_exr(im, path("blender.exr"));
     const std::string fake = path("fake-blender");
-    std::ofstream(fake) << fake_blender_text("cp '" + path("blender.exr") + "' render.exr");
+    std::ofstream(fake) << fake_blender_text(fake_blender_answer(path("blender.exr")));
     ::chmod(fake.c_str(), 0755);
     std::filesystem::copy_file(kSource + "/harness/blender_render.py", path("script.py"));
     ::setenv("PENUMBRA_BLENDER", fake.c_str(), 1);
