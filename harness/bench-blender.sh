@@ -17,7 +17,7 @@ script="$root/harness/blender_render.py"
 n="${1:-8}"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-blender=(blender -b --factory-startup -noaudio --python-exit-code 1 --python "$script" --)
+blender=(blender -b -t 1 --factory-startup -noaudio --python-exit-code 1 --python "$script" --)
 
 export_job() {  # export_job NAME REPRESENTATION [--set ...]
   local name="$1" rep="$2"

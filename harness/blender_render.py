@@ -6,10 +6,20 @@ on stderr and exit status 1.
 
 Usage:
 
-    blender -b --factory-startup -noaudio --python-exit-code 1 \\
+    blender -b -t 1 --factory-startup -noaudio --python-exit-code 1 \\
         --python harness/blender_render.py -- JOB.json OUTPUT.exr [--threads N]
-    blender -b --factory-startup -noaudio --python-exit-code 1 \\
+    blender -b -t 1 --factory-startup -noaudio --python-exit-code 1 \\
         --python harness/blender_render.py -- --serve
+
+-t 1 makes all of Blender run on one thread, Cycles included (it overrides
+--threads).  Penumbra always starts Blender so and renders several jobs at
+once instead.  A displaced surface (mode "mesh", below) needs it: without
+it, Blender sums the mesh's vertex normals on several threads in an order
+that varies from run to run (Blender 3.4 mesh_normals.cc,
+normals_calc_poly_vert with add_v3_v3_atomic), Cycles' bump shadowing term
+reads them, and the same job renders one float ulp apart in a pixel or
+two (measured: 5 of 24 renders).  Such a job is refused on more than one
+thread (single_threaded).
 
 With --serve, one Blender renders job after job, so that its start-up (about
 1 s) is paid once: each line on stdin is a request, a JSON object
@@ -30,7 +40,11 @@ albedo, a sum or product of sines h(P) or an image map beside the job (a
 height map or a tangent-space normal map, sampled at per-corner UVs from a
 fourth raw file, float32 u v per triangle corner), a shading mode: "smooth",
 "bump-displacement", "bump-node" or "mesh", and the object's shading and
-geometry ("shadow terminator") offsets.
+geometry ("shadow terminator") offsets.  Smooth normals become custom split
+normals, except in mode "mesh" with both offsets 0 (a displaced surface),
+where only the Diffuse BSDF reads them: there they reach its Normal input
+through a point attribute, which shades alike and builds in a fraction of
+the time (exact_normals_as_attribute).
 
 The job is data only: it is validated strictly (unknown keys, wrong types and
 out-of-range values are errors naming the JSON path) and only its numbers and
@@ -44,6 +58,7 @@ renamed into place only on success.  On failure one line starting with
 "blender_render.py: " goes to stderr and the exit status is 1.
 """
 
+import functools
 import hashlib
 import json
 import math
@@ -237,6 +252,35 @@ def read_raw(folder, name, dtype, count, path):
     return np.fromfile(fn, dtype=dtype, count=count)
 
 
+# The point attribute that carries a "mesh" job's vertex normals.
+NORMALS_ATTRIBUTE = "penumbra_normal"
+
+
+def exact_normals_as_attribute(job):
+    """Whether the job's smooth normals reach the shading through an
+    attribute rather than as custom split normals: in mode "mesh" (the
+    displaced surface itself) with both offsets 0, nothing but the Diffuse
+    BSDF reads them, and its Normal input can take them.  Custom normals
+    make Blender compute split normals, and Cycles split the mesh by them
+    (object sync), which took 4.3 s of a 1.1 M-triangle render."""
+    sh = job["shading"]
+    return (sh["mode"] == "mesh" and job["mesh"]["faces"] == "smooth"
+            and sh["shading_offset"] == 0.0 and sh["geometry_offset"] == 0.0)
+
+
+@functools.lru_cache(maxsize=None)
+def single_threaded():
+    """Whether Blender runs on one thread: started with -t 1, or on a
+    one-core machine.  In mode AUTO, RenderSettings.threads reports
+    Blender's thread count, -t first; it is fixed for the process."""
+    r = bpy.context.scene.render
+    mode = r.threads_mode
+    r.threads_mode = "AUTO"
+    threads = r.threads
+    r.threads_mode = mode
+    return threads == 1
+
+
 def build_mesh(job, folder):
     jm = job["mesh"]
     n, m = jm["vertex_count"], jm["triangle_count"]
@@ -260,11 +304,15 @@ def build_mesh(job, folder):
     me.vertices.add(n)
     me.vertices.foreach_set("co", pos)
     me.loops.add(3 * m)
-    me.loops.foreach_set("vertex_index", tri.astype(np.int32))
+    # Unsigned 32-bit arrays: Blender 3.4 declares these properties
+    # unsigned, and foreach_set copies a buffer of that exact type in one
+    # go but converts any other item by item (int32: 0.15 s against 0.01 s
+    # for the 3.4 M corners of a 1.1 M-triangle mesh).
+    me.loops.foreach_set("vertex_index", tri)
     me.polygons.add(m)
     me.polygons.foreach_set("loop_start",
-                            np.arange(0, 3 * m, 3, dtype=np.int32))
-    me.polygons.foreach_set("loop_total", np.full(m, 3, dtype=np.int32))
+                            np.arange(0, 3 * m, 3, dtype=np.uint32))
+    me.polygons.foreach_set("loop_total", np.full(m, 3, dtype=np.uint32))
     # Cycles applies the geometry offset to smooth faces only
     # (SHADER_SMOOTH_NORMAL): smooth faces must really be marked smooth.
     smooth = jm["faces"] == "smooth"
@@ -280,7 +328,13 @@ def build_mesh(job, folder):
             raise JobError("/mesh/uvs: NaN or infinity")
         layer = me.uv_layers.new(name="penumbra_uv")
         layer.data.foreach_set("uv", uvs)
-    if smooth:
+    if smooth and exact_normals_as_attribute(job):
+        # The displaced surface's normals, for the material to shade with
+        # (build_material): custom split normals would cost most of the
+        # render (README, Speed), and the shading is the same (tested).
+        layer = me.attributes.new(NORMALS_ATTRIBUTE, "FLOAT_VECTOR", "POINT")
+        layer.data.foreach_set("vector", nrm.ravel())
+    elif smooth:
         # Custom split normals: Cycles then shades with these vertex normals.
         # Up to 4.0 they count only with auto smooth on (an angle of pi marks
         # no edge sharp); 4.1 removed the option (4.1 API change log,
@@ -326,6 +380,7 @@ def mesh_digest(job, folder):
              if k not in ("light", "height", "material", "shading")}
     parts["shading"] = {k: v for k, v in job["shading"].items()
                         if k != "mode"}
+    parts["normals_as_attribute"] = exact_normals_as_attribute(job)
     return digest(parts, folder, [(f"/mesh/{k}", jm[k]) for k in
                                   ("positions", "normals", "triangles", "uvs")
                                   if k in jm])
@@ -333,9 +388,10 @@ def mesh_digest(job, folder):
 
 def material_digest(job, folder):
     """What build_material builds from: the mode, /height (and its image
-    file), /material."""
+    file), /material, where the normals come from."""
     image = job["height"].get("image")
-    return digest([job["shading"]["mode"], job["height"], job["material"]],
+    return digest([job["shading"]["mode"], job["height"], job["material"],
+                   exact_normals_as_attribute(job)],
                   folder, [("/height/image/file", image["file"])] if image
                   else [])
 
@@ -405,6 +461,31 @@ def map_height_socket(nt, job, folder):
     return sep.outputs[0]
 
 
+def attribute_normal(nt):
+    """The normals attribute, interpolated, normalised and turned to the
+    viewer's side as Cycles turns its smooth normal (N = -N on a back face);
+    returns the output socket."""
+    nodes, links = nt.nodes, nt.links
+    attr = nodes.new("ShaderNodeAttribute")
+    configure(attr, "ShaderNodeAttribute", attribute_type="GEOMETRY",
+              attribute_name=NORMALS_ATTRIBUTE)
+    geometry = nodes.new("ShaderNodeNewGeometry")
+    sign = nodes.new("ShaderNodeMath")  # 1 - 2 * backfacing
+    configure(sign, "ShaderNodeMath", operation="MULTIPLY_ADD",
+              use_clamp=False)
+    links.new(geometry.outputs["Backfacing"], sign.inputs[0])
+    sign.inputs[1].default_value = -2.0
+    sign.inputs[2].default_value = 1.0
+    turned = nodes.new("ShaderNodeVectorMath")
+    configure(turned, "ShaderNodeVectorMath", operation="SCALE")
+    links.new(attr.outputs["Vector"], turned.inputs[0])
+    links.new(sign.outputs["Value"], turned.inputs["Scale"])
+    unit = nodes.new("ShaderNodeVectorMath")
+    configure(unit, "ShaderNodeVectorMath", operation="NORMALIZE")
+    links.new(turned.outputs["Vector"], unit.inputs[0])
+    return unit.outputs["Vector"]
+
+
 def build_material(job, ob, folder):
     mat = bpy.data.materials.new("penumbra_material")
     mat.use_nodes = True
@@ -425,6 +506,8 @@ def build_material(job, ob, folder):
     else:
         configure(mat, "Material", displacement_method="BUMP")
     mode, amp = job["shading"]["mode"], job["height"]["amplitude"]
+    if exact_normals_as_attribute(job):
+        nt.links.new(attribute_normal(nt), bsdf.inputs["Normal"])
     image = job["height"].get("image")
     if image and image["kind"] == "normal":
         if mode != "bump-node":
@@ -621,7 +704,7 @@ def write_exr(scene, raw, tmp):
         raise JobError(f"{tmp}: EXR was not written")
 
 
-USAGE = ("usage: blender -b --factory-startup -noaudio --python-exit-code 1 "
+USAGE = ("usage: blender -b -t 1 --factory-startup -noaudio --python-exit-code 1 "
          "--python blender_render.py -- (JOB.json OUTPUT.exr [--threads N] "
          "| --serve)")
 REQUEST = {"job": ("path",), "output": ("path",), "threads": ("int", 1, 1024)}
@@ -665,6 +748,11 @@ def render_job(job_path, out_path, threads, serving=False):
     kept, KEPT["object"] = KEPT["object"], None  # a failure keeps nothing
     try:
         check(job, SCHEMA)
+        if exact_normals_as_attribute(job) and not single_threaded():
+            raise JobError(
+                "/shading/mode: \"mesh\" renders the same pixels run after "
+                "run only on one thread: start Blender with -t 1 (see the "
+                "usage at the top of blender_render.py)")
         digests = ((mesh_digest(job, folder), material_digest(job, folder))
                    if serving else (None, None))
         keep = (kept if digests[0] is not None and digests[0] == KEPT["mesh"]
@@ -698,11 +786,18 @@ def render_job(job_path, out_path, threads, serving=False):
                 os.remove(name)
 
 
+def normals_note(job):
+    if job["mesh"]["faces"] != "smooth":
+        return ""
+    return (" (normals as an attribute)" if exact_normals_as_attribute(job)
+            else " (custom normals)")
+
+
 def summary(job, ob, scene):
     """What was rendered, for the job's log."""
     return (f"{len(ob.data.vertices)} vertices, "
-            f"{len(ob.data.polygons)} {job['mesh']['faces']} triangles, mode "
-            f"{job['shading']['mode']}, geometry offset "
+            f"{len(ob.data.polygons)} {job['mesh']['faces']} triangles"
+            f"{normals_note(job)}, mode {job['shading']['mode']}, geometry offset "
             f"{ob.cycles.shadow_terminator_geometry_offset:g}, "
             f"{scene.cycles.samples} samples, "
             f"{scene.render.resolution_x}x{scene.render.resolution_y}, "

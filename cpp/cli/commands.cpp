@@ -531,7 +531,7 @@ int command_export(const ExportArgs& a, std::ostream& out) {
   const TriangleMesh& m = job.mesh;
   write_blender_files(job, dir.string());
   out << fmt::format(
-      "wrote {} and its mesh ({} vertices, {} triangles); render with\n  blender -b "
+      "wrote {} and its mesh ({} vertices, {} triangles); render with\n  blender -b -t 1 "
       "--factory-startup -noaudio --python-exit-code 1 --python {} -- "
       "{} out.exr\n",
       (dir / kBlenderJobFile).string(), m.vertex_count(), m.triangle_count(),

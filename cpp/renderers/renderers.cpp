@@ -4,20 +4,17 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <thread>
 
 #include <fmt/format.h>
-#include <fmt/ranges.h>
-#include <nlohmann/json.hpp>
 
 #include "export/export.h"
 #include "image/image_io.h"
 #include "renderers/code_digest.h"
-#include "util/data_files.h"
+#include "renderers/external.h"
 #include "util/files.h"
 #include "util/hash.h"
 #include "util/process.h"
@@ -25,8 +22,9 @@
 
 namespace penumbra {
 namespace fs = std::filesystem;
+using namespace external;
 
-namespace {
+namespace external {
 
 int thread_count(const RenderSettings& s) {
   return s.threads > 0 ? s.threads : std::max(1u, std::thread::hardware_concurrency());
@@ -46,36 +44,35 @@ std::string executable_for(RendererKind r, const RenderSettings& s) {
   return *found;
 }
 
-std::string blender_script(const RenderSettings& s) {
-  std::string script = s.blender_script;
-  if (script.empty() && std::getenv("PENUMBRA_BLENDER_SCRIPT"))
-    script = std::getenv("PENUMBRA_BLENDER_SCRIPT");
-  if (script.empty()) script = data_file("harness/blender_render.py");
-  if (!fs::is_regular_file(script))
-    throw RendererError(fmt::format("blender: the harness script {} is missing", script));
-  return fs::absolute(script).string();
+WorkDir::WorkDir(const std::string& log_path, RendererKind r) {
+  fs::path dir = fs::path(log_path).parent_path();
+  if (dir.empty()) dir = ".";
+  // Named after host and process, so a later run can remove it if this
+  // process is killed (remove_stale_temporaries).
+  std::string pattern = (dir / work_folder_pattern(to_string(r))).string();
+  if (!::mkdtemp(pattern.data()))
+    throw RendererError(fmt::format("cannot create a work folder in {}", dir.string()));
+  path = fs::absolute(pattern);
 }
 
-// A fresh folder beside the log; removed on success, kept on failure so the
-// user can rerun the exact command by hand.
-struct WorkDir {
-  fs::path path;
-  bool keep = true;
-  explicit WorkDir(const std::string& log_path, RendererKind r) {
-    fs::path dir = fs::path(log_path).parent_path();
-    if (dir.empty()) dir = ".";
-    // Named after host and process, so a later run can remove it if this
-    // process is killed (remove_stale_temporaries).
-    std::string pattern = (dir / work_folder_pattern(to_string(r))).string();
-    if (!::mkdtemp(pattern.data()))
-      throw RendererError(fmt::format("cannot create a work folder in {}", dir.string()));
-    path = fs::absolute(pattern);
+WorkDir::~WorkDir() {
+  std::error_code ec;
+  if (!keep) fs::remove_all(path, ec);
+}
+
+// A renderer's output file; unreadable or garbage is the renderer's failure.
+Image read_renderer_image(RendererKind r, const std::string& path) {
+  try {
+    return read_image(path);
+  } catch (const std::exception& e) {
+    throw RendererError(fmt::format("{} wrote an image that cannot be read: {}", to_string(r),
+                                    printable(e.what(), 300)));
   }
-  ~WorkDir() {
-    std::error_code ec;
-    if (!keep) fs::remove_all(path, ec);
-  }
-};
+}
+
+}  // namespace external
+
+namespace {
 
 void check_process(RendererKind r, const ProcessResult& p, const RenderSettings& s, WorkDir& work) {
   if (p.ok()) return;
@@ -96,16 +93,6 @@ void check_process(RendererKind r, const ProcessResult& p, const RenderSettings&
   throw RendererError(fmt::format("{} {}; log {} (work files kept in {}), last lines:\n{}",
                                   to_string(r), what, s.log_path, work.path.string(),
                                   tail_lines(s.log_path, 12)));
-}
-
-// A renderer's output file; unreadable or garbage is the renderer's failure.
-Image read_renderer_image(RendererKind r, const std::string& path) {
-  try {
-    return read_image(path);
-  } catch (const std::exception& e) {
-    throw RendererError(fmt::format("{} wrote an image that cannot be read: {}", to_string(r),
-                                    printable(e.what(), 300)));
-  }
 }
 
 // What every renderer must return before it is used or cached: the scene's
@@ -142,12 +129,9 @@ RendererRun geometry_pass(const Scene& scene, const RenderSettings& settings) {
   return run;
 }
 
-// Runs an external renderer in `work` and reads the image it leaves there
-// (`output`); RendererError when it fails or writes nothing readable.
-struct ExternalRun {
-  Image image;
-  double seconds = 0.0;
-};
+}  // namespace
+
+namespace external {
 
 ExternalRun run_external(RendererKind r, const std::vector<std::string>& argv, WorkDir& work,
                          const std::string& output, const RenderSettings& settings) {
@@ -171,232 +155,9 @@ RendererRun with_geometry(RendererKind r, const Image& colour, double seconds, c
   return run;
 }
 
-RendererRun render_povray(const Scene& scene, const RenderSettings& settings) {
-  const PovrayExport job = export_povray(scene);
-  const std::string exe = executable_for(RendererKind::kPovray, settings);
-  WorkDir work(settings.log_path, RendererKind::kPovray);
-  try {  // a full disk is this render's failure, not the study's
-    write_povray_files(job, work.path.string());
-  } catch (const std::exception& e) {
-    throw RendererError(fmt::format("cannot write the POV-Ray job: {}", e.what()));
-  }
-  std::vector<std::string> argv{exe};
-  for (std::string& a : job.arguments("scene.pov", "scene.exr", thread_count(settings)))
-    argv.push_back(std::move(a));
-  const ExternalRun ext = run_external(RendererKind::kPovray, argv, work, "scene.exr", settings);
-  const Image& big = ext.image;
-  if (big.width != job.width * job.supersample_x || big.height != job.height * job.supersample_y)
-    throw RendererError(fmt::format("povray wrote {}x{}, expected {}x{}", big.width, big.height,
-                                    job.width * job.supersample_x, job.height * job.supersample_y));
-  const Image colour = box_downsample(big, job.supersample_x, job.supersample_y);
-  return with_geometry(RendererKind::kPovray, colour, ext.seconds, scene, settings, work);
-}
-
-// Blender processes are ended and replaced after this many jobs, which
-// bounds what Blender may leak across resets.
-constexpr int kMaxJobsPerSession = 64;
-
-std::vector<std::string> blender_argv(const std::string& exe, const std::string& script,
-                                      const std::vector<std::string>& script_args) {
-  std::vector<std::string> argv{
-      exe,    "-b", "--factory-startup", "-noaudio", "--python-exit-code", "1", "--python",
-      script, "--"};
-  argv.insert(argv.end(), script_args.begin(), script_args.end());
-  return argv;
-}
-
-// Penumbra's environment with the folder of Blender's executable first in
-// PATH. Blender's embedded Python finds its standard library from the first
-// `python3` on PATH: a pyenv, conda or virtualenv one first would give it a
-// library without numpy (or of another version), and every render would fail.
-std::vector<std::string> blender_environment(const std::string& exe) {
-  std::vector<std::string> env;
-  std::string path = "PATH=" + fs::path(exe).parent_path().string();
-  for (char** e = environ; e && *e; ++e) {
-    const std::string entry = *e;
-    if (entry.rfind("PATH=", 0) == 0)
-      path += ":" + entry.substr(5);
-    else
-      env.push_back(entry);
-  }
-  env.push_back(path);
-  return env;
-}
-
-// The bytes appended to `path` since `offset`.
-std::string read_from(const std::string& path, std::uintmax_t offset) {
-  std::ifstream in(path, std::ios::binary);
-  in.seekg(static_cast<std::streamoff>(offset));
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-std::uintmax_t file_size_or_zero(const std::string& path) {
-  std::error_code ec;
-  const std::uintmax_t n = fs::file_size(path, ec);
-  return ec ? 0 : n;
-}
-
-}  // namespace
-
-struct BlenderSessions::Session {
-  std::thread::id owner;
-  std::string executable, script, log_path, cwd;
-  std::unique_ptr<Coprocess> process;
-  int served = 0, starts = 0;
-};
-
-BlenderSessions::BlenderSessions(std::string folder) : folder_(std::move(folder)) {}
-
-BlenderSessions::~BlenderSessions() {
-  for (auto& s : idle_)
-    if (s->process) s->process->close(5.0);
-  idle_.clear();
-  std::error_code ec;
-  if (!work_.empty()) fs::remove_all(work_, ec);
-}
-
-std::unique_ptr<BlenderSessions::Session> BlenderSessions::acquire(const std::string& executable,
-                                                                   const std::string& script) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  // A process ends with the thread that started it (Coprocess), so a thread
-  // only ever uses the processes it started itself.
-  const std::thread::id self = std::this_thread::get_id();
-  std::erase_if(
-      idle_, [](const std::unique_ptr<Session>& s) { return !s->process || !s->process->alive(); });
-  for (auto it = idle_.begin(); it != idle_.end(); ++it)
-    if ((*it)->owner == self && (*it)->executable == executable && (*it)->script == script) {
-      std::unique_ptr<Session> s = std::move(*it);
-      idle_.erase(it);
-      return s;
-    }
-  if (work_.empty()) {
-    std::string pattern =
-        (fs::path(folder_) / work_folder_pattern(to_string(RendererKind::kBlender))).string();
-    if (!::mkdtemp(pattern.data()))
-      throw RendererError(fmt::format("cannot create a work folder in {}", folder_));
-    work_ = fs::absolute(pattern).string();
-  }
-  auto s = std::make_unique<Session>();
-  s->owner = self;
-  s->executable = executable, s->script = script, s->cwd = work_;
-  s->log_path = (fs::path(work_) / fmt::format("blender-{}.log", next_id_++)).string();
-  return s;
-}
-
-void BlenderSessions::release(std::unique_ptr<Session> session) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  started_ += std::exchange(session->starts, 0);
-  if (session->process && session->process->alive()) idle_.push_back(std::move(session));
-}
-
-int BlenderSessions::started() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return started_;
-}
+}  // namespace external
 
 namespace {
-
-// The failure of a served job: the process ended (crash, timeout, stopped)
-// or answered with an .error file.
-[[noreturn]] void blender_job_failed(const std::optional<ProcessResult>& ended,
-                                     const std::string& answer, const RenderSettings& settings,
-                                     WorkDir& work, const std::string& rerun) {
-  if (ended && ended->cancelled) {
-    work.keep = false;
-    throw RenderCancelled("blender was stopped (interrupted)");
-  }
-  std::string what = "failed: " + printable(answer, 400);
-  if (ended && ended->timed_out)
-    what = fmt::format("timed out after {:.0f} s (the limit; raise it with --timeout)",
-                       settings.timeout_s);
-  else if (ended && ended->signal != 0)
-    what = fmt::format("was killed by signal {}", ended->signal);
-  else if (ended)
-    what = fmt::format("exited with status {} before the render was done", ended->exit_code);
-  throw RendererError(fmt::format(
-      "blender {}; log {} (work files kept in {}; rerun by hand: {}), "
-      "last lines:\n{}",
-      what, settings.log_path, work.path.string(), rerun, tail_lines(settings.log_path, 12)));
-}
-
-// Renders the job in `work` with a serving Blender process (started if it
-// is not running); its log lines for this job are copied to the job's log.
-// Returns the wall time of the job.
-double serve_blender_job(BlenderSessions::Session& s, WorkDir& work,
-                         const RenderSettings& settings) {
-  if (s.process && (!s.process->alive() || s.served >= kMaxJobsPerSession)) {
-    s.process->close(5.0);
-    s.process.reset();
-  }
-  if (!s.process) {
-    s.process = std::make_unique<Coprocess>(blender_argv(s.executable, s.script, {"--serve"}),
-                                            s.cwd, s.log_path, blender_environment(s.executable));
-    s.served = 0, ++s.starts;
-  }
-  ++s.served;
-  const fs::path output = work.path / "render.exr";
-  const std::string error_path = output.string() + ".error";
-  const std::uintmax_t log_offset = file_size_or_zero(s.log_path);
-  nlohmann::json request{{"job", (work.path / kBlenderJobFile).string()},
-                         {"output", output.string()},
-                         {"threads", thread_count(settings)}};
-  const auto t0 = std::chrono::steady_clock::now();
-  s.process->send_line(request.dump());  // a process gone shows in the wait
-  const std::optional<ProcessResult> ended = s.process->wait_until(
-      [&] { return fs::exists(output) || fs::exists(error_path); }, settings.timeout_s);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (s.log_path != settings.log_path) {
-    const std::string lines = read_from(s.log_path, log_offset);
-    std::ofstream(settings.log_path, std::ios::binary | std::ios::app) << lines;
-  }
-  if (ended || !fs::exists(output)) {
-    std::ifstream in(error_path);
-    std::string answer;
-    std::getline(in, answer);
-    std::string rerun = fmt::format(
-        "cd {} && {}", work.path.string(),
-        fmt::join(blender_argv(s.executable, s.script, {kBlenderJobFile, "render.exr"}), " "));
-    blender_job_failed(ended, answer, settings, work, rerun);
-  }
-  return seconds;
-}
-
-// Hands the session back to the pool whatever happens.
-struct SessionLease {
-  BlenderSessions* pool;
-  std::unique_ptr<BlenderSessions::Session> session;
-  ~SessionLease() {
-    if (pool)
-      pool->release(std::move(session));
-    else if (session && session->process)
-      session->process->close(5.0);
-  }
-};
-
-RendererRun render_blender(const Scene& scene, const RenderSettings& settings) {
-  const BlenderExport job = export_blender(scene);
-  const std::string exe = executable_for(RendererKind::kBlender, settings);
-  const std::string script = blender_script(settings);
-  WorkDir work(settings.log_path, RendererKind::kBlender);
-  try {
-    write_blender_files(job, work.path.string());
-  } catch (const std::exception& e) {  // the work folder, not the user's output
-    throw RendererError(fmt::format("cannot write the Blender job: {}", e.what()));
-  }
-  SessionLease lease{settings.blender_sessions, nullptr};
-  if (lease.pool) {
-    lease.session = lease.pool->acquire(exe, script);
-  } else {  // a process of its own, logging straight into the job's log
-    lease.session = std::make_unique<BlenderSessions::Session>();
-    lease.session->executable = exe, lease.session->script = script;
-    lease.session->cwd = work.path.string(), lease.session->log_path = settings.log_path;
-  }
-  const double seconds = serve_blender_job(*lease.session, work, settings);
-  const Image colour =
-      read_renderer_image(RendererKind::kBlender, (work.path / "render.exr").string());
-  return with_geometry(RendererKind::kBlender, colour, seconds, scene, settings, work);
-}
 
 RendererRun render_dispatch(RendererKind renderer, const Scene& scene,
                             const RenderSettings& settings) {

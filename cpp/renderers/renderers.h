@@ -35,7 +35,7 @@ class BlenderSessions;
 
 struct RenderSettings {
   double timeout_s = 600.0;  // per external render, wall clock
-  int threads = 0;           // per render; 0: all cores
+  int threads = 0;           // per render; 0: all cores (Blender: always 1, blender_driver.cpp)
   // Executable to run instead of `povray` / `blender` from PATH (tests point
   // these at fakes; users at a self-built renderer). Env: PENUMBRA_POVRAY,
   // PENUMBRA_BLENDER.
