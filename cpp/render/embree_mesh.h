@@ -55,10 +55,13 @@ class EmbreeMesh {
   // The closest hits of n <= kPacketRays rays at once, through Embree's
   // packet traversal (worth it for coherent rays, such as one pixel's
   // samples): the same hits as intersect(), found[k] saying whether hits[k]
-  // was set. Eight lanes, not sixteen: Embree 3.13.5's rtcOccluded16 (the
-  // Debian 12 build, AVX-512) never returned for one shadow ray of the
-  // default sphere's truth, where rtcOccluded8 and rtcOccluded1 answered
-  // alike (tests/test_embree_mesh.cpp keeps that ray).
+  // was set; the same bits too where Embree's packet and single-ray kernels
+  // round alike (its AVX-512 kernels, not its AVX2 ones with compact
+  // leaves: there t differs by float ulps; tests/render/embree_rounding.h).
+  // Eight lanes, not sixteen: Embree 3.13.5's rtcOccluded16 (the Debian 12
+  // build, AVX-512) never returned for one shadow ray of the default
+  // sphere's truth, where rtcOccluded8 and rtcOccluded1 answered alike
+  // (tests/test_embree_mesh.cpp keeps that ray).
   static constexpr std::size_t kPacketRays = 8;
   void intersect_packet(const Ray* rays, std::size_t n, TriangleHit* hits, bool* found) const;
   // Any hit with t in (t_min, t_max), ignoring triangle `skip`.
