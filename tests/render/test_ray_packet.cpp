@@ -192,10 +192,11 @@ TEST(RayPacket, HitsAndBumpNormalsHaveTheScalarBits) {
 }
 
 // Two renders of a displaced mesh whose hits differ by Embree's float
-// rounding alone (embree_rounding.h): radiance within 1e-6 of albedo*E/pi
-// (measured on an AVX2 machine: 6e-9), the analysis angles within 1e-3
-// degrees (measured: 2.2e-4, at a grazing view), the factor analysis.G
-// within 1e-5, coverage the same. A
+// rounding alone (embree_rounding.h): radiance within 1e-5 of albedo*E/pi
+// (measured on an AVX2 machine: 3.9e-7, the hit's barycentrics moving the
+// exact normal; a hundredth of the truths' convergence tolerance), the
+// analysis angles within 1e-2 degrees (measured: 2.2e-4, at a grazing
+// view), the factor analysis.G within 1e-5, coverage the same. A
 // shadow ray that the rounding turned around would move a pixel by a whole
 // sample's share and fail this: none did on these scenes.
 void expect_within_hit_rounding(const Image& packet, const Image& scalar, double radiance_scale,
@@ -215,8 +216,8 @@ void expect_within_hit_rounding(const Image& packet, const Image& scalar, double
     else
       EXPECT_NEAR(packet.pixels[i], scalar.pixels[i], 1e-5) << label << ", " << channel;
   }
-  EXPECT_LT(worst_radiance, 1e-6) << label;
-  EXPECT_LT(worst_angle, 1e-3) << label;
+  EXPECT_LT(worst_radiance, 1e-5) << label;
+  EXPECT_LT(worst_angle, 1e-2) << label;
 }
 
 // The evaluator's packet path gives its scalar path's images bit for bit,
