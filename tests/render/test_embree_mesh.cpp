@@ -143,21 +143,14 @@ TEST(EmbreeMesh, BothBuildsFindTheSameSurfacePoints) {
   const TriangleMesh grid = make_grid_mesh(shape, make_grating({1, 0.2, 0}, 8.0, 0.3), 0.02,
                                            GridResolution{160, 80}, nullptr, GridNormals::kOmit);
   const EmbreeMesh fast_build(grid, BvhBuild::kFastBuild), fast_trace(grid, BvhBuild::kFastTrace);
-  auto vertex = [&](std::uint32_t triangle, int k) {
-    const float* p = &grid.positions[3 * std::size_t(grid.triangles[3 * triangle + k])];
-    return Vec3{p[0], p[1], p[2]};
-  };
-  auto point = [&](const TriangleHit& h) {
-    return (1.0 - h.b1 - h.b2) * vertex(h.triangle, 0) + h.b1 * vertex(h.triangle, 1) +
-           h.b2 * vertex(h.triangle, 2);
-  };
   Pcg32 rng(11);
   std::size_t hits = 0, ties = 0, blocked = 0, rays = 0;
   for (std::uint32_t t = 0; t < grid.triangle_count(); t += 7, ++rays) {
     const int kind = int(t % 3);  // aimed at a vertex, an edge's midpoint, the centroid
-    const Vec3 target = kind == 0   ? vertex(t, 0)
-                        : kind == 1 ? 0.5 * (vertex(t, 0) + vertex(t, 1))
-                                    : (vertex(t, 0) + vertex(t, 1) + vertex(t, 2)) / 3.0;
+    const Vec3 target =
+        kind == 0   ? vertex_of(grid, t, 0)
+        : kind == 1 ? 0.5 * (vertex_of(grid, t, 0) + vertex_of(grid, t, 1))
+                    : (vertex_of(grid, t, 0) + vertex_of(grid, t, 1) + vertex_of(grid, t, 2)) / 3.0;
     const Vec3 from{4.0 * rng.next_double() - 2.0, 4.0 * rng.next_double() - 2.0, -3.0};
     const Ray ray{from, normalize(target - from)};
     const auto a = fast_build.intersect(ray), b = fast_trace.intersect(ray);
@@ -181,7 +174,7 @@ TEST(EmbreeMesh, BothBuildsFindTheSameSurfacePoints) {
     const double tolerance = std::max(hit_tolerance(ray, a->t, normal_of(grid, a->triangle)),
                                       hit_tolerance(ray, b->t, normal_of(grid, b->triangle)));
     EXPECT_NEAR(a->t, b->t, tolerance) << "ray " << t;
-    EXPECT_LT(length(point(*a) - point(*b)), tolerance) << "ray " << t;
+    EXPECT_LT(length(point_of(grid, *a) - point_of(grid, *b)), tolerance) << "ray " << t;
   }
   EXPECT_GT(hits, rays / 2);  // most rays reach the sphere's near side
   EXPECT_GT(ties, 0u);        // the vertex- and edge-aimed rays do meet ties
