@@ -1,5 +1,6 @@
-// Schilling's bump-map pyramid (seed: shared/seeds/schilling-bump-map-
-// roughness-pyramid.txt; reference sheet, section 4): a bump map stored as
+// Schilling's bump-map pyramid (A. Schilling 1997, "Toward Real-Time
+// Photorealistic Rendering: Challenges and Solutions", SIGGRAPH/Eurographics
+// Workshop on Graphics Hardware; docs/filtering.md): a bump map stored as
 // offset vectors (precalculated derivatives f_u, f_v of the height), a bump
 // pyramid that is the mip map of those offsets, and a roughness pyramid that
 // keeps, per texel, the covariance K of every finest-level offset the texel

@@ -1,8 +1,10 @@
 // Filtered bumps back into roughness: the mappings from a texel footprint's
 // slope statistics (bump_pyramid.h) to the lobe a renderer shades with.
 // One enum, one table, one switch, as for the terminator methods. Sources
-// and formulas: shared/reference/terminator-methods.md, section 4, checked
-// against each paper or its public code as cited in the table.
+// and formulas: each paper or its public code, as cited in the table's
+// `source` (Schilling 1997, Graphics Hardware workshop; Conty Estevez et al.
+// 2019, Ray Tracing Gems ch. 12; Toksvig 2005; Olano & Baker 2010; Hery,
+// Kass & Ling 2014; Tokuyoshi & Kaplanyan 2021); docs/filtering.md.
 //
 // Units: slopes are offsets (height per scene unit, bump_pyramid.h); a
 // lobe's roughness is a slope-space alpha^2 tensor A, so that the GGX slope

@@ -4,8 +4,10 @@
 // triangles do not have; shadow rays leaving the flat triangle hit the
 // neighbouring triangles and the lit area ends in a stair-stepped line. Each
 // method below moves the shadow-ray origin off the triangle. One enum, one
-// table, one switch (shadow_ray_origin in shadow_origin.cpp); formulas and
-// sources: shared/reference/terminator-methods.md, section 3.
+// table, one switch (shadow_ray_origin in shadow_origin.cpp); sources: the
+// pixnblox gist (2020), Hanika 2021 ("Hacking the Shadow Terminator", Ray
+// Tracing Gems II ch. 4) and Cycles' Geometry Offset, as cited in the table
+// and in docs/lowpoly.md.
 //
 // Orientation: every vector is given on the side being shaded. A caller that
 // hits a triangle from its back flips Ng, Ns and the vertex normals before

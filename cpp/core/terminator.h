@@ -6,10 +6,13 @@
 // contribution (BSDF value times the cosine against Ns) of the lobes it is
 // applied to. Some bring a normal adjustment (normal_adjust.h) as their
 // renderer ships it, and the microfacet models (Schuessler et al. 2017)
-// replace the BSDF; shading.cpp composes them. Formulas and sources:
-// shared/reference/terminator-methods.md, sections 1-2, and README.md's
-// method table. Adding a method touches this header's enum and table and the
-// switches in terminator.cpp and shading.cpp, nothing else.
+// replace the BSDF; shading.cpp composes them. Sources: the publication
+// (or renderer commit) in each row's `source`, cited in full in
+// docs/methods.md and CITATION.cff (e.g. Chiang, Li, Burley 2019, "Taming
+// the Shadow Terminator", SIGGRAPH Talks; Conty Estevez, Lecocq, Stein 2019,
+// Ray Tracing Gems ch. 12). Adding a method: docs/extending.md lists every
+// place to touch (the enum and table here, the switches in terminator.cpp
+// and shading.cpp, the scene reader for a parameter, the tests, the studies).
 #pragma once
 
 #include <optional>
