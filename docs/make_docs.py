@@ -313,13 +313,17 @@ def schema_type(node):
     return kind + (' (' + ', '.join(limits) + ')' if limits else '')
 
 
+def table_type(node):
+    return schema_type(node).replace('|', '\\|')  # a pattern's '|' would split the cell
+
+
 def schema_rows(node, pointer, rows):
     """One row per key under `node` (inline objects and arrays recursed; a
     $ref is a link to its own section)."""
     for key, child in node.get('properties', {}).items():
         path = f'{pointer}/{key}'
         required = key in node.get('required', [])
-        rows.append([code(path), schema_type(child), 'yes' if required else '',
+        rows.append([code(path), table_type(child), 'yes' if required else '',
                      cell(child.get('description', ''))])
         schema_children(child, path, rows)
 
@@ -332,13 +336,13 @@ def schema_children(child, path, rows):
     items = child.get('items')
     if isinstance(items, dict) and '$ref' not in items and (
             'properties' in items or 'items' in items):
-        rows.append([code(path + '/*'), schema_type(items), '',
+        rows.append([code(path + '/*'), table_type(items), '',
                      cell(items.get('description', ''))])
         schema_children(items, path + '/*', rows)
     extra = child.get('additionalProperties')
     if isinstance(extra, dict) and '$ref' not in extra and (
             'properties' in extra or 'items' in extra or 'additionalProperties' in extra):
-        rows.append([code(path + '/KEY'), schema_type(extra), '',
+        rows.append([code(path + '/KEY'), table_type(extra), '',
                      cell(extra.get('description', ''))])
         schema_children(extra, path + '/KEY', rows)
 
