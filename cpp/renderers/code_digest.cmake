@@ -1,6 +1,7 @@
 # Writes OUTPUT, a C++ file defining build_code_digests(), from the SHA-256 of
 # the files in EVALUATOR, POVRAY, BLENDER, FILTERING, COMPARISON and PREVIEWS (semicolon lists, paths relative
 # to ROOT). Run by the build whenever one of those files changes.
+include("${CMAKE_CURRENT_LIST_DIR}/../util/write_if_changed.cmake")
 function(digest_of out_var)
   set(text "")
   foreach(rel IN LISTS ARGN)
@@ -32,9 +33,4 @@ const CodeDigests& build_code_digests() {
 }  // namespace penumbra
 ")
 # Rewrite only on change, so an unchanged digest does not relink everything.
-if(EXISTS "${OUTPUT}")
-  file(READ "${OUTPUT}" old)
-endif()
-if(NOT "${old}" STREQUAL "${content}")
-  file(WRITE "${OUTPUT}" "${content}")
-endif()
+write_if_changed("${OUTPUT}" "${content}")

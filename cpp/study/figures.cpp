@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "renderers/renderers.h"
 #include "util/data_files.h"
@@ -108,12 +109,21 @@ namespace {
 
 constexpr const char* kStampName = "figures/.inputs";
 
+// report.json without its provenance (study/provenance.h): the date and the
+// machine change every run, and no figure depends on them.
+std::string without_provenance(const std::string& text) {
+  nlohmann::json doc = nlohmann::json::parse(text, nullptr, false);
+  if (doc.is_discarded() || !doc.is_object()) return text;
+  doc.erase("provenance");
+  return doc.dump();
+}
+
 // Everything the figures are drawn from: report.json names every render by
 // its content key (so the same text means the same images), the harness's
 // scripts and templates, the interpreter and the HTML mode.
 std::string figure_inputs_digest(const fs::path& out, bool self_contained,
                                  const std::string& python) {
-  std::uint64_t h = fnv1a(read_file((out / "report.json").string()));
+  std::uint64_t h = fnv1a(without_provenance(read_file((out / "report.json").string())));
   h = fnv1a(read_file((out / "lowpoly.csv").string()), h);
   // The scripts, the page's templates and style sheet, and the column
   // table; not __pycache__, which Python rewrites as it pleases.

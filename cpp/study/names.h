@@ -25,4 +25,20 @@ inline std::string file_safe(const std::string& label) {
   return out;
 }
 
+// "/height/amplitude" -> "height_amplitude" (separator '_'): ASCII letters
+// lower-cased and digits kept, every other run of characters one separator,
+// none at either end.
+inline std::string lower_words(const std::string& text, char separator) {
+  std::string out;
+  for (char ch : text) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 128 && std::isalnum(c))
+      out += static_cast<char>(std::tolower(c));
+    else if (!out.empty() && out.back() != separator)
+      out += separator;
+  }
+  while (!out.empty() && out.back() == separator) out.pop_back();
+  return out;
+}
+
 }  // namespace penumbra

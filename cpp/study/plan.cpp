@@ -1,6 +1,8 @@
 #include "study/plan.h"
 
 #include <algorithm>
+#include <cctype>
+#include <cmath>
 #include <filesystem>
 
 #include <fmt/format.h>
@@ -8,6 +10,7 @@
 #include "render/displaced_mesh.h"
 #include "scene/scene_json.h"
 #include "study/light_angles.h"
+#include "study/names.h"
 #include "util/strict_json.h"
 
 namespace penumbra {
@@ -223,6 +226,33 @@ Plan plan_study(const Study& study, double max_memory_bytes) {
 
 std::string axis_value_text(const std::string& pointer, const json& value) {
   return light_direction(pointer, value) ? direction_text(vec3(value)) : value_text(value);
+}
+
+namespace {
+
+std::string value_id(const StudyAxis& axis, std::size_t k) {
+  if (k < axis.ids.size() && !axis.ids[k].empty()) return axis.ids[k];
+  const json& v = axis.values[k];
+  if (v.is_number()) return fmt::format("{:g}", v.get<double>());
+  if (light_direction(axis.pointer, v)) {
+    const Vec3 d = vec3(v);
+    return fmt::format("az{:.0f}-el{:.0f}", std::round(azimuth_deg(d)) + 0.0,
+                       std::round(elevation_deg(d)) + 0.0);
+  }
+  return lower_words(v.is_string() ? v.get<std::string>() : v.dump(), '-').substr(0, 32);
+}
+
+}  // namespace
+
+std::vector<std::string> axis_value_ids(const StudyAxis& axis) {
+  std::vector<std::string> ids;
+  for (std::size_t k = 0; k < axis.values.size(); ++k) {
+    std::string id = value_id(axis, k);
+    if (id.empty()) id = fmt::format("v{}", k);
+    if (std::find(ids.begin(), ids.end(), id) != ids.end()) id += fmt::format("-{}", k);
+    ids.push_back(std::move(id));
+  }
+  return ids;
 }
 
 std::string render_group_key(const Job& job) {

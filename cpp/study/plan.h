@@ -71,6 +71,13 @@ Plan plan_study(const Study& study, double max_memory_bytes);
 // (study/light_angles.h), a number as %g, anything else as compact JSON.
 std::string axis_value_text(const std::string& pointer, const nlohmann::json& value);
 
+// Short ids of an axis's values, unique within the axis, for CSV cells, file
+// names and compact labels: a compound value's own id; a number as %g; a
+// light direction as "az<A>-el<E>" (whole degrees); a string or anything else
+// as lower-case letters, digits and '-' ("v<k>" when that leaves nothing).
+// A repeated id gets "-<k>" appended.
+std::vector<std::string> axis_value_ids(const StudyAxis& axis);
+
 // The key of the jobs that render one after another on one worker (a local
 // worker, or one Slurm array task): the evaluator's displacement renders of
 // one geometry (they share its mesh while the process holds it:

@@ -19,6 +19,8 @@
 #include "scene/scene_json.h"
 #include "study/cache.h"
 #include "study/light_angles.h"
+#include "study/names.h"
+#include "study/provenance.h"
 #include "study/ranking.h"
 
 namespace penumbra {
@@ -60,6 +62,9 @@ struct CsvRow {
   const Job& test;
   const Job& reference;
   const StudyMethod* method;  // as the study names it; null if the label is unknown
+  // The ranking metric C (study/ranking.h) for an evaluator row against the
+  // evaluator's truth; NaN elsewhere.
+  double combined = kNaN;
 };
 
 struct Column {
@@ -92,6 +97,7 @@ Columns bump_columns() {
   using C = ComparisonRow;
   using I = ComparisonIntervals;
   Columns out;
+  out.push_back({"combined_relative_error", [](const CsvRow& r) { return number(r.combined); }});
   add_with_ci(
       out, "profile_rmse_terminator_rel", [](const C& r) { return r.profile.rmse_terminator; },
       &I::rmse_terminator);
@@ -245,18 +251,9 @@ Columns key_columns(SectionKind kind) {
   return out;
 }
 
-// "/height/amplitude" -> "height_amplitude": ASCII letters (lower-cased) and
-// digits kept, every other run of characters one '_'.
+// "/height/amplitude" -> "height_amplitude" (study/names.h).
 std::string snake_name(const std::string& pointer) {
-  std::string out;
-  for (char ch : pointer) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c < 128 && std::isalnum(c))
-      out += static_cast<char>(std::tolower(c));
-    else if (!out.empty() && out.back() != '_')
-      out += '_';
-  }
-  while (!out.empty() && out.back() == '_') out.pop_back();
+  const std::string out = lower_words(pointer, '_');
   return out.empty() ? "axis" : out;
 }
 
@@ -265,13 +262,14 @@ std::string snake_name(const std::string& pointer) {
 // numeric column; strings one text column; arrays of 2 or 3 numbers one
 // numeric column per component (_x, _y, _z); anything else compact JSON
 // text. null is an empty cell.
-enum class AxisKind { kNumber, kString, kVector, kJson };
+enum class AxisKind { kNumber, kString, kVector, kJson, kId };
 struct AxisLayout {
   AxisKind kind = AxisKind::kJson;
   std::size_t size = 1;
 };
 
 AxisLayout axis_layout(const StudyAxis& a) {
+  if (!a.sets.empty()) return {AxisKind::kId, 1};  // a compound axis: its values' short ids
   const auto all = [&a](const std::function<bool(const json&)>& pred) {
     return std::all_of(a.values.begin(), a.values.end(),
                        [&pred](const json& v) { return v.is_null() || pred(v); });
@@ -290,6 +288,7 @@ AxisLayout axis_layout(const StudyAxis& a) {
 
 std::string axis_cell(const json& v, AxisKind kind, std::size_t component) {
   if (v.is_null()) return "";
+  if (kind == AxisKind::kId) return v.get<std::string>();
   switch (kind) {
     case AxisKind::kString:
       return v.get<std::string>();
@@ -298,6 +297,14 @@ std::string axis_cell(const json& v, AxisKind kind, std::size_t component) {
     default:
       return v.dump();
   }
+}
+
+// A compound axis's value as its short id; any other value as it is.
+json axis_id_or_value(const StudyAxis& axis, const json& v, AxisKind kind) {
+  if (kind != AxisKind::kId) return v;
+  const auto it = std::find(axis.values.begin(), axis.values.end(), v);
+  return it == axis.values.end() ? v
+                                 : json(axis_value_ids(axis)[std::size_t(it - axis.values.begin())]);
 }
 
 // One column per axis (per component of a vector axis), named after its
@@ -318,8 +325,9 @@ Columns axis_columns(const std::vector<StudyAxis>& axes, const Columns& others) 
       base += "_axis";
     for (std::size_t k = 0; k < suffixes.size(); ++k) {
       taken.insert(base + suffixes[k]);
-      out.push_back({base + suffixes[k], [i, k, kind = layout.kind](const CsvRow& r) {
-                       return axis_cell(r.variant.axis_values[i], kind, k);
+      out.push_back({base + suffixes[k], [i, k, kind = layout.kind, axis = axes[i]](const CsvRow& r) {
+                       return axis_cell(axis_id_or_value(axis, r.variant.axis_values[i], kind), kind,
+                                        k);
                      }});
     }
   }
@@ -332,34 +340,133 @@ const StudyMethod* find_method(const Section& section, const std::string& label)
   return nullptr;
 }
 
-// One header line, then one row per comparison of the section: study,
-// variant, scene, the axes, the identification columns, then `metrics`.
-std::string comparison_csv(const ReportInputs& in, const Section& section, const Columns& metrics) {
-  const Columns head{{"study", [](const CsvRow& r) { return r.study; }},
-                     {"variant", [](const CsvRow& r) { return r.variant.id; }},
-                     {"scene", [](const CsvRow& r) { return r.variant.scene; }}};
-  Columns tail = key_columns(section.kind);
-  tail.insert(tail.end(), metrics.begin(), metrics.end());
+// Per bump variant, raw bump's E_term + E_view against the evaluator's truth.
+std::map<std::size_t, double> baseline_errors(const std::vector<ComparisonRow>& rows) {
+  std::map<std::size_t, double> out;
+  for (const ComparisonRow& row : rows)
+    if (row.method == "none" && row.renderer == RendererKind::kEvaluator &&
+        row.reference_renderer == RendererKind::kEvaluator)
+      out[row.variant] = row.profile.rmse_terminator + row.view.rmse_grazing;
+  return out;
+}
+
+// The rows of a section's comparisons, in report order.
+std::vector<CsvRow> csv_rows(const ReportInputs& in, const Section& section) {
+  const std::map<std::size_t, double> baseline = baseline_errors(in.comparisons.rows);
+  std::vector<CsvRow> out;
+  for (const ComparisonRow& row : in.comparisons.rows) {
+    const Variant& var = in.plan.variants[row.variant];
+    if (var.section != section.kind) continue;
+    CsvRow r{in.study.name,         var, row, in.plan.jobs[row.job], in.plan.jobs[row.reference_job],
+             find_method(section, row.method)};
+    const auto none = baseline.find(row.variant);
+    if (section.kind == SectionKind::kBump && none != baseline.end() && none->second > 0.0 &&
+        row.renderer == RendererKind::kEvaluator &&
+        row.reference_renderer == RendererKind::kEvaluator)
+      r.combined = (row.profile.rmse_terminator + row.view.rmse_grazing) / none->second;
+    out.push_back(r);
+  }
+  return out;
+}
+
+std::string csv_line(const Columns& columns, const CsvRow& r) {
+  std::string line;
+  for (std::size_t k = 0; k < columns.size(); ++k)
+    line += (k ? "," : "") + csv_field(columns[k].value(r));
+  return line + "\n";
+}
+
+std::string csv_header(const Columns& columns) {
+  std::string line;
+  for (const Column& c : columns) line += (line.empty() ? "" : ",") + csv_field(c.name);
+  return line + "\n";
+}
+
+// `head` then the section's axis columns then `tail`, axis names kept clear
+// of the others.
+Columns with_axes(const Columns& head, const Section& section, const Columns& tail) {
   Columns columns = head;
   columns.insert(columns.end(), tail.begin(), tail.end());
   const Columns axes = axis_columns(section.axes, columns);
   columns.insert(columns.begin() + static_cast<std::ptrdiff_t>(head.size()), axes.begin(),
                  axes.end());
-  std::string csv;
-  for (const Column& c : columns) csv += (csv.empty() ? "" : ",") + csv_field(c.name);
-  csv += "\n";
-  for (const ComparisonRow& row : in.comparisons.rows) {
-    const Variant& var = in.plan.variants[row.variant];
-    if (var.section != section.kind) continue;
-    const CsvRow r{in.study.name,
-                   var,
-                   row,
-                   in.plan.jobs[row.job],
-                   in.plan.jobs[row.reference_job],
-                   find_method(section, row.method)};
-    for (std::size_t k = 0; k < columns.size(); ++k)
-      csv += (k ? "," : "") + csv_field(columns[k].value(r));
-    csv += "\n";
+  return columns;
+}
+
+Columns identity_head() {
+  return {{"study", [](const CsvRow& r) { return r.study; }},
+          {"variant", [](const CsvRow& r) { return r.variant.id; }},
+          {"scene", [](const CsvRow& r) { return r.variant.scene; }}};
+}
+
+// One header line, then one row per comparison of the section: study,
+// variant, scene, the axes, the identification columns, then `metrics`.
+std::string comparison_csv(const ReportInputs& in, const Section& section, const Columns& metrics) {
+  Columns tail = key_columns(section.kind);
+  tail.insert(tail.end(), metrics.begin(), metrics.end());
+  const Columns columns = with_axes(identity_head(), section, tail);
+  std::string csv = csv_header(columns);
+  for (const CsvRow& r : csv_rows(in, section)) csv += csv_line(columns, r);
+  return csv;
+}
+
+// metrics-long.csv: one row per (comparison, metric), for data frames.
+struct LongMetric {
+  const char* name;
+  const char* unit;
+  double (*value)(const CsvRow&);
+  Interval ComparisonIntervals::*ci;  // null: no interval
+};
+
+const std::vector<LongMetric>& long_metrics() {
+  using R = CsvRow;
+  using I = ComparisonIntervals;
+  static const char* rel = "fraction of albedo*E/pi";
+  static const char* radiance = "W m^-2 sr^-1";
+  static const std::vector<LongMetric> m{
+      {"combined_relative_error", "fraction of raw bump's", [](const R& r) { return r.combined; },
+       nullptr},
+      {"profile.rmse_terminator", rel, [](const R& r) { return r.c.profile.rmse_terminator; },
+       &I::rmse_terminator},
+      {"profile.rmse_overall", rel, [](const R& r) { return r.c.profile.rmse_overall; }, nullptr},
+      {"profile.max_error_terminator", rel, [](const R& r) { return r.c.profile.max_error; },
+       &I::max_error},
+      {"profile.max_step", rel, [](const R& r) { return r.c.profile.max_step; }, nullptr},
+      {"profile.position_error_deg", "degrees",
+       [](const R& r) { return r.c.profile.position_error; }, &I::position_error},
+      {"profile.width_deg", "degrees", [](const R& r) { return r.c.profile.width; }, nullptr},
+      {"profile.lit_bias", rel, [](const R& r) { return r.c.profile.lit_bias; }, &I::lit_bias},
+      {"image.rmse", radiance, [](const R& r) { return r.c.image.rmse; }, &I::image_rmse},
+      {"image.ssim", "unitless", [](const R& r) { return r.c.image.ssim; }, nullptr},
+      {"image.max_error", radiance, [](const R& r) { return r.c.image.max_error; }, nullptr},
+      {"image.mask_iou", "unitless", [](const R& r) { return r.c.image.mask_iou; }, nullptr},
+      {"view.rmse_grazing", rel, [](const R& r) { return r.c.view.rmse_grazing; },
+       &I::view_rmse_grazing},
+      {"view.bias_grazing", rel, [](const R& r) { return r.c.view.bias_grazing; },
+       &I::view_bias_grazing}};
+  return m;
+}
+
+std::string long_csv(const ReportInputs& in, const Section& section) {
+  const auto str = [](const char* s) { return std::string(s); };
+  const Columns tail{
+      {"method", [](const CsvRow& r) { return r.c.method; }},
+      {"renderer", [str](const CsvRow& r) { return str(to_string(r.test.renderer)); }},
+      {"reference", [](const CsvRow& r) { return r.c.reference; }}};
+  const Columns columns = with_axes(identity_head(), section, tail);
+  std::string csv = csv_header(columns);
+  csv.pop_back();
+  csv += ",metric,value,ci_low,ci_high,unit\n";
+  for (const CsvRow& r : csv_rows(in, section)) {
+    std::string key = csv_line(columns, r);
+    key.pop_back();
+    for (const LongMetric& m : long_metrics()) {
+      const double v = m.value(r);
+      if (!std::isfinite(v)) continue;  // long format: an undefined value is no row
+      const Interval ci = m.ci ? r.c.intervals.*(m.ci) : Interval{kNaN, kNaN};
+      csv += fmt::format("{},{},{},{},{},{}\n", key, m.name, number(v), number(ci.low),
+                         number(ci.high), csv_field(m.unit));
+    }
   }
   return csv;
 }
@@ -380,7 +487,8 @@ json axes_json(const std::vector<StudyAxis>& axes) {
     json axis = {{"pointer", a.pointer},
                  {"label", a.label},
                  {"values", a.values},
-                 {"value_labels", axis_value_labels(a)}};
+                 {"value_labels", axis_value_labels(a)},
+                 {"value_ids", axis_value_ids(a)}};
     if (!a.sets.empty()) {
       json sets = json::array();
       for (const auto& pairs : a.sets) {
@@ -620,9 +728,24 @@ json paired_json(const PairedComparison& c) {
           {"p_sign_test", c.p}};
 }
 
+json means_json(const MethodStatistics& m) {
+  json out = json::object();
+  for (std::size_t k = 0; k < m.means.size(); ++k)
+    out[ranked_quantities()[k].id] = {{"mean", value(m.means[k].mean)},
+                                      {"ci", interval_json(m.means[k].interval)}};
+  return out;
+}
+
 json method_statistics_json(const MethodStatistics& m) {
   return {{"method", m.method},
           {"rank", m.rank},
+          {"group_leader", m.group_leader},
+          {"versus_leader",
+           {{"mean_difference", value(m.versus_leader.n ? m.versus_leader.mean_difference : 0.0)},
+            {"ci", m.versus_leader.n ? interval_json(m.versus_leader.interval)
+                                     : json::array({0.0, 0.0})},
+            {"pairs", m.versus_leader.n}}},
+          {"means", means_json(m)},
           {"rejected", m.rejected.empty() ? json() : json(m.rejected)},
           {"variants", m.variants},
           {"combined_relative_error", value(m.combined)},
@@ -644,10 +767,10 @@ json ranking_statistics_json(const RankingStatistics& s) {
     pairs.push_back({{"a", p.a},
                      {"b", p.b},
                      {"combined", paired_json(p.combined)},
-                     {"p_holm", p.p_holm},
-                     {"tied", p.tied}});
+                     {"separated", p.separated}});
   return {{"scene", s.scene.empty() ? json() : json(s.scene)},
           {"variants", s.variants},
+          {"confidence", s.confidence},
           {"methods", methods},
           {"pairs", pairs},
           {"headline", s.headline}};
@@ -682,12 +805,57 @@ json agreement_json(const ReportInputs& in) {
           {"headline", headline}};
 }
 
-// Rankings with statistics (study/ranking.h), overall and per scene.
+json interactions_json(const AxisStatistics& a) {
+  json out = json::array();
+  for (const Interaction& i : a.interactions) {
+    json levels = json::array();
+    for (const LevelRanking& l : a.levels) {
+      const MethodStatistics* m = l.ranking.find(i.method);
+      if (!m) continue;
+      const char* verdict = m->combined_interval.high < 1.0  ? "helps"
+                            : m->combined_interval.low > 1.0 ? "hurts"
+                                                             : "tie";
+      levels.push_back({{"value_label", l.value_label},
+                        {"value_id", l.value_id},
+                        {"combined", value(m->combined)},
+                        {"combined_ci", interval_json(m->combined_interval)},
+                        {"verdict", verdict}});
+    }
+    out.push_back({{"method", i.method},
+                   {"statistic", i.test.statistic},
+                   {"blocks", i.test.blocks},
+                   {"p", i.test.p},
+                   {"p_holm", i.p_holm},
+                   {"depends", i.depends},
+                   {"levels", levels}});
+  }
+  return out;
+}
+
+json by_axis_json(const StudyStatistics& s) {
+  json out = json::array();
+  for (const AxisStatistics& a : s.by_axis) {
+    json levels = json::array();
+    for (const LevelRanking& l : a.levels)
+      levels.push_back({{"value", l.value},
+                        {"value_label", l.value_label},
+                        {"value_id", l.value_id},
+                        {"ranking", ranking_statistics_json(l.ranking)}});
+    out.push_back({{"pointer", a.pointer},
+                   {"label", a.label},
+                   {"numeric", a.numeric},
+                   {"levels", levels},
+                   {"interactions", interactions_json(a)}});
+  }
+  return out;
+}
+
+// Rankings with statistics (study/ranking.h): overall, per scene, per level
+// of each axis, with the interaction tests and the report's lead.
 json statistics_json(const ReportInputs& in) {
+  const StudyStatistics s = study_statistics(in.plan, in.comparisons.rows, in.study.bump.axes);
   json per_scene = json::array();
-  for (const std::string& s : section_scenes(in.plan, SectionKind::kBump))
-    per_scene.push_back(
-        ranking_statistics_json(ranking_statistics(in.plan, in.comparisons.rows, s)));
+  for (const RankingStatistics& r : s.per_scene) per_scene.push_back(ranking_statistics_json(r));
   return {
       {"definition",
        "per variant v and method m, evaluator against its displacement ground truth, both as "
@@ -696,15 +864,30 @@ json statistics_json(const ReportInputs& in) {
        "by the view angle, [60, 75) deg); combined relative error C = (E_term + E_view) / "
        "(E_term(none) + E_view(none)), 1 for raw bump, lower is better; terminator improvement "
        "= 1 - mean(E_term/E_term(none)); view_vs_none: paired E_view - E_view(none)"},
-      {"confidence", kRankingConfidence},
-      {"interval", "percentile bootstrap over variants, 10000 resamples, seed 1"},
+      {"primary_metric",
+       {{"id", "combined_relative_error"},
+        {"name", "combined error relative to raw bump"},
+        {"unit", ranked_quantities().front().unit}}},
+      {"confidence", kRankingFamilyConfidence},
+      {"interval",
+       "percentile bootstrap over variants, seed 1: intervals of the combined error and of "
+       "paired differences at each ranking's confidence (95 % simultaneous over its K - 1 "
+       "comparisons, Bonferroni; 10,000 resamples, 20,000 for the rank groups' paired "
+       "differences); means of the other quantities at 95 %, 10,000 resamples"},
       {"test",
-       "two-sided exact sign test over variants; pairs of methods Holm-adjusted as one family; "
-       "tied when the interval of the mean paired difference contains 0 or p_holm >= 0.05"},
+       fmt::format("rank groups by the rule below; interactions: permutation test of the "
+                   "variance of the level means of C, levels exchanged within matched variants "
+                   "(same scene and other axes), {} permutations, seed 1, Holm-adjusted over "
+                   "every method and axis; depends when p_holm < {}",
+                   kInteractionPermutations, kSignificance)},
+      {"rule", rank_rule_text(s.overall.methods.size())},
       {"baseline", "none"},
       {"reference", "evaluator:displacement"},
-      {"overall", ranking_statistics_json(ranking_statistics(in.plan, in.comparisons.rows, ""))},
-      {"per_scene", per_scene}};
+      {"overall", ranking_statistics_json(s.overall)},
+      {"per_scene", per_scene},
+      {"by_axis", by_axis_json(s)},
+      {"headline", s.headline},
+      {"notes", s.notes}};
 }
 
 json bump_ranking_json(const ReportInputs& in) {
@@ -790,6 +973,9 @@ json report_json(const ReportInputs& in) {
           // Absolute: the same study run as `study.json` or `./study.json`
           // gives the same report (and keeps its figures).
           {"study", {{"name", in.study.name}, {"file", in.study.absolute_file}}},
+          {"provenance",
+           provenance_json(collect_provenance(in.study.absolute_file, in.versions))},
+          {"notices", in.study.notices},
           {"units", units_json()},
           {"axes", axes_json(in.study.bump.axes)},
           {"renderers", offered.renderers},
@@ -819,6 +1005,7 @@ void write_report_files(const ReportInputs& in, const std::string& folder) {
   write_text_file((out / "report.json").string(), report_json(in).dump(1) + "\n");
   write_text_file((out / "metrics.csv").string(),
                   comparison_csv(in, in.study.bump, bump_columns()));
+  write_text_file((out / "metrics-long.csv").string(), long_csv(in, in.study.bump));
 }
 
 }  // namespace penumbra

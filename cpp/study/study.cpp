@@ -411,6 +411,8 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
 
   StudyRunStats stats;
   stats.renders = plan.jobs.size();
+  if (options.log)
+    for (const std::string& notice : study.notices) options.log("notice: " + notice);
   if (options.dry_run) {
     dry_run_convergence(study, plan, cache, options, renderers, stats);
     count_planned(plan, cache, stats);

@@ -81,8 +81,22 @@ StudyAxis read_compound_axis(const json& a, const std::string& f, const std::str
   for (std::size_t k = 0; k < values.size(); ++k) {
     const std::string q = fmt::format("{}/values/{}", p, k);
     if (!values[k].is_object()) throw InputError(f, q, "expected {\"label\": ..., \"set\": {...}}");
-    reject_unknown(values[k], {"label", "set"}, f, q);
+    reject_unknown(values[k], {"id", "label", "set"}, f, q);
     const json& label = require(values[k], "label", f, q);
+    std::string id;
+    if (values[k].contains("id")) {
+      const json& i = values[k]["id"];
+      if (!i.is_string() || i.get<std::string>().empty() || i.get<std::string>().size() > 32 ||
+          i.get<std::string>().find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-_.") !=
+              std::string::npos)
+        throw InputError(f, q + "/id",
+                         "expected a short id of 1 to 32 lower-case letters, digits, '-', '_' or "
+                         "'.', such as \"ggx-diffuse\", got " + describe_json(i));
+      id = i.get<std::string>();
+      for (const std::string& other : axis.ids)
+        if (other == id)
+          throw InputError(f, q + "/id", fmt::format("the id \"{}\" is already used", id));
+    }
     const json& set = require(values[k], "set", f, q);
     if (!label.is_string()) throw InputError(f, q + "/label", "expected a string");
     if (!set.is_object() || set.empty())
@@ -96,6 +110,7 @@ StudyAxis read_compound_axis(const json& a, const std::string& f, const std::str
     }
     axis.values.push_back(label);
     axis.sets.push_back(std::move(pairs));
+    axis.ids.push_back(std::move(id));
   }
   return axis;
 }
@@ -316,6 +331,18 @@ GroundTruthSettings read_ground_truth(const json& g, const std::string& f) {
   return out;
 }
 
+// Every ranking measures against raw bump: a bump study that does not name
+// `none` gets it first, and a notice says so.
+void add_baseline(Study& s) {
+  if (s.bump.scenes.empty()) return;
+  for (const StudyMethod& m : s.bump.methods)
+    if (m.id == "none") return;
+  s.bump.methods.insert(s.bump.methods.begin(), StudyMethod{"none", json(), "none"});
+  s.notices.push_back(
+      "The study's methods do not include raw bump (\"none\"), the baseline of every ranking "
+      "and of the combined error: it was added to /methods.");
+}
+
 }  // namespace
 
 Study load_study(const std::string& path) {
@@ -359,6 +386,7 @@ Study load_study(const std::string& path) {
   s.bump.set = read_set(doc, f, "");
   s.bump.axes = read_axes(doc, f, "");
   s.bump.methods = read_method_list(doc, "methods", f, "", terminator_ids(), "method");
+  add_baseline(s);
   s.bump.renderers = read_renderers(doc, f, "");
   if (doc.contains("blender_spp")) {
     const long long spp = strict_integer(doc["blender_spp"], 1, 65536);

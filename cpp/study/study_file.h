@@ -29,6 +29,9 @@ struct StudyAxis {
   std::vector<nlohmann::json> values;
   // Compound axes only: per value, the (pointer, value) pairs it sets.
   std::vector<std::vector<std::pair<std::string, nlohmann::json>>> sets;
+  // Compound axes only: per value, its short id ("lambert"; "" when the
+  // study gives none): CSV cells and file names (plan.h axis_value_ids).
+  std::vector<std::string> ids;
 };
 
 // A method as the study names it: an id and optional parameter values.
@@ -130,6 +133,9 @@ struct Study {
   int blender_spp = 32;
   GroundTruthSettings ground_truth;
   std::vector<StudyPlot> plots;
+  // What the reader changed or assumed that the user must hear (a raw-bump
+  // baseline added, say): printed by `run` and shown by the report.
+  std::vector<std::string> notices;
 };
 
 Study load_study(const std::string& path);

@@ -2,8 +2,12 @@
 // and optionally the log lines that start with `prefix` collected in *log.
 #pragma once
 
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "study/study.h"
 
@@ -21,6 +25,19 @@ inline StudyOptions test_study_options(const std::string& output_dir,
       if (line.rfind(prefix, 0) == 0) log->push_back(line);
     };
   return o;
+}
+
+// A study folder's report.json without its provenance (the date it was
+// written, the machine): what two runs of one study must agree on, byte for
+// byte.
+inline std::string report_without_provenance(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  nlohmann::json doc = nlohmann::json::parse(text.str(), nullptr, false);
+  if (doc.is_discarded()) return text.str();
+  doc.erase("provenance");
+  return doc.dump(1);
 }
 
 }  // namespace penumbra

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "study/ranking.h"
+#include "study/ranking_text.h"
 
 namespace penumbra {
 namespace {
@@ -96,6 +97,95 @@ TEST(Ranking, PerSceneSelectsItsVariantsAndNoBaselineGivesNoRanking) {
   Synthetic without;
   without.add(0, "good", 0.1, 0.1, 0.0);
   EXPECT_TRUE(ranking_statistics(without.plan, without.rows, "").methods.empty());
+}
+
+// Two scenes x two amplitudes x twelve light directions. "flip" helps at
+// A = 0.02 (0.7 of raw bump's error) and hurts at A = 0.005 (2.5 of it);
+// "steady" is 0.8 of raw bump's everywhere. Raw bump's own error is ten
+// times larger at A = 0.02, so the mean absolute error puts flip below raw
+// bump while the ranking metric puts it above.
+struct Sweep {
+  Synthetic t;
+  std::vector<StudyAxis> axes;
+};
+Sweep interaction_sweep() {
+  Sweep s;
+  StudyAxis amplitude;
+  amplitude.pointer = "/height/amplitude";
+  amplitude.label = "amplitude A (scene units)";
+  amplitude.values = {0.005, 0.02};
+  StudyAxis light;
+  light.pointer = "/light/direction";
+  light.label = "light direction";
+  for (int k = 0; k < 12; ++k) light.values.push_back(nlohmann::json::array({-1, 0, 0.05 * k}));
+  s.axes = {amplitude, light};
+  std::size_t v = 0;
+  for (const char* scene : {"cylinder", "sphere"})
+    for (int l = 0; l < 12; ++l)
+      for (int a = 0; a < 2; ++a, ++v) {
+        const double none = a == 1 ? 0.1 : 0.01, jitter = 1.0 + 0.01 * ((l + a) % 3 - 1);
+        s.t.add(v, "none", none, 0.0, 0.0);
+        s.t.add(v, "flip", none * (a == 1 ? 0.7 : 2.5) * jitter, 0.0, 0.0);
+        s.t.add(v, "steady", none * 0.8 * jitter, 0.0, 0.0);
+        Variant& var = s.t.plan.variants[v];
+        var.scene = scene;
+        var.section = SectionKind::kBump;
+        var.axis_values = {amplitude.values[static_cast<std::size_t>(a)],
+                           light.values[static_cast<std::size_t>(l)]};
+      }
+  return s;
+}
+
+TEST(StudyStatistics, AnInteractionIsFoundRankedPerLevelAndSaidInTheLead) {
+  const Sweep w = interaction_sweep();
+  const StudyStatistics s = study_statistics(w.t.plan, w.t.rows, w.axes);
+  ASSERT_EQ(s.by_axis.size(), 2u);
+  const AxisStatistics& amp = s.by_axis[0];
+  ASSERT_EQ(amp.levels.size(), 2u);
+  for (const Interaction& i : amp.interactions)
+    EXPECT_EQ(i.depends, i.method == "flip") << i.method << " p_holm " << i.p_holm;
+  for (const Interaction& i : s.by_axis[1].interactions) EXPECT_FALSE(i.depends) << i.method;
+  // Per level: flip first where it helps, behind raw bump where it hurts.
+  EXPECT_EQ(amp.levels[1].ranking.methods.front().method, "flip");
+  EXPECT_GT(amp.levels[0].ranking.find("flip")->rank, amp.levels[0].ranking.find("none")->rank);
+  EXPECT_EQ(amp.levels[0].value_id, "0.005");
+  // Overall, flip is worse than raw bump (mean C 1.6), steady leads.
+  EXPECT_EQ(s.overall.methods.front().method, "steady");
+  EXPECT_GT(s.overall.find("flip")->combined_interval.low, 1.0);
+  ASSERT_GE(s.headline.size(), 3u);
+  ASSERT_LE(s.headline.size(), 6u);
+  bool said = false;
+  for (const std::string& line : s.headline)
+    said |= line.find("flip helps at amplitude A = 0.02") != std::string::npos &&
+            line.find("hurts at amplitude A = 0.005") != std::string::npos &&
+            line.find("depends on the amplitude A") != std::string::npos;
+  EXPECT_TRUE(said) << s.headline[2];
+  // The absolute mean disagrees (flip below raw bump) and a note says why.
+  ASSERT_EQ(s.notes.size(), 1u);
+  EXPECT_NE(s.notes[0].find("flip is below raw bump"), std::string::npos) << s.notes[0];
+  EXPECT_NE(s.notes[0].find("largest at amplitude A = 0.02"), std::string::npos) << s.notes[0];
+}
+
+TEST(StudyStatistics, OneRuleDecidesEveryRankAndEveryVerdict) {
+  // The leader sentence names exactly the methods of rank group 1, and a
+  // method's "worse than raw bump" verdict is its interval above 1 at the
+  // ranking's own confidence: the same intervals the groups use.
+  const Sweep w = interaction_sweep();
+  const StudyStatistics s = study_statistics(w.t.plan, w.t.rows, w.axes);
+  for (const RankingStatistics* r : {&s.overall, &s.by_axis[0].levels[0].ranking,
+                                     &s.by_axis[0].levels[1].ranking}) {
+    const std::string lead = finding_sentences(*r).front();
+    for (const MethodStatistics& m : r->methods) {
+      const bool named = lead.find(" " + m.method) != std::string::npos;
+      EXPECT_EQ(named, m.rank == 1) << m.method << ": " << lead;
+      if (m.method != m.group_leader) {
+        const MethodStatistics* leader = r->find(m.group_leader);
+        EXPECT_EQ(leader->rank, m.rank);
+        EXPECT_TRUE(m.versus_leader.interval.contains(0.0));
+      }
+    }
+  }
+  EXPECT_NE(s.headline[1].find("flip"), std::string::npos) << s.headline[1];
 }
 
 TEST(Agreement, SummariesPerRendererAndWhatWithThresholdCounts) {

@@ -180,6 +180,41 @@ def check_csv(path, doc, axes, comparisons, method_key):
     return table
 
 
+def check_long_csv(path, doc, axes, comparisons, wide):
+    """metrics-long.csv: the documented header, one row per comparison and
+    defined metric, each value equal to the wide file's, units as documented."""
+    with open(path, newline='', encoding='utf-8') as f:
+        rows = list(csv.reader(f))
+    header, body = rows[0], rows[1:]
+    documented = [c[0] for c in expected_columns(doc['columns'], axes)]
+    check(header == documented, f'metrics-long.csv header {header} != documented {documented}')
+    if header != documented:
+        return
+    wide_name = {'combined_relative_error': 'combined_relative_error',
+                 'profile.rmse_terminator': 'profile_rmse_terminator_rel',
+                 'view.rmse_grazing': 'view_rmse_grazing_rel',
+                 'image.rmse': 'image_rmse_w_m2_sr',
+                 'profile.position_error_deg': 'position_error_deg'}
+    units = {'combined_relative_error': "fraction of raw bump's",
+             'profile.rmse_terminator': 'fraction of albedo*E/pi', 'image.rmse': 'W m^-2 sr^-1',
+             'profile.position_error_deg': 'degrees', 'image.ssim': 'unitless'}
+    by_key = {(r['variant'], r['method_label'], r['renderer'],
+               f"{r['reference_renderer']}:{r['reference_representation']}"): r for r in wide}
+    seen = set()
+    for r in (dict(zip(header, row)) for row in body):
+        key = (r['variant'], r['method'], r['renderer'], r['reference'])
+        check(key in by_key, f'metrics-long.csv row {key} has no comparison')
+        seen.add(key)
+        if r['metric'] in units:
+            check(r['unit'] == units[r['metric']], f"unit of {r['metric']}: {r['unit']}")
+        w = by_key.get(key, {}).get(wide_name.get(r['metric'], ''), None)
+        if w is not None:
+            check(w != '' and float(w) == float(r['value']),
+                  f"metrics-long.csv {key} {r['metric']} = {r['value']}, metrics.csv {w}")
+    check(len(seen) == len(comparisons), f'metrics-long.csv covers {len(seen)} of '
+          f'{len(comparisons)} comparisons')
+
+
 def check_light(table):
     for r in table:
         d = [float(r[f'light_direction_{c}']) for c in 'xyz']
@@ -222,6 +257,10 @@ def main():
 
         table = check_csv(os.path.join(out, 'metrics.csv'), docs['files']['metrics.csv'],
                           report['axes'], report['comparisons'], 'method')
+        if table:
+            check_long_csv(os.path.join(out, 'metrics-long.csv'),
+                           docs['files']['metrics-long.csv'], report['axes'],
+                           report['comparisons'], table)
         lowpoly = report['lowpoly']
         check_csv(os.path.join(out, 'lowpoly.csv'), docs['files']['lowpoly.csv'],
                   lowpoly['axes'], lowpoly['comparisons'], 'offset')

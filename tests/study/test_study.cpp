@@ -124,7 +124,8 @@ TEST_F(Study, InterruptedAndResumedEqualsCleanWithNoRenderDoneTwice) {
   EXPECT_EQ(b2.cached, 5u + 2u);
   EXPECT_EQ(b2.rendered, a.rendered - 5);  // each render exactly once over both runs
   ASSERT_TRUE(b2.complete());
-  EXPECT_EQ(read_text(path("clean/report.json")), read_text(path("resumed/report.json")));
+  EXPECT_EQ(report_without_provenance(path("clean/report.json")),
+            report_without_provenance(path("resumed/report.json")));
   EXPECT_EQ(read_text(path("clean/metrics.csv")), read_text(path("resumed/metrics.csv")));
   // A third run renders nothing.
   const StudyRunStats b3 = run_study(study, second);
@@ -153,14 +154,14 @@ TEST_F(Study, ComparisonsAreKeptBetweenRunsAndGiveTheSameReport) {
   // Every render's preview, and each test render's difference from its truth.
   EXPECT_EQ(first.pictures_drawn, 2u * (1 + 3 + 3));
   EXPECT_EQ(first.pictures_kept, 0u);
-  const std::string report = read_text(path("out/report.json"));
+  const std::string report = report_without_provenance(path("out/report.json"));
   const std::string csv = read_text(path("out/metrics.csv"));
   const StudyRunStats second = run_study(study, o);
   EXPECT_EQ(second.comparisons_measured, 0u);
   EXPECT_EQ(second.comparisons_kept, first.comparisons_measured);
   EXPECT_EQ(second.pictures_drawn, 0u);
   EXPECT_EQ(second.pictures_kept, first.pictures_drawn);
-  EXPECT_EQ(read_text(path("out/report.json")), report);
+  EXPECT_EQ(report_without_provenance(path("out/report.json")), report);
   EXPECT_EQ(read_text(path("out/metrics.csv")), csv);
 
   const std::string store = path("out/cache/comparisons.bin");
@@ -170,7 +171,7 @@ TEST_F(Study, ComparisonsAreKeptBetweenRunsAndGiveTheSameReport) {
   EXPECT_EQ(damaged.comparisons_measured, first.comparisons_measured);
   ASSERT_EQ(damaged.warnings.size(), 1u);
   EXPECT_NE(damaged.warnings[0].find(store), std::string::npos) << damaged.warnings[0];
-  EXPECT_EQ(read_text(path("out/report.json")), report);
+  EXPECT_EQ(report_without_provenance(path("out/report.json")), report);
   EXPECT_EQ(read_text(store), kept);  // rewritten whole
 
   // One render replaced by another image under its key (as a renderer that
@@ -246,6 +247,7 @@ TEST_F(Study, CompoundAxisSetsSeveralPointersAndSkipsWhatARendererCannotRender) 
        {"values",
         {{{"label", "Lambert"}, {"set", {{"/terminator/lobes", "diffuse"}}}},
          {{"label", "GGX, all lobes"},
+          {"id", "ggx-all"},
           {"set", {{"/material/specular", {{"weight", 0.4}}}, {"/terminator/lobes", "all"}}}}}}}};
   j["methods"] = {"none", "cycles45", "schuessler2017-walk"};
   const ::penumbra::Study study = load_study(write("compound.json", j));
@@ -270,9 +272,12 @@ TEST_F(Study, CompoundAxisSetsSeveralPointersAndSkipsWhatARendererCannotRender) 
                m.at("why").get<std::string>().find("GGX") != std::string::npos;
     }
   EXPECT_TRUE(listed) << report.at("missing").dump();
-  // The variant's scene has both values set.
-  const std::string scene = read_text(path("out/metrics.csv"));
-  EXPECT_NE(scene.find("GGX, all lobes"), std::string::npos);
+  // Short ids: the study's own, else made from the label; the CSV's axis
+  // column holds them, not the labels.
+  EXPECT_EQ(axis.at("value_ids"), json({"lambert", "ggx-all"}));
+  const std::string csv = read_text(path("out/metrics.csv"));
+  EXPECT_NE(csv.find(",ggx-all,"), std::string::npos);
+  EXPECT_EQ(csv.find("GGX, all lobes"), std::string::npos);
 }
 
 TEST_F(Study, ReportIsWrittenAsDumpedAndCsvHasOneRowPerComparison) {
@@ -418,6 +423,31 @@ TEST_F(Study, LowPolyStudyComparesEveryOffsetWithTheAnalyticSurface) {
 // MAX_VARIANT_SECTIONS = 48): the page has 48 variant sections, the first
 // and the last among them, says how many there are, and report.json and
 // metrics.csv keep every variant.
+// Every ranking is relative to raw bump: a study that does not name it gets
+// it, and the notice reaches the log and the report.
+TEST_F(Study, AStudyWithoutRawBumpGetsItAsTheBaselineAndSaysSo) {
+  json j = tiny_evaluator("chiang2019");
+  j["methods"] = {"chiang2019", "estevez2019"};
+  j["ground_truth"] = {{"max_edge_refinements", 0}, {"max_spp_refinements", 0}};
+  const ::penumbra::Study study = load_study(write("no-none.json", j));
+  ASSERT_EQ(study.bump.methods.size(), 3u);
+  EXPECT_EQ(study.bump.methods[0].id, "none");
+  ASSERT_EQ(study.notices.size(), 1u);
+  EXPECT_NE(study.notices[0].find("raw bump (\"none\")"), std::string::npos) << study.notices[0];
+  StudyOptions o = test_study_options(path("out"));
+  std::vector<std::string> log;
+  o.log = [&](const std::string& line) { log.push_back(line); };
+  o.figures = false;
+  ASSERT_TRUE(run_study(study, o).complete());
+  EXPECT_EQ(log.at(0), "notice: " + study.notices[0]);
+  const json report = json::parse(read_text(path("out/report.json")));
+  EXPECT_EQ(report["notices"], json::array({study.notices[0]}));
+  EXPECT_EQ(report["statistics"]["overall"]["methods"].size(), 3u);
+  // A study that names it gets no notice.
+  j["methods"] = {"none", "chiang2019"};
+  EXPECT_TRUE(load_study(write("with-none.json", j)).notices.empty());
+}
+
 TEST_F(Study, AReportOfManyVariantsShowsASampleAndSaysSo) {
   json j = tiny_evaluator("chiang2019");
   json amplitudes = json::array();
@@ -569,9 +599,9 @@ TEST_F(Study, TheStudyFilesSpellingDoesNotChangeTheReport) {
   const ::penumbra::Study relative = load_study("./named.json");
   fs::current_path(cwd);
   run_study(load_study(path("named.json")), test_study_options(path("out")));
-  const std::string absolute_report = read_text(path("out/report.json"));
+  const std::string absolute_report = report_without_provenance(path("out/report.json"));
   run_study(relative, test_study_options(path("out")));
-  EXPECT_TRUE(read_text(path("out/report.json")) == absolute_report);
+  EXPECT_TRUE(report_without_provenance(path("out/report.json")) == absolute_report);
   EXPECT_NE(absolute_report.find("\"file\": \"" + path("named.json") + "\""), std::string::npos);
 }
 
