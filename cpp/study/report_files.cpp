@@ -424,8 +424,8 @@ const std::vector<LongMetric>& long_metrics() {
   static const char* rel = "fraction of albedo*E/pi";
   static const char* radiance = "W m^-2 sr^-1";
   static const std::vector<LongMetric> m{
-      {"combined_relative_error", "fraction of raw bump's", [](const R& r) { return r.combined; },
-       nullptr},
+      {"combined_relative_error", ranked_quantities().front().unit,
+       [](const R& r) { return r.combined; }, nullptr},
       {"profile.rmse_terminator", rel, [](const R& r) { return r.c.profile.rmse_terminator; },
        &I::rmse_terminator},
       {"profile.rmse_overall", rel, [](const R& r) { return r.c.profile.rmse_overall; }, nullptr},
@@ -976,6 +976,7 @@ json report_json(const ReportInputs& in) {
           {"provenance",
            provenance_json(collect_provenance(in.study.absolute_file, in.versions))},
           {"notices", in.study.notices},
+          {"figures", {{"methods", in.study.figure_methods}}},
           {"units", units_json()},
           {"axes", axes_json(in.study.bump.axes)},
           {"renderers", offered.renderers},

@@ -331,6 +331,33 @@ GroundTruthSettings read_ground_truth(const json& g, const std::string& f) {
   return out;
 }
 
+// "figures": {"methods": [...]}: labels of the study's own bump methods, as
+// the study names them ("shading-offset(s=0.3)", or its id when that is
+// unambiguous).
+std::vector<std::string> read_figure_methods(const json& figures, const std::string& f,
+                                             const Section& bump) {
+  if (!figures.is_object()) throw InputError(f, "/figures", "expected an object");
+  reject_unknown(figures, {"methods"}, f, "/figures");
+  std::vector<std::string> out;
+  if (!figures.contains("methods")) return out;
+  const json& list = figures["methods"];
+  if (!list.is_array()) throw InputError(f, "/figures/methods", "expected an array of methods");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string p = fmt::format("/figures/methods/{}", i);
+    if (!list[i].is_string()) throw InputError(f, p, "expected a method label (string)");
+    const std::string name = list[i].get<std::string>();
+    std::vector<std::string> matches;
+    for (const StudyMethod& m : bump.methods)
+      if (m.label == name || m.id == name) matches.push_back(m.label);
+    if (matches.size() != 1)
+      throw InputError(f, p,
+                       fmt::format("expected one of the study's /methods by label, got \"{}\" ({})",
+                                   name, matches.empty() ? "not in the study" : "ambiguous"));
+    out.push_back(matches.front());
+  }
+  return out;
+}
+
 // Every ranking measures against raw bump: a bump study that does not name
 // `none` gets it first, and a notice says so.
 void add_baseline(Study& s) {
@@ -351,7 +378,7 @@ Study load_study(const std::string& path) {
   if (!doc.is_object()) throw InputError(f, "", "expected a JSON object");
   reject_unknown(doc,
                  {"version", "name", "scenes", "set", "axes", "methods", "renderers", "blender_spp",
-                  "ground_truth", "plots", "lowpoly", "filtering", "interplay"},
+                  "ground_truth", "plots", "figures", "lowpoly", "filtering", "interplay"},
                  f, "");
   const json& version = require(doc, "version", f, "");
   if (strict_integer(version, 1, 1000) != kStudyFormatVersion)
@@ -398,6 +425,7 @@ Study load_study(const std::string& path) {
   }
   if (doc.contains("ground_truth")) s.ground_truth = read_ground_truth(doc["ground_truth"], f);
   if (doc.contains("plots")) s.plots = read_plots(doc["plots"], f, s.bump.axes);
+  if (doc.contains("figures")) s.figure_methods = read_figure_methods(doc["figures"], f, s.bump);
   return s;
 }
 

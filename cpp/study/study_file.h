@@ -133,6 +133,9 @@ struct Study {
   int blender_spp = 32;
   GroundTruthSettings ground_truth;
   std::vector<StudyPlot> plots;
+  // The methods (labels) the figures show beside raw bump and the leaders
+  // (JSON "figures": {"methods": [...]}); empty: the automatic pick.
+  std::vector<std::string> figure_methods;
   // What the reader changed or assumed that the user must hear (a raw-bump
   // baseline added, say): printed by `run` and shown by the report.
   std::vector<std::string> notices;

@@ -195,7 +195,7 @@ def check_long_csv(path, doc, axes, comparisons, wide):
                  'view.rmse_grazing': 'view_rmse_grazing_rel',
                  'image.rmse': 'image_rmse_w_m2_sr',
                  'profile.position_error_deg': 'position_error_deg'}
-    units = {'combined_relative_error': "fraction of raw bump's",
+    units = {'combined_relative_error': "fraction of raw bump's E_term + E_view in the same variant",
              'profile.rmse_terminator': 'fraction of albedo*E/pi', 'image.rmse': 'W m^-2 sr^-1',
              'profile.position_error_deg': 'degrees', 'image.ssim': 'unitless'}
     by_key = {(r['variant'], r['method_label'], r['renderer'],

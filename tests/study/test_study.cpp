@@ -353,6 +353,20 @@ TEST_F(Study, MalformedStudiesNameFileAndPointer) {
          j["plots"] = {{{"metric", "image.ssim"}, {"x", "/nope"}, {"y", "/height/amplitude"}}};
        },
        "/plots/0/x", "axes"},
+      {[](json& j) { j["figures"] = {{"methods", {"mitsuba3"}}}; }, "/figures/methods/0",
+       "not in the study"},
+      {[](json& j) { j["figures"] = {{"method", {"none"}}}; }, "/figures/method", "unknown key"},
+      {[](json& j) {
+         j["axes"] = {{{"name", "shading"},
+                       {"values",
+                        {{{"label", "a"}, {"id", "Bad Id"}, {"set", {{"/terminator/lobes", "all"}}}}}}}};
+       },
+       "/axes/0/values/0/id", "short id"},
+      {[](json& j) {
+         const json value = {{"label", "a"}, {"id", "same"}, {"set", {{"/terminator/lobes", "all"}}}};
+         j["axes"] = {{{"name", "shading"}, {"values", {value, value}}}};
+       },
+       "/axes/0/values/1/id", "already used"},
   };
   expect_refused(tiny(), "", cases, [&](const json& j) { return write("bad.json", j); });
   // A pointer that names no scene value fails when the study expands, with
