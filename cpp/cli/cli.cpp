@@ -45,15 +45,7 @@ std::vector<std::string> external_renderer_ids() {
 
 }  // namespace
 
-// Unlike idiff, whose exit 2 is a failed comparison, Penumbra's 2 is bad input
-// and 3 a failed comparison, so that scripts can tell the two apart.
 namespace {
-
-constexpr const char* kExitCodes =
-    "Exit status: 0 success; 1 a run failed (renderer or internal error, NaN or Inf in a "
-    "render); 2 bad input (usage, scene or study file, output path, a render over --max-memory); "
-    "3 a comparison missed its bound or an image holds NaN/Inf (compare, calibrate); 128+N "
-    "stopped by signal N (130 Ctrl-C, 143 SIGTERM), nothing half-written.";
 
 // "penumbra rendr": name the unknown subcommand and list the real ones
 // (CLI11 only says the argument was not expected).
@@ -172,7 +164,8 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   CLI::App app{"Penumbra: shadow-terminator laboratory (reference evaluator)", "penumbra"};
   app.require_subcommand(1);
   app.set_version_flag("--version", kPenumbraVersion);
-  app.footer(kExitCodes);
+  const std::string exit_status = exit_status_text();
+  app.footer(exit_status);
   // Global options (--threads) are accepted after the subcommand too.
   app.fallthrough();
   int threads = 0;
@@ -387,7 +380,14 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   FilteringArgs filtering_args;
   CLI::App* filtering_cmd = add_filtering_command(app, filtering_args);
 
-  for (CLI::App* sub : app.get_subcommands({})) sub->footer(kExitCodes);
+  bool exit_codes_json = false;
+  CLI::App* exit_codes = app.add_subcommand(
+      "exit-codes", "list the exit statuses of every command (code, name, meaning)");
+  exit_codes->add_flag("--json", exit_codes_json,
+                       "print a JSON array of {code, name, meaning} (the signal row: code 128, "
+                       "meaning \"128+N: ...\")");
+
+  for (CLI::App* sub : app.get_subcommands({})) sub->footer(exit_status);
   if (const auto unknown = unknown_subcommand(app, argc, argv)) {
     err << "penumbra: error: " << *unknown << " (see penumbra --help)\n";
     return kExitBadInput;
@@ -420,6 +420,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     if (*pyramid_cmd) return command_pyramid(pyramid_args, out);
     if (*filtering_cmd) return command_filtering(filtering_args, out, err);
     if (*bake_cmd) return command_bake(bake_args, out);
+    if (*exit_codes) return command_exit_codes(exit_codes_json, out);
   } catch (const InputError& e) {
     err << "penumbra: error: " << e.what() << "\n";
     return kExitBadInput;

@@ -126,6 +126,8 @@ struct RunBatchArgs {
 };
 
 int command_methods(bool as_json, std::ostream& out);
+// The exit statuses (cli/exit_codes.h), as a table or a JSON array.
+int command_exit_codes(bool as_json, std::ostream& out);
 int command_renderers(bool as_json, std::ostream& out);
 int command_render(const RenderArgs& a, std::ostream& out, std::ostream& err);
 int command_export(const ExportArgs& a, std::ostream& out);
