@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "analysis/measure.h"
 #include "analysis/metrics_json.h"
 #include "export/export.h"
 #include "image/image_io.h"
@@ -244,11 +245,12 @@ struct RowMaker {
         row.missing +=
             fmt::format("{} failed: {}; ", specs[i].label, result.renders[i].error.substr(0, 200));
     if (row.missing.empty()) {
-      const double radiance = radiance_scale(specs[ri].scene);
-      const ProfileOptions po;
-      row.profile = compare_profiles(terminator_profile(images[ti], radiance, po),
-                                     terminator_profile(images[ri], radiance, po), po);
-      row.image = compare_images(images[ti], images[ri]);
+      MeasureOptions options;
+      options.scale = radiance_scale(specs[ri].scene);
+      options.intervals = options.view = false;
+      const Measurement m = measure(images[ti], images[ri], options);
+      row.profile = m.profile;
+      row.image = m.image;
     }
     result.rows.push_back(std::move(row));
     return result.rows.back();

@@ -439,7 +439,7 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
           : std::vector<FilteringEntry>{};
   std::optional<InterplayResult> interplay;
   if (study.interplay)
-    interplay = run_interplay_section(*study.interplay, out.string(), cache, renderers.identities,
+    interplay = run_interplay_section(*study.interplay, out.string(), cache, renderers,
                                       options.jobs, options.log);
   write_report_files({study, plan, comparisons, renderers.versions, r.errors, r.images.done,
                       convergence, filtering, interplay ? &*interplay : nullptr},
