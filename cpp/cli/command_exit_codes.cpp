@@ -2,12 +2,13 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "cli/commands.h"
-#include "cli/exit_codes.h"
+#include "cli/command.h"
 
 namespace penumbra {
 
-int command_exit_codes(bool as_json, std::ostream& out) {
+namespace {
+
+int exit_codes(bool as_json, std::ostream& out) {
   if (as_json) {
     nlohmann::json list = nlohmann::json::array();
     for (const ExitCodeInfo& info : kExitCodes)
@@ -21,6 +22,18 @@ int command_exit_codes(bool as_json, std::ostream& out) {
   for (const ExitCodeInfo& info : kExitCodes)
     out << fmt::format("{:<6} {:<10} {}\n", info.shown, info.name, info.meaning);
   return kExitOk;
+}
+
+}  // namespace
+
+Command add_exit_codes_command(CLI::App& app, SharedOptions&) {
+  auto as_json = std::make_shared<bool>(false);
+  CLI::App* cmd = app.add_subcommand(
+      "exit-codes", "list the exit statuses of every command (code, name, meaning)");
+  cmd->add_flag("--json", *as_json,
+                "print a JSON array of {code, name, meaning} (the signal row: code 128, "
+                "meaning \"128+N: ...\")");
+  return {cmd, [as_json](const CommandContext& c) { return exit_codes(*as_json, c.out); }};
 }
 
 }  // namespace penumbra

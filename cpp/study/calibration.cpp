@@ -179,7 +179,7 @@ std::vector<Image> render_specs(const std::vector<Spec>& specs, const Calibratio
   result.renders.resize(specs.size());
   std::vector<Image> images(specs.size());
   ExecuteOptions eo;
-  eo.jobs = options.jobs;
+  eo.jobs = options.parallelism.renders;
   eo.log = options.log;
   const ExecuteResult executed = execute_tasks(
       specs.size(), eo,
@@ -188,7 +188,7 @@ std::vector<Image> render_specs(const std::vector<Spec>& specs, const Calibratio
         CalibrationRender& r = result.renders[i];
         RenderSettings settings;
         settings.timeout_s = options.timeout_s;
-        settings.threads = threads_per_job(options.jobs);
+        settings.threads = options.parallelism.threads_per_render;
         settings.log_path = (renders_dir / (spec.label + ".log")).string();
         std::error_code ignored;
         fs::remove(settings.log_path, ignored);  // a log per attempt, not appended forever
