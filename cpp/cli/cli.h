@@ -4,13 +4,9 @@
 
 #include <ostream>
 
-namespace penumbra {
+#include "cli/exit_codes.h"
 
-// Documented exit codes (also in `penumbra --help`).
-inline constexpr int kExitOk = 0;
-inline constexpr int kExitFailure = 1;    // a run failed: renderer or internal error
-inline constexpr int kExitBadInput = 2;   // usage, scene file or output path
-inline constexpr int kExitThreshold = 3;  // a comparison missed its bound, or NaN/Inf pixels
+namespace penumbra {
 
 int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& err);
 

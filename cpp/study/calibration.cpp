@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "analysis/measure.h"
 #include "analysis/metrics_json.h"
 #include "export/export.h"
 #include "image/image_io.h"
@@ -178,7 +179,7 @@ std::vector<Image> render_specs(const std::vector<Spec>& specs, const Calibratio
   result.renders.resize(specs.size());
   std::vector<Image> images(specs.size());
   ExecuteOptions eo;
-  eo.jobs = options.jobs;
+  eo.jobs = options.parallelism.renders;
   eo.log = options.log;
   const ExecuteResult executed = execute_tasks(
       specs.size(), eo,
@@ -187,7 +188,7 @@ std::vector<Image> render_specs(const std::vector<Spec>& specs, const Calibratio
         CalibrationRender& r = result.renders[i];
         RenderSettings settings;
         settings.timeout_s = options.timeout_s;
-        settings.threads = threads_per_job(options.jobs);
+        settings.threads = options.parallelism.threads_per_render;
         settings.log_path = (renders_dir / (spec.label + ".log")).string();
         std::error_code ignored;
         fs::remove(settings.log_path, ignored);  // a log per attempt, not appended forever
@@ -244,11 +245,12 @@ struct RowMaker {
         row.missing +=
             fmt::format("{} failed: {}; ", specs[i].label, result.renders[i].error.substr(0, 200));
     if (row.missing.empty()) {
-      const double radiance = radiance_scale(specs[ri].scene);
-      const ProfileOptions po;
-      row.profile = compare_profiles(terminator_profile(images[ti], radiance, po),
-                                     terminator_profile(images[ri], radiance, po), po);
-      row.image = compare_images(images[ti], images[ri]);
+      MeasureOptions options;
+      options.scale = radiance_scale(specs[ri].scene);
+      options.intervals = options.view = false;
+      const Measurement m = measure(images[ti], images[ri], options);
+      row.profile = m.profile;
+      row.image = m.image;
     }
     result.rows.push_back(std::move(row));
     return result.rows.back();

@@ -11,13 +11,15 @@
 
 #include "analysis/metrics.h"
 #include "renderers/renderers.h"
+#include "util/parallel.h"
 
 namespace penumbra {
 
 struct CalibrationOptions {
-  std::string output_dir;                       // renders/, calibration.{json,csv,md} go here
-  std::string scenes_dir;                       // holds cylinder.json and sphere.json
-  int jobs = 1;                                 // renders in parallel
+  std::string output_dir;  // renders/, calibration.{json,csv,md} go here
+  std::string scenes_dir;  // holds cylinder.json and sphere.json
+  // Renders at once and threads per render (util/parallel.h).
+  Parallelism parallelism = resolve_parallelism(1);
   double timeout_s = 600.0;                     // per external render
   int blender_spp = 64;                         // Cycles samples per pixel (its noise, not ours)
   std::vector<std::string> sets;                // overrides applied to both base scenes

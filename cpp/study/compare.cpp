@@ -53,13 +53,13 @@ struct Measurer {
   const std::vector<std::uint64_t>& digests;
   ComparisonStore* store;
 
-  ComparisonMetrics operator()(std::size_t test, std::size_t reference, double scale,
+  Measurement operator()(std::size_t test, std::size_t reference, double scale,
                                ComparisonExtent extent) const {
     if (!store)
       return measure_comparison(renders.images[test], renders.images[reference], scale, extent);
     const std::uint64_t key = comparison_key(digests[test], digests[reference], scale, extent);
-    if (std::optional<ComparisonMetrics> kept = store->find(key)) return *kept;
-    ComparisonMetrics m =
+    if (std::optional<Measurement> kept = store->find(key)) return *kept;
+    Measurement m =
         measure_comparison(renders.images[test], renders.images[reference], scale, extent);
     store->insert(key, m);
     return m;
@@ -79,7 +79,7 @@ void add_comparisons(const Plan& plan, const Measurer& measure, std::size_t i, C
       kind == SectionKind::kLowPoly ? ComparisonExtent::kFullShadows : ComparisonExtent::kFull;
   for (const auto& [ref_renderer, ref] : refs) {
     if (ref < 0 || !measure.renders.done[ref]) continue;
-    ComparisonMetrics m = measure(i, static_cast<std::size_t>(ref), scale, extent);
+    Measurement m = measure(i, static_cast<std::size_t>(ref), scale, extent);
     ComparisonRow row;
     row.variant = job.variant, row.job = i, row.reference_job = static_cast<std::size_t>(ref);
     row.renderer = job.renderer, row.reference_renderer = ref_renderer;
@@ -107,7 +107,7 @@ void add_agreement(const Plan& plan, const Measurer& measure, std::size_t i, Com
         plan.jobs[k].method == job.method)
       ref = static_cast<long>(k);
   if (ref < 0 || !measure.renders.done[ref]) return;
-  const ComparisonMetrics m = measure(i, static_cast<std::size_t>(ref), radiance_scale(job.scene),
+  const Measurement m = measure(i, static_cast<std::size_t>(ref), radiance_scale(job.scene),
                                       ComparisonExtent::kProfileOnly);
   AgreementRow row;
   row.variant = job.variant, row.job = i, row.reference_job = static_cast<std::size_t>(ref);

@@ -53,7 +53,7 @@ T get(const char*& in) {
   return value;
 }
 
-void append_record(std::string& out, std::uint64_t key, const ComparisonMetrics& m) {
+void append_record(std::string& out, std::uint64_t key, const Measurement& m) {
   put(out, key);
   put(out, std::uint64_t{m.shadow.has_value()});
   put(out, m.profile);
@@ -63,8 +63,8 @@ void append_record(std::string& out, std::uint64_t key, const ComparisonMetrics&
   put(out, m.intervals);
 }
 
-ComparisonMetrics read_record(const char* in, std::uint64_t* key) {
-  ComparisonMetrics m;
+Measurement read_record(const char* in, std::uint64_t* key) {
+  Measurement m;
   *key = get<std::uint64_t>(in);
   const bool has_shadow = get<std::uint64_t>(in) != 0;
   m.profile = get<ProfileMetrics>(in);
@@ -78,18 +78,13 @@ ComparisonMetrics read_record(const char* in, std::uint64_t* key) {
 
 }  // namespace
 
-ComparisonMetrics measure_comparison(const Image& test, const Image& reference, double scale,
-                                     ComparisonExtent extent) {
-  const ProfileOptions po;
-  ComparisonMetrics m;
-  m.profile = compare_profiles(terminator_profile(test, scale, po),
-                               terminator_profile(reference, scale, po), po);
-  m.intervals = comparison_intervals(test, reference, scale, po);
-  if (extent == ComparisonExtent::kProfileOnly) return m;
-  m.image = compare_images(test, reference);
-  m.view = view_metrics(view_error_profile(test, reference, scale));
-  if (extent == ComparisonExtent::kFullShadows) m.shadow = compare_shadows(test, reference, scale);
-  return m;
+Measurement measure_comparison(const Image& test, const Image& reference, double scale,
+                               ComparisonExtent extent) {
+  MeasureOptions options;
+  options.scale = scale;
+  options.image = options.view = extent != ComparisonExtent::kProfileOnly;
+  options.shadows = extent == ComparisonExtent::kFullShadows;
+  return measure(test, reference, options);
 }
 
 std::uint64_t pixel_digest(const Image& image) {
@@ -144,12 +139,12 @@ ComparisonStore::ComparisonStore(std::string path, std::string* warning) : path_
   }
   for (std::size_t at = head.size(); at < bytes.size(); at += kRecordBytes) {
     std::uint64_t key = 0;
-    const ComparisonMetrics m = read_record(bytes.data() + at, &key);
+    const Measurement m = read_record(bytes.data() + at, &key);
     loaded_.emplace(key, m);
   }
 }
 
-std::optional<ComparisonMetrics> ComparisonStore::find(std::uint64_t key) {
+std::optional<Measurement> ComparisonStore::find(std::uint64_t key) {
   const std::lock_guard<std::mutex> lock(mutex_);
   const auto it = loaded_.find(key);
   if (it == loaded_.end()) return std::nullopt;
@@ -158,7 +153,7 @@ std::optional<ComparisonMetrics> ComparisonStore::find(std::uint64_t key) {
   return it->second;
 }
 
-void ComparisonStore::insert(std::uint64_t key, const ComparisonMetrics& metrics) {
+void ComparisonStore::insert(std::uint64_t key, const Measurement& metrics) {
   const std::lock_guard<std::mutex> lock(mutex_);
   used_.insert_or_assign(key, metrics);
   ++inserted_;

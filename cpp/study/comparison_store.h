@@ -12,31 +12,23 @@
 #include <string>
 #include <unordered_map>
 
-#include "analysis/intervals.h"
-#include "analysis/metrics.h"
+#include "analysis/measure.h"
 
 namespace penumbra {
 
-// What one comparison of two images measures. Agreement rows (an external
+// Which metrics a comparison computes (the store keeps them as
+// measure() gives them, analysis/measure.h). Agreement rows (an external
 // renderer against the evaluator) fill `profile` and `intervals` only.
-struct ComparisonMetrics {
-  ProfileMetrics profile;
-  ImageMetrics image;
-  ViewMetrics view;
-  std::optional<ShadowMetrics> shadow;  // low-poly rows
-  ComparisonIntervals intervals;
-};
-
-// Which metrics a comparison computes.
 enum class ComparisonExtent : std::uint8_t {
   kFull,         // profile, image, view and intervals
   kFullShadows,  // and the shadow metrics (low-poly rows)
   kProfileOnly,  // profile and intervals (agreement rows)
 };
 
-// The metrics of `test` against `reference` (radiance scale in W m^-2 sr^-1).
-ComparisonMetrics measure_comparison(const Image& test, const Image& reference, double scale,
-                                     ComparisonExtent extent);
+// The metrics of `test` against `reference` (radiance scale in W m^-2 sr^-1):
+// measure() asked for what `extent` names.
+Measurement measure_comparison(const Image& test, const Image& reference, double scale,
+                               ComparisonExtent extent);
 
 // A digest of an image's size, channel names and pixel bits, independent of
 // the channels' order (a render and its cache entry read back differ in it).
@@ -57,8 +49,8 @@ class ComparisonStore {
   // gives an empty store; a damaged one too, with *warning saying so.
   ComparisonStore(std::string path, std::string* warning);
 
-  std::optional<ComparisonMetrics> find(std::uint64_t key);
-  void insert(std::uint64_t key, const ComparisonMetrics& metrics);
+  std::optional<Measurement> find(std::uint64_t key);
+  void insert(std::uint64_t key, const Measurement& metrics);
   // Replaces the file atomically (OutputError when it cannot be written).
   void save() const;
 
@@ -67,7 +59,7 @@ class ComparisonStore {
 
  private:
   std::string path_;
-  std::unordered_map<std::uint64_t, ComparisonMetrics> loaded_, used_;
+  std::unordered_map<std::uint64_t, Measurement> loaded_, used_;
   std::size_t found_ = 0, inserted_ = 0;
   mutable std::mutex mutex_;
 };

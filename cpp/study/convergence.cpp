@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "analysis/metrics.h"
+#include "analysis/measure.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {
@@ -200,11 +200,12 @@ ConvergenceDecision decide_refinement(double edge_change, double spp_change, int
 }
 
 double truth_change(const Image& truth, const Image& refined, double radiance_scale) {
-  const ProfileOptions o;
-  const double profile = compare_profiles(terminator_profile(refined, radiance_scale, o),
-                                          terminator_profile(truth, radiance_scale, o), o)
-                             .rmse_terminator;
-  const double view = view_metrics(view_error_profile(refined, truth, radiance_scale)).rmse_grazing;
+  MeasureOptions options;
+  options.scale = radiance_scale;
+  options.intervals = options.image = false;
+  const Measurement m = measure(refined, truth, options);
+  const double profile = m.profile.rmse_terminator;
+  const double view = m.view.rmse_grazing;
   // A truth without grazing views (or without a terminator) constrains only
   // the other; one without either has no profile to converge.
   if (std::isnan(profile)) return view;

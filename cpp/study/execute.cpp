@@ -11,10 +11,6 @@
 
 namespace penumbra {
 
-int threads_per_job(int jobs) {
-  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / std::max(1, jobs));
-}
-
 namespace {
 
 struct Shared {

@@ -47,7 +47,4 @@ ExecuteResult execute_tasks(std::size_t count, const ExecuteOptions& options,
                             const std::function<void(std::size_t)>& task,
                             const std::function<std::string(std::size_t)>& label);
 
-// Threads each of `jobs` parallel renders may use, sharing the machine's cores.
-int threads_per_job(int jobs);
-
 }  // namespace penumbra

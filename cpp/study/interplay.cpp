@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "analysis/filtering.h"
+#include "analysis/measure.h"
 #include "core/roughness_filter.h"
 #include "core/surface_map.h"
 #include "core/terminator.h"
@@ -16,8 +17,8 @@
 #include "scene/scene_json.h"
 #include "study/json_fields.h"
 #include "study/plan.h"
+#include "study/rendering.h"
 #include "util/strict_json.h"
-#include "util/version.h"
 
 namespace penumbra {
 namespace fs = std::filesystem;
@@ -149,25 +150,19 @@ Job make_job(const json& base, const InterplaySection& s, const std::string& map
   return job;
 }
 
-Image render_or_reuse(const Job& job, const RenderCache& cache, int threads,
-                      InterplayResult& result) {
+// What the cache holds for `job`, else its render, stored as every study
+// render is (render_into_cache: the same metadata, cost and host included).
+Image render_or_reuse(const Job& job, const RenderCache& cache, const Renderers& renderers,
+                      int threads, InterplayResult& result) {
   std::string reason;
   if (cache.contains(job.key))
     if (std::optional<Image> image = cache.lookup(job.key, &reason)) {
       ++result.reused;
       return std::move(*image);
     }
-  RenderSettings settings;
-  settings.threads = threads;
-  settings.log_path = cache.log_path(job.key);
-  RendererRun run = render_with(RendererKind::kEvaluator, job.scene, settings);
-  cache.store(job.key, run.image,
-              {{"penumbra:version", kPenumbraVersion},
-               {"penumbra:scene", job.scene_json.dump()},
-               {"penumbra:method", job.method},
-               {"penumbra:representation", to_string(job.representation)}});
+  Image image = render_into_cache(job, cache, RenderSettings{}.timeout_s, threads, renderers);
   ++result.rendered;
-  return std::move(run.image);
+  return image;
 }
 
 std::string percent(double value, const Interval& ci) {
@@ -236,10 +231,10 @@ std::string bake_map(const json& base, const InterplaySection& s, const fs::path
 
 }  // namespace
 
-InterplayResult run_interplay_section(
-    const InterplaySection& s, const std::string& out_dir, const RenderCache& cache,
-    const std::vector<std::pair<RendererKind, RendererIdentity>>& identities, int jobs,
-    const std::function<void(const std::string&)>& log) {
+InterplayResult run_interplay_section(const InterplaySection& s, const std::string& out_dir,
+                                      const RenderCache& cache, const Renderers& renderers,
+                                      int threads,
+                                      const std::function<void(const std::string&)>& log) {
   InterplayResult result;
   const json base = base_document(s);
   const std::string map_path = bake_map(base, s, fs::path(out_dir) / "interplay", result);
@@ -251,24 +246,27 @@ InterplayResult run_interplay_section(
   for (const std::optional<int>& level : s.levels)
     for (const std::string& method : s.methods)
       work.push_back(make_job(base, s, map_path, {Representation::kBump, method, level, 0.0}));
-  assign_keys(work, identities);
+  assign_keys(work, renderers.identities);
   result.map_digest = work[0].scene.height.map->digest;
   result.truth_key = work[0].key;
-  const Image truth = render_or_reuse(work[0], cache, jobs, result);
-  const double scale = radiance_scale(work[0].scene);
-  const Profile reference = terminator_profile(truth, scale);
+  const Image truth = render_or_reuse(work[0], cache, renderers, threads, result);
+  // The terminator profile and its interval only.
+  MeasureOptions profile;
+  profile.scale = radiance_scale(work[0].scene);
+  profile.image = profile.view = false;
   {
-    const Image fine = render_or_reuse(work[1], cache, jobs, result);
-    result.truth_change =
-        compare_profiles(reference, terminator_profile(fine, scale)).rmse_terminator;
-    result.truth_change_interval = comparison_intervals(truth, fine, scale).rmse_terminator;
+    // The truth (as the test) against the truth at half its edge length.
+    const Image fine = render_or_reuse(work[1], cache, renderers, threads, result);
+    const Measurement m = measure(truth, fine, profile);
+    result.truth_change = m.profile.rmse_terminator;
+    result.truth_change_interval = m.intervals.rmse_terminator;
   }
   for (std::size_t i = 2; i < work.size(); ++i) {
-    const Image image = render_or_reuse(work[i], cache, jobs, result);
+    const Image image = render_or_reuse(work[i], cache, renderers, threads, result);
     const std::size_t k = i - 2;
+    const Measurement m = measure(image, truth, profile);
     InterplayRow row{s.levels[k / s.methods.size()], s.methods[k % s.methods.size()], work[i].key,
-                     compare_profiles(terminator_profile(image, scale), reference),
-                     comparison_intervals(image, truth, scale)};
+                     m.profile, m.intervals};
     result.rows.push_back(std::move(row));
     if (log)
       log(fmt::format("interplay: {} {}: {}/{} done", result.rows.back().method,

@@ -25,6 +25,8 @@
 
 namespace penumbra {
 
+struct Renderers;  // study/rendering.h
+
 // Reads /interplay of the study file `file` (InputError naming the pointer).
 InterplaySection read_interplay_section(const nlohmann::json& section, const std::string& file,
                                         const std::string& base);
@@ -53,11 +55,13 @@ struct InterplayResult {
 };
 
 // Bakes the map into OUT/interplay/map.exr, renders what the cache lacks
-// (the evaluator, `jobs` threads), compares. `log` gets progress lines.
-InterplayResult run_interplay_section(
-    const InterplaySection& section, const std::string& out_dir, const RenderCache& cache,
-    const std::vector<std::pair<RendererKind, RendererIdentity>>& identities, int jobs,
-    const std::function<void(const std::string&)>& log);
+// (the evaluator, one render at a time with `threads` threads, through
+// render_into_cache like the study's other renders), compares. `log` gets
+// progress lines.
+InterplayResult run_interplay_section(const InterplaySection& section, const std::string& out_dir,
+                                      const RenderCache& cache, const Renderers& renderers,
+                                      int threads,
+                                      const std::function<void(const std::string&)>& log);
 
 // report.json's "interplay", or null without a section.
 nlohmann::json interplay_report_json(const InterplaySection* section,

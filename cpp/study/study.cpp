@@ -57,7 +57,7 @@ std::vector<std::size_t> use_cache(const std::vector<Job>& jobs, const RenderCac
   // in job order below.
   std::vector<std::string> reasons(jobs.size());
   std::vector<char> damaged(jobs.size(), 0);
-  run_parallel(options.jobs, jobs.size(), [&](std::size_t i) {
+  run_parallel(options.parallelism.renders, jobs.size(), [&](std::size_t i) {
     if (!cache.contains(jobs[i].key)) return;
     if (std::optional<Image> image = cache.lookup(jobs[i].key, &reasons[i])) {
       r.images.images[i] = std::move(*image);
@@ -191,9 +191,9 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
   }
   if (options.log)
     options.log(fmt::format("{} renders: {} cached, {} to do, {} in parallel", jobs.size(), cached,
-                            todo.size(), options.jobs));
+                            todo.size(), options.parallelism.renders));
   ExecuteOptions eo;
-  eo.jobs = options.jobs;
+  eo.jobs = options.parallelism.renders;
   eo.max_started = options.max_new_renders;
   eo.interrupted = options.interrupted;
   eo.log = options.log;
@@ -212,7 +212,7 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
       [&](std::size_t t) {
         r.images.images[todo[t]] =
             render_into_cache(jobs[todo[t]], cache, options.timeout_s,
-                              threads_per_job(options.jobs), renderers, &batches);
+                              options.parallelism.threads_per_render, renderers, &batches);
       },
       [&](std::size_t t) { return jobs[todo[t]].label; });
   for (std::size_t t = 0; t < todo.size(); ++t) {
@@ -379,7 +379,7 @@ Comparisons compare_renders(const Plan& plan, const RenderedImages& images, cons
   ComparisonStore store((out / "cache" / "comparisons.bin").string(), &warning);
   if (!warning.empty()) warn(options, stats, warning);
   PreviewFolder pictures(out);
-  Comparisons c = compare_study(plan, images, pictures, options.jobs, &store);
+  Comparisons c = compare_study(plan, images, pictures, options.parallelism.renders, &store);
   store.save();
   pictures.save();
   stats.comparisons_measured = store.inserted();
@@ -436,13 +436,13 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
 
   const Comparisons comparisons = compare_renders(plan, r.images, out, options, stats);
   const std::vector<FilteringEntry> filtering =
-      study.filtering
-          ? run_filtering_section(*study.filtering, out.string(), options.jobs, options.log)
-          : std::vector<FilteringEntry>{};
+      study.filtering ? run_filtering_section(*study.filtering, out.string(),
+                                              options.parallelism.renders, options.log)
+                      : std::vector<FilteringEntry>{};
   std::optional<InterplayResult> interplay;
   if (study.interplay)
-    interplay = run_interplay_section(*study.interplay, out.string(), cache, renderers.identities,
-                                      options.jobs, options.log);
+    interplay = run_interplay_section(*study.interplay, out.string(), cache, renderers,
+                                      options.parallelism.threads(), options.log);
   write_report_files({study, plan, comparisons, renderers.versions, r.errors, r.images.done,
                       convergence, filtering, interplay ? &*interplay : nullptr},
                      out.string());

@@ -18,6 +18,7 @@
 #include "study/cost.h"
 #include "study/slurm.h"
 #include "study/study_file.h"
+#include "util/parallel.h"
 
 namespace penumbra {
 
@@ -26,7 +27,9 @@ inline constexpr double kFiguresTimeoutS = 3600.0;
 
 struct StudyOptions {
   std::string output_dir;
-  int jobs = 1;
+  // Renders (cache reads, comparisons) at once and threads per render
+  // (util/parallel.h); by default one render at a time on every core.
+  Parallelism parallelism = resolve_parallelism(1);
   double timeout_s = 600.0;  // per render; the figures get at least kFiguresTimeoutS
   // Stop starting renders after this many new (uncached) ones; -1: no limit.
   // Resuming later finishes the rest. Tests use it to simulate an interrupt.

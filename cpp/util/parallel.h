@@ -17,7 +17,34 @@
 
 namespace penumbra {
 
-//
+// How much of the machine a command uses, decided once (run_cli, from the
+// global --threads and the command's --jobs) and passed down:
+//   --threads T  threads in all; default: the cores. It also caps the
+//                evaluator's TBB pool, which every evaluator render shares.
+//   --jobs J     renders at once, or as many of a command's other
+//                independent tasks (cache reads, comparisons, the footprints
+//                of `penumbra filtering`); default: T.
+// Each render then gets T / J threads, at least one: what an external
+// renderer is given (POV-Ray's +WT; Blender always renders on one). A
+// command or step that renders one image at a time (`penumbra render`, a
+// study's interplay section) gives it threads(): T, or J where J > T.
+struct Parallelism {
+  int renders = 1;             // J
+  int threads_per_render = 1;  // T / J, at least 1
+  int threads() const { return renders * threads_per_render; }
+};
+
+// `jobs` and `threads`: --jobs and --threads, 0 where not given.
+inline Parallelism resolve_parallelism(int jobs, int threads = 0) {
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int budget = threads > 0 ? threads : cores;
+  Parallelism p;
+  p.renders = jobs > 0 ? jobs : budget;
+  p.threads_per_render = std::max(1, budget / p.renders);
+  return p;
+}
+
+// `jobs` worker threads take `tasks` in index order.
 // With `group_starts` (ascending, the first 0), the tasks from one start to
 // the next are one group that one worker runs in order: renders that reuse
 // what the worker's last render built (a serving Blender's mesh) stay on one

@@ -775,7 +775,7 @@ TEST_F(Renderers, CalibrationMeetsEveryBound) {
   CalibrationOptions options;
   options.output_dir = dir_.string();
   options.scenes_dir = kSource + "/scenes/calibration";
-  options.jobs = 2;
+  options.parallelism = resolve_parallelism(2);
   options.timeout_s = 600;
   const CalibrationResult result = run_calibration(options);
   for (const CalibrationRender& r : result.renders)

@@ -127,7 +127,7 @@ class Faults : public TempDirTest {
   StudyOptions options(const std::string& out) const {
     StudyOptions o;
     o.output_dir = path(out);
-    o.jobs = 1;
+    o.parallelism = resolve_parallelism(1);
     o.figures = false;
     o.timeout_s = 2.0;
     return o;

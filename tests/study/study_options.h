@@ -19,7 +19,7 @@ inline StudyOptions test_study_options(const std::string& output_dir,
   StudyOptions o;
   o.output_dir = output_dir;
   o.figures = false;
-  o.jobs = 2;
+  o.parallelism = resolve_parallelism(2);
   if (log)
     o.log = [log, prefix](const std::string& line) {
       if (line.rfind(prefix, 0) == 0) log->push_back(line);

@@ -12,6 +12,7 @@
 #include "analysis/metrics.h"
 #include "render/evaluator.h"
 #include "scene/scene_json.h"
+#include "small_sphere.h"
 #include "study/comparison_store.h"
 #include "temp_dir_test.h"
 #include "util/files.h"
@@ -20,32 +21,16 @@
 namespace penumbra {
 namespace {
 
-const std::string kSphere = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/calibration/sphere.json";
-
-Image render_sphere(const char* representation) {
-  return render(load_scene(kSphere, {parse_override("/camera/width=32"),
-                                     parse_override("/camera/height=32"),
-                                     parse_override("/camera/spp=4"),
-                                     parse_override("/height/amplitude=0.02"),
-                                     parse_override("/displacement/edge_length=0.02"),
-                                     {"/representation", representation}}));
-}
-
-template <typename T>
-bool same_bytes(const T& a, const T& b) {
-  return std::memcmp(&a, &b, sizeof(T)) == 0;
-}
-
 class ComparisonStoreTest : public TempDirTest {};
 
 TEST_F(ComparisonStoreTest, GivesBackTheMeasuredMetricsBitForBit) {
-  const Image bump = render_sphere("bump"), truth = render_sphere("displacement");
-  const double scale = radiance_scale(load_scene(kSphere));
-  const ComparisonMetrics full =
+  const Image bump = render_small_sphere("bump"), truth = render_small_sphere("displacement");
+  const double scale = radiance_scale(load_scene(kSmallSphere));
+  const Measurement full =
       measure_comparison(bump, truth, scale, ComparisonExtent::kFullShadows);
   ASSERT_TRUE(full.shadow.has_value());
   ASSERT_GT(full.profile.rmse_terminator, 0.0);  // a real difference, not two zeros
-  const ComparisonMetrics profile_only =
+  const Measurement profile_only =
       measure_comparison(bump, truth, scale, ComparisonExtent::kProfileOnly);
   const std::uint64_t k1 = comparison_key(pixel_digest(bump), pixel_digest(truth), scale,
                                           ComparisonExtent::kFullShadows);
@@ -88,8 +73,8 @@ TEST_F(ComparisonStoreTest, GivesBackTheMeasuredMetricsBitForBit) {
 }
 
 TEST_F(ComparisonStoreTest, AFileItCannotTrustIsNotRead) {
-  const Image bump = render_sphere("bump"), truth = render_sphere("displacement");
-  const double scale = radiance_scale(load_scene(kSphere));
+  const Image bump = render_small_sphere("bump"), truth = render_small_sphere("displacement");
+  const double scale = radiance_scale(load_scene(kSmallSphere));
   const std::uint64_t key =
       comparison_key(pixel_digest(bump), pixel_digest(truth), scale, ComparisonExtent::kFull);
   {
@@ -124,7 +109,7 @@ TEST_F(ComparisonStoreTest, AFileItCannotTrustIsNotRead) {
 }
 
 TEST(PixelDigest, SeesEveryBitButNotTheOrderOfTheChannels) {
-  const Image image = render_sphere("bump");
+  const Image image = render_small_sphere("bump");
   const std::uint64_t digest = pixel_digest(image);
   // The last mantissa bit of one value in the middle of the image.
   Image flipped = image;
@@ -153,7 +138,7 @@ TEST(PixelDigest, SeesEveryBitButNotTheOrderOfTheChannels) {
 // order. The digest keys the comparisons kept on disk, so its value must
 // not change with the way it is computed.
 TEST(PixelDigest, IsEachChannelPlaneHashedThenFoldedInNameOrder) {
-  const Image image = render_sphere("bump");
+  const Image image = render_small_sphere("bump");
   const std::size_t nc = image.channels.size(), pixels = std::size_t(image.width) * image.height;
   std::vector<std::pair<std::string, std::uint64_t>> planes;
   for (std::size_t c = 0; c < nc; ++c) {

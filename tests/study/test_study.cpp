@@ -85,7 +85,7 @@ TEST_F(Study, InterruptedAndResumedEqualsCleanWithNoRenderDoneTwice) {
   const ::penumbra::Study study = load_study(write("tiny.json", tiny()));
   StudyOptions clean;
   clean.output_dir = path("clean");
-  clean.jobs = 2;
+  clean.parallelism = resolve_parallelism(2);
   clean.figures = false;
   // A dry run counts from the cache alone: the first round of checks (3
   // per variant) and the 12 planned renders, none cached yet.
@@ -253,7 +253,7 @@ TEST_F(Study, CompoundAxisSetsSeveralPointersAndSkipsWhatARendererCannotRender) 
   const ::penumbra::Study study = load_study(write("compound.json", j));
   StudyOptions o;
   o.output_dir = path("out");
-  o.jobs = 2;
+  o.parallelism = resolve_parallelism(2);
   o.figures = false;
   ASSERT_TRUE(run_study(study, o).complete());
   const json report = json::parse(read_text(path("out/report.json")));
@@ -284,7 +284,7 @@ TEST_F(Study, ReportIsWrittenAsDumpedAndCsvHasOneRowPerComparison) {
   const ::penumbra::Study study = load_study(write("tiny.json", tiny()));
   StudyOptions o;
   o.output_dir = path("out");
-  o.jobs = 2;
+  o.parallelism = resolve_parallelism(2);
   o.figures = false;
   ASSERT_TRUE(run_study(study, o).complete());
   const std::string text = read_text(path("out/report.json"));
@@ -395,7 +395,7 @@ TEST_F(Study, LowPolyStudyComparesEveryOffsetWithTheAnalyticSurface) {
         {"renderers", {"evaluator"}}}}};
   StudyOptions o;
   o.output_dir = path("out");
-  o.jobs = 2;
+  o.parallelism = resolve_parallelism(2);
   o.figures = false;
   const StudyRunStats stats = run_study(load_study(write("lp.json", j)), o);
   ASSERT_TRUE(stats.complete());
@@ -471,7 +471,7 @@ TEST_F(Study, AReportOfManyVariantsShowsASampleAndSaysSo) {
   j["ground_truth"] = {{"max_edge_refinements", 0}, {"max_spp_refinements", 0}};
   StudyOptions o;
   o.output_dir = path("many");
-  o.jobs = 2;
+  o.parallelism = resolve_parallelism(2);
   const StudyRunStats stats = run_study(load_study(write("many.json", j)), o);
   ASSERT_TRUE(stats.complete()) << (stats.failures.empty() ? "" : stats.failures[0]);
   const std::string html = read_text(stats.report_html);
@@ -503,7 +503,7 @@ TEST_F(Study, UnchangedFiguresAreKeptAndAnyChangeRedrawsThem) {
   std::vector<std::string> lines;
   StudyOptions o;
   o.output_dir = path("figures");
-  o.jobs = 2;
+  o.parallelism = resolve_parallelism(2);
   o.log = [&](const std::string& line) { lines.push_back(line); };
   auto kept = [&] {
     lines.clear();
@@ -628,7 +628,7 @@ TEST_F(Study, SmokeStudyReportLoadsInChromium) {
   const ::penumbra::Study study = load_study(kSource + "/scenes/studies/smoke.json");
   StudyOptions o;
   o.output_dir = path("smoke");
-  o.jobs = 2;
+  o.parallelism = resolve_parallelism(2);
   const StudyRunStats stats = run_study(study, o);
   ASSERT_TRUE(stats.complete()) << (stats.failures.empty() ? "" : stats.failures[0]);
   ASSERT_TRUE(fs::exists(stats.report_html));

@@ -1,0 +1,99 @@
+// `penumbra bake`: a scene's analytic height function as a height map of the
+// plane, or as a height or normal map over its shape (core/surface_map.h).
+#include <fmt/format.h>
+
+#include "cli/command.h"
+#include "core/surface_map.h"
+#include "image/bump_maps.h"
+#include "image/image_io.h"
+#include "util/strict_json.h"
+
+namespace penumbra {
+
+namespace {
+
+struct BakeArgs {
+  std::string scene, output;
+  std::vector<std::string> sets;
+  int size = 1024;
+  double extent = 1.0;
+  std::string on = "plane";     // "plane": z = 0 over [0, extent)^2; "shape": the shape's (u, v)
+  std::string kind = "height";  // "height" or "normal" (shape only)
+};
+
+// --on shape: the map over the shape's (u, v), texels as square as the
+// parameterisation allows (on the sphere, at the equator).
+int bake_on_shape(const BakeArgs& a, const Scene& scene, std::ostream& out) {
+  const Shape& s = scene.shape;
+  const int rows = shape_map_rows(s, a.size, kMaxImageSize);
+  const MapKind kind = a.kind == "normal" ? MapKind::kNormal : MapKind::kHeight;
+  const Image map =
+      bake_surface_map(s, scene.height.function, scene.height.amplitude, a.size, rows, kind);
+  write_exr(map, a.output, {{"penumbra:baked_from", a.scene}});
+  const std::string use =
+      kind == MapKind::kHeight
+          ? fmt::format(R"({{"type": "height-map", "file": "{}", "amplitude": 1}})", a.output)
+          : fmt::format(R"({{"type": "normal-map", "file": "{}"}})", a.output);
+  out << fmt::format("wrote {} ({}x{} over the {}'s (u, v)): use it as /height = {}\n", a.output,
+                     a.size, rows, name_of<ShapeType>(kShapeTypeNames, s.type), use);
+  return kExitOk;
+}
+
+int bake(const BakeArgs& a, std::ostream& out) {
+  SceneArgs scene_args;
+  scene_args.sets = a.sets;
+  const LoadedScene loaded = read_scene(a.scene, scene_args);
+  const Scene& scene = loaded.scene;
+  if (scene.height.family == HeightFamily::kNone || scene.height.map)
+    throw InputError(loaded.origin, "/height",
+                     fmt::format("expected an analytic height function to bake, got \"{}\"",
+                                 to_string(scene.height.family)));
+  check_extension(a.output, ".exr", "-o", ": a baked map is float OpenEXR");
+  if (a.kind == "normal" && a.on != "shape")
+    throw InputError("--kind", "", "a normal map is baked over a shape: add --on shape");
+  check_writable(a.output);
+  if (a.on == "shape") return bake_on_shape(a, scene, out);
+  const Image map =
+      bake_height_map(scene.height.function, scene.height.amplitude, a.size, a.extent);
+  write_exr(map, a.output, {{"penumbra:baked_from", a.scene}});
+  const double texel = a.extent / a.size;
+  out << fmt::format(
+      "wrote {} ({}x{}, heights in scene units, texel {:.6g} scene units): use penumbra pyramid "
+      "{} --texel-size {:.6g} --edge {}\n",
+      a.output, a.size, a.size, texel, a.output, texel,
+      "wrap (if the extent holds whole periods) or clamp");
+  return kExitOk;
+}
+
+}  // namespace
+
+Command add_bake_command(CLI::App& app, SharedOptions&) {
+  auto a = std::make_shared<BakeArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "bake",
+      "a scene's analytic height function (/height) as a height map of the plane z = 0, or as a "
+      "height or normal map over its shape's (u, v)");
+  cmd->add_option("scene", a->scene, "scene file (JSON)")->required();
+  cmd->add_option("-o,--output", a->output, "height map (.exr)")->required();
+  cmd->add_option("--set", a->sets, "JSON-pointer override, /pointer=VALUE");
+  cmd->add_option("--size", a->size, "texels a side")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
+  cmd->add_option("--extent", a->extent, "side of the baked square, scene units")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--on", a->on,
+                  "plane: the plane z = 0 (for penumbra pyramid and filtering); shape: the "
+                  "scene's cylinder or sphere over its map parameters (u, v), --size texels "
+                  "around and as many along v as keep texels square")
+      ->check(CLI::IsMember({"plane", "shape"}))
+      ->capture_default_str();
+  cmd->add_option("--kind", a->kind,
+                  "height: amplitude * h in scene units (channel Y); normal: the exact bump "
+                  "normal as a tangent-space normal map (R, G, B = 0.5 n + 0.5; --on shape only)")
+      ->check(CLI::IsMember({"height", "normal"}))
+      ->capture_default_str();
+  return {cmd, [a](const CommandContext& c) { return bake(*a, c.out); }};
+}
+
+}  // namespace penumbra

@@ -1,0 +1,290 @@
+// `penumbra run`: a study (study/study.h) here, or on Slurm; its dry run
+// counts and prices the renders.
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <mutex>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "cli/command.h"
+#include "cli/stop_signals.h"
+#include "study/study.h"
+
+namespace penumbra {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct RunArgs {
+  std::string study, output;
+  double timeout = 600.0;
+  long max_renders = -1;
+  bool no_figures = false, quiet = false, dry_run = false;
+  bool self_contained = false;  // report.html embeds its images
+  double max_memory_gib = kDefaultMaxMemoryBytes / kGiB;
+  std::string executor = "local";  // local or slurm
+  SlurmOptions slurm;              // --partition, --array-limit, ... (chain: --slurm-chain)
+};
+
+std::string duration_text(double s) {
+  if (!std::isfinite(s) || s < 0) return "?";
+  const long t = std::lround(s);
+  return t >= 60 ? fmt::format("{}m{:02d}s", t / 60, t % 60) : fmt::format("{}s", t);
+}
+
+// One line per kind of render still to do, with where its rate comes from.
+void print_cost(const CostEstimate& cost, std::ostream& out) {
+  if (cost.lines.empty()) return;
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  out << fmt::format(
+      "estimated cost of the renders to do: {:.3f} core-hours (cores x wall time; {} on {} "
+      "cores), at the samples planned now: the convergence checks come on top, and a truth "
+      "that needs more samples raises its variant's bump renders with it:\n",
+      cost.core_seconds / 3600.0, duration_text(cost.core_seconds / cores), cores);
+  for (const CostLine& line : cost.lines) {
+    const std::string kind =
+        fmt::format("{} {}{}", to_string(line.renderer), to_string(line.representation),
+                    line.tessellated ? " (low-poly)" : "");
+    const std::string basis =
+        line.measured > 0
+            ? fmt::format(
+                  "median of {} cached renders of this study; their range {:.4f} to "
+                  "{:.4f} core-h",
+                  line.measured, line.core_seconds_low / 3600.0, line.core_seconds_high / 3600.0)
+            : "built-in rate measured on a 2-core machine, no spread known; none cached yet";
+    out << fmt::format(
+        "  {:<32} {:>7} renders {:>10.4f} core-h  ({:.3g} core-s per 10^6 "
+        "pixel samples: {})\n",
+        kind, line.renders, line.core_seconds / 3600.0, line.core_seconds_per_msample, basis);
+  }
+}
+
+// The study's own sections, measured after the renders.
+void print_sections(const Study& study, const std::string& dir, std::ostream& out) {
+  if (study.filtering) {
+    const FilteringSection& f = *study.filtering;
+    out << fmt::format(
+        "filtering: {} maps x {} runs, each {} footprints per level over levels 0 to {} x {} "
+        "filters x {} base alphas (measured after the renders; unchanged entries in {}/filtering "
+        "are reused; about 25 s per entry of a 1024^2 map at the defaults on 2 cores)\n",
+        f.maps.size(), f.runs.size(), f.options.footprints, f.options.max_level,
+        f.options.filters.size(), f.options.alphas.size(), dir);
+  }
+  if (study.interplay) {
+    const InterplaySection& ip = *study.interplay;
+    out << fmt::format(
+        "interplay: {} baked at {} texels around, {} bump renders ({} levels x {} methods) and 2 "
+        "displacement truths (the evaluator, after the renders; cached in {}/cache)\n",
+        ip.scene, ip.size, ip.levels.size() * ip.methods.size(), ip.levels.size(),
+        ip.methods.size(), dir);
+  }
+}
+
+int print_dry_run(const Study& study, const StudyRunStats& stats, const std::string& dir,
+                  double max_memory_gib, std::ostream& out) {
+  std::string per;
+  for (const auto& [renderer, count] : stats.planned)
+    per += fmt::format("{}{} {}", per.empty() ? "" : ", ", count, renderer);
+  out << fmt::format(
+      "study {}: {} renders ({}); {} found in {}/cache, {} to render; nothing written (dry run)\n",
+      study.name, stats.renders, per, stats.cached, dir, stats.renders - stats.cached);
+  const std::string checks =
+      stats.planned_checks == 0
+          ? std::string("every ground-truth convergence check is cached")
+          : fmt::format(
+                "{} ground-truth convergence checks to render first (more may follow, up to 3 "
+                "renders per variant and round)",
+                stats.planned_checks);
+  out << fmt::format(
+      "cache: the renders to do write at most {:.3f} GiB (uncompressed EXR); the largest needs "
+      "about {:.3f} GiB of memory (--max-memory {:.3g} GiB); {}\n",
+      stats.planned_output_bytes / kGiB, stats.planned_peak_memory_bytes / kGiB, max_memory_gib,
+      checks);
+  print_cost(stats.cost, out);
+  print_sections(study, dir, out);
+  return kExitOk;
+}
+
+// The Slurm options of `penumbra run`, with the command its report job runs:
+// this run again, by absolute paths, so that it runs from any folder.
+SlurmOptions slurm_options(const RunArgs& a, const std::string& output_dir) {
+  SlurmOptions s = a.slurm;
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) throw std::runtime_error("cannot find the penumbra executable (/proc/self/exe)");
+  s.continue_argv = {self.string(),
+                     "run",
+                     fs::absolute(a.study).string(),
+                     "-o",
+                     fs::absolute(output_dir).string(),
+                     "--executor",
+                     "slurm",
+                     "--timeout",
+                     fmt::format("{}", a.timeout),
+                     "--max-memory",
+                     fmt::format("{}", a.max_memory_gib),
+                     "--array-limit",
+                     std::to_string(s.array_limit),
+                     "--renders-per-task",
+                     std::to_string(s.renders_per_task)};
+  if (a.no_figures) s.continue_argv.push_back("--no-figures");
+  if (a.self_contained) s.continue_argv.push_back("--self-contained");
+  if (!s.partition.empty())
+    s.continue_argv.insert(s.continue_argv.end(), {"--partition", s.partition});
+  for (const std::string& arg : s.sbatch_args) s.continue_argv.push_back("--sbatch-arg=" + arg);
+  return s;
+}
+
+int print_submission(const SlurmSubmission& sub, const std::string& dir, std::ostream& out) {
+  if (sub.submitted > 0)
+    out << fmt::format(
+        "submitted {} renders to Slurm as array job {} ({} tasks{}); job {} writes the report "
+        "when they end (or submits what is still missing); `penumbra status {}` shows progress\n",
+        sub.submitted - sub.chains, sub.array_job, sub.tasks,
+        sub.chains > 0 ? fmt::format(", with {} ground-truth convergence chains, each in a task of "
+                                     "its own with its variant's evaluator renders",
+                                     sub.chains)
+                       : "",
+        sub.report_job, dir);
+  if (sub.still_queued > 0)
+    out << fmt::format(
+        "{} renders are still queued or running in an earlier submission; nothing submitted "
+        "twice\n",
+        sub.still_queued);
+  return kExitOk;
+}
+
+// The progress bar and the lines worth showing on a terminal; every line,
+// prefixed, elsewhere (a log file).
+void set_progress(StudyOptions& o, bool quiet, bool tty, std::mutex& mutex, std::ostream& err) {
+  if (quiet) return;
+  if (!tty) {
+    o.log = [&](const std::string& line) {
+      std::lock_guard<std::mutex> lock(mutex);
+      err << "penumbra run: " << line << "\n" << std::flush;
+    };
+    return;
+  }
+  o.progress = [&](std::size_t done, std::size_t total, double eta) {
+    std::lock_guard<std::mutex> lock(mutex);
+    const int width = 30;
+    const int fill =
+        static_cast<int>(width * double(done) / double(std::max<std::size_t>(total, 1)));
+    err << fmt::format("\r[{}{}] {}/{} renders, ETA {}   ", std::string(fill, '#'),
+                       std::string(width - fill, '.'), done, total, duration_text(eta))
+        << std::flush;
+  };
+  o.log = [&](const std::string& line) {
+    if (line.find("FAILED") != std::string::npos || line.find("renders:") != std::string::npos ||
+        line.find("WARNING") != std::string::npos || line.rfind("figures:", 0) == 0) {
+      std::lock_guard<std::mutex> lock(mutex);
+      err << "\r" << line << "\n" << std::flush;
+    }
+  };
+}
+
+StudyOptions study_options(const RunArgs& a, const Study& study, const CommandContext& c) {
+  StudyOptions o;
+  o.output_dir = a.output.empty() ? "results/" + study.name : a.output;
+  o.parallelism = c.parallelism;
+  o.timeout_s = a.timeout;
+  o.max_new_renders = a.max_renders;
+  o.figures = !a.no_figures;
+  o.self_contained_html = a.self_contained;
+  o.interrupted = &StopSignals::interrupted();
+  o.dry_run = a.dry_run;
+  o.max_memory_bytes = a.max_memory_gib * kGiB;
+  if (a.executor == "slurm") o.slurm = slurm_options(a, o.output_dir);
+  return o;
+}
+
+int run(const RunArgs& a, const CommandContext& c) {
+  const Study study = load_study(a.study);
+  StudyOptions o = study_options(a, study, c);
+  const bool tty = ::isatty(STDERR_FILENO);
+  std::mutex mutex;
+  set_progress(o, a.quiet, tty, mutex, c.err);
+  const StopSignals stop;
+  const StudyRunStats stats = run_study(study, o);
+  if (a.dry_run) return print_dry_run(study, stats, o.output_dir, a.max_memory_gib, c.out);
+  if (!a.quiet && tty) c.err << "\n";
+  c.out << fmt::format(
+      "study {}: {} renders ({} rendered now, {} from the cache, {} failed, {} not started) in "
+      "{:.1f} s\n",
+      study.name, stats.renders, stats.rendered, stats.cached, stats.failed, stats.not_started,
+      stats.seconds);
+  for (const std::string& f : stats.failures) c.out << "  failed: " << f << "\n";
+  if (stats.slurm && stats.not_started > 0)
+    return print_submission(*stats.slurm, o.output_dir, c.out);
+  if (stats.not_started > 0) {
+    c.out << fmt::format(
+        "stopped before the end; run the same command again to resume (finished "
+        "renders are cached in {}/cache)\n",
+        o.output_dir);
+    return StopSignals::interrupted().load() ? StopSignals::exit_code() : kExitFailure;
+  }
+  c.out << fmt::format("wrote {0}/report.json, {0}/metrics.csv{1}\n", o.output_dir,
+                       stats.report_html.empty() ? "" : ", figures/ and report.html");
+  if (!stats.report_html.empty()) c.out << "report: " << stats.report_html << "\n";
+  return stats.failed > 0 ? kExitFailure : kExitOk;
+}
+
+void add_slurm_options(CLI::App* cmd, RunArgs& a) {
+  cmd->add_option("--executor", a.executor,
+                  "local: render here, --jobs at a time; slurm: submit the missing renders as "
+                  "a Slurm job array and a report job that depends on it, then return")
+      ->check(CLI::IsMember({"local", "slurm"}))
+      ->capture_default_str();
+  cmd->add_option("--partition", a.slurm.partition,
+                  "slurm: partition of the array and report jobs (default: the cluster's)");
+  cmd->add_option("--array-limit", a.slurm.array_limit, "slurm: array tasks running at once")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  cmd->add_option("--renders-per-task", a.slurm.renders_per_task,
+                  "slurm: renders per array task, at most (a variant's ground-truth "
+                  "convergence chain takes a task of its own; renders that share a mesh "
+                  "share a task where they fit)")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  cmd->add_option("--sbatch-arg", a.slurm.sbatch_args,
+                  "slurm: an argument for every sbatch call, as it is "
+                  "(--sbatch-arg=--time=2:00:00; repeatable)");
+  cmd->add_option("--slurm-chain", a.slurm.chain, "internal: the report job's chain of submissions")
+      ->group("");
+}
+
+}  // namespace
+
+Command add_run_command(CLI::App& app, SharedOptions& shared) {
+  auto a = std::make_shared<RunArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "run", "run a study: renders (cached, resumable), metrics, report.json/csv/html, figures");
+  cmd->add_option("study", a->study, "study JSON file")->required();
+  cmd->add_option("-o,--output", a->output, "output folder (default results/NAME)");
+  add_jobs_option(cmd, shared)->check(CLI::Range(1, 256));
+  cmd->add_option("--timeout", a->timeout, "seconds per external render")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--max-renders", a->max_renders,
+                  "start at most this many new renders, then stop (resume later)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--no-figures", a->no_figures, "skip matplotlib figures and report.html");
+  cmd->add_flag("--self-contained", a->self_contained,
+                "report.html embeds every image (one file to mail; default: it links "
+                "images/ and figures/ beside it)");
+  cmd->add_flag("--dry-run", a->dry_run,
+                "validate and count the renders (and cache hits); write nothing");
+  cmd->add_option("--max-memory", a->max_memory_gib,
+                  "refuse a study with a render estimated to need more memory (GiB, per render)")
+      ->check(CLI::Range(0.001, 1e6))
+      ->capture_default_str();
+  cmd->add_flag("-q,--quiet", a->quiet, "no progress");
+  add_slurm_options(cmd, *a);
+  return {cmd, [a](const CommandContext& c) { return run(*a, c); }};
+}
+
+}  // namespace penumbra

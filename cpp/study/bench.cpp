@@ -1,0 +1,106 @@
+#include "study/bench.h"
+
+#include <filesystem>
+
+#include <fmt/format.h>
+
+#include "core/vec.h"
+#include "image/image_io.h"
+#include "render/evaluator.h"
+#include "renderers/renderers.h"
+#include "scene/scene_json.h"
+#include "util/resource_usage.h"
+
+namespace penumbra {
+
+namespace fs = std::filesystem;
+
+nlohmann::json bench_scene(int size, int spp) {
+  return {
+      {"version", 1},
+      {"name", "bench-cylinder-grating"},
+      {"camera",
+       {{"position", {0, 0, -5}},
+        {"direction", {0, 0, 1}},
+        {"right", {2.5, 0, 0}},
+        {"up", {0, 2.5, 0}},
+        {"width", size},
+        {"height", size},
+        {"spp", spp},
+        {"seed", 1}}},
+      {"light", {{"type", "distant"}, {"direction", {-1, 0, -0.2}}, {"irradiance", kPi}}},
+      {"shape", {{"type", "cylinder"}, {"radius", 1.0}, {"height", 2.0}}},
+      {"material", {{"albedo", 0.8}}},
+      {"height",
+       {{"type", "grating"}, {"amplitude", 0.01}, {"frequency", 8.0}, {"direction", {1, 0, 0}}}},
+      {"representation", "bump"}};
+}
+
+BenchTiming bench_method(const MethodInfo& method, int size, int spp, bool packets) {
+  nlohmann::json document = bench_scene(size, spp);
+  document["terminator"] = {{"method", method.id}};
+  const Scene scene = scene_from_json(document, "<bench>");
+  RenderStats stats;
+  RenderOptions options;
+  options.packets = packets;
+  const double cpu_before = cpu_seconds();
+  render(scene, options, &stats);
+  const double cpu = cpu_seconds() - cpu_before;
+  return {std::string(method.id), stats.packets, stats.seconds, cpu,
+          double(stats.camera_samples) / 1e6};
+}
+
+BenchTiming bench_shared_pass(int size, int spp, bool packets) {
+  const Scene scene = scene_from_json(bench_scene(size, spp), "<bench>");
+  std::vector<TerminatorSettings> methods;
+  for (const MethodInfo& m : all_methods()) {
+    TerminatorSettings t = scene.terminator;
+    t.method.method = m.method;
+    if (shares_samples(t)) methods.push_back(t);
+  }
+  RenderStats stats;
+  RenderOptions options;
+  options.packets = packets;
+  const double cpu_before = cpu_seconds();
+  render_methods(scene, methods, options, &stats);
+  const double cpu = cpu_seconds() - cpu_before;
+  return {fmt::format("{} methods, one pass", methods.size()), stats.packets, stats.seconds, cpu,
+          double(stats.camera_samples) * double(methods.size()) / 1e6};
+}
+
+DisplacementTiming bench_displacement(int size, int spp) {
+  DisplacementTiming t;
+  t.peak_rss_mib_before = peak_rss_mib();
+  nlohmann::json document = bench_scene(size, spp);
+  document["representation"] = "displacement";
+  const Scene scene = scene_from_json(document, "<bench>");
+  RenderStats stats;
+  render(scene, {}, &stats);
+  t.edge_length = scene.displacement.edge_length;
+  t.triangles = stats.triangles;
+  t.build_seconds = stats.build_seconds;
+  t.seconds = stats.seconds;
+  t.msamples_per_second = double(stats.camera_samples) / stats.seconds / 1e6;
+  t.peak_rss_mib = peak_rss_mib();
+  return t;
+}
+
+double render_cpu_seconds(RendererKind renderer, const nlohmann::json& document,
+                          const std::string& folder, int threads,
+                          const std::atomic<bool>& interrupted) {
+  const Scene scene = scene_from_json(document, "<bench>");
+  const std::string name = to_string(renderer);
+  RenderSettings settings;
+  settings.threads = threads;
+  settings.log_path = (fs::path(folder) / (name + ".log")).string();
+  settings.progress.progress = [&interrupted](double) {
+    if (interrupted.load()) throw RenderCancelled("interrupted");
+  };
+  const double before = cpu_seconds_with_children();
+  const RendererRun run = render_with(renderer, scene, settings);
+  write_exr(run.image, (fs::path(folder) / (name + ".exr")).string(),
+            {{"penumbra:renderer", name}, {"penumbra:scene", document.dump()}});
+  return cpu_seconds_with_children() - before;
+}
+
+}  // namespace penumbra

@@ -1,0 +1,54 @@
+// The measurements behind `penumbra bench`: the evaluator's throughput on
+// the bench scene of the evaluator issue (a bump cylinder with a grating,
+// A = 0.01), per method and in the one pass a study renders a variant's
+// methods in, and the CPU time of one render against an external renderer's.
+#pragma once
+
+#include <atomic>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "core/terminator.h"
+#include "scene/renderer_table.h"
+
+namespace penumbra {
+
+// The bench scene, size x size pixels at `spp` samples per pixel.
+nlohmann::json bench_scene(int size, int spp);
+
+// One render (or pass) of the bench scene.
+struct BenchTiming {
+  std::string label;    // the method, or "N methods, one pass"
+  bool packets = true;  // whether the evaluator traced packets (core/ray_packet.h)
+  double wall_seconds = 0.0, cpu_seconds = 0.0;
+  double msamples = 0.0;  // camera samples, millions, once per method
+};
+
+// One method's render, through the packets where they apply (`packets`) or
+// the scalar path.
+BenchTiming bench_method(const MethodInfo& method, int size, int spp, bool packets);
+
+// Every method that shares its samples, rendered in one pass
+// (render_methods), as a study renders the methods of a variant.
+BenchTiming bench_shared_pass(int size, int spp, bool packets);
+
+// The bench scene as a displaced mesh: its build and render.
+struct DisplacementTiming {
+  double edge_length = 0.0;
+  std::size_t triangles = 0;
+  double build_seconds = 0.0, seconds = 0.0;
+  double msamples_per_second = 0.0;
+  double peak_rss_mib = 0.0, peak_rss_mib_before = 0.0;
+};
+DisplacementTiming bench_displacement(int size, int spp);
+
+// One render of `document` as `penumbra render` makes it (render_with, then
+// the EXR with the scene in its header) into `folder`: the CPU seconds it
+// took, an external renderer's own processes included; an external renderer
+// gets `threads` threads. Throws RenderCancelled once `interrupted` is set.
+double render_cpu_seconds(RendererKind renderer, const nlohmann::json& document,
+                          const std::string& folder, int threads,
+                          const std::atomic<bool>& interrupted);
+
+}  // namespace penumbra

@@ -1,0 +1,32 @@
+#include "util/resource_usage.h"
+
+#include <sys/resource.h>
+
+namespace penumbra {
+
+namespace {
+
+double cpu_seconds_of(int who) {
+  rusage usage{};
+  getrusage(who, &usage);
+  const auto seconds = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
+  return seconds(usage.ru_utime) + seconds(usage.ru_stime);
+}
+
+}  // namespace
+
+double peak_rss_mib() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_maxrss) / 1024.0;  // Linux reports KiB
+}
+
+double cpu_seconds() {
+  return cpu_seconds_of(RUSAGE_SELF);
+}
+
+double cpu_seconds_with_children() {
+  return cpu_seconds_of(RUSAGE_SELF) + cpu_seconds_of(RUSAGE_CHILDREN);
+}
+
+}  // namespace penumbra
