@@ -37,30 +37,34 @@ std::string duration_text(double s) {
   return t >= 60 ? fmt::format("{}m{:02d}s", t / 60, t % 60) : fmt::format("{}s", t);
 }
 
-// One line per kind of render still to do, with where its rate comes from.
+// The wall-time estimate, then one line per kind of render still to do,
+// with where its rate comes from.
 void print_cost(const CostEstimate& cost, std::ostream& out) {
-  if (cost.lines.empty()) return;
-  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  if (cost.lines.empty() && cost.first_checks == 0) return;
   out << fmt::format(
-      "estimated cost of the renders to do: {:.3f} core-hours (cores x wall time; {} on {} "
-      "cores), at the samples planned now: the convergence checks come on top, and a truth "
-      "that needs more samples raises its variant's bump renders with it:\n",
-      cost.core_seconds / 3600.0, duration_text(cost.core_seconds / cores), cores);
+      "estimated time: about {} of wall time on {} cores: renders {:.0f} core-s, ground-truth "
+      "convergence checks about {:.0f} core-s ({} in the first round, {:.0f} core-s, times {:g} "
+      "for the later rounds, as measured on the shipped studies), comparisons and figures about "
+      "{:.0f} s ({} comparisons); a model of this machine's cost per render, good to about a "
+      "factor of 2 (core-hours, which Slurm bills: {:.3f})\n",
+      duration_text(cost.wall_seconds), cost.cores, cost.core_seconds, cost.checks_core_seconds,
+      cost.first_checks, cost.first_checks_core_seconds, kCheckRoundsRatio, cost.report_seconds,
+      cost.comparisons, (cost.core_seconds + cost.checks_core_seconds) / 3600.0);
   for (const CostLine& line : cost.lines) {
     const std::string kind =
         fmt::format("{} {}{}", to_string(line.renderer), to_string(line.representation),
                     line.tessellated ? " (low-poly)" : "");
     const std::string basis =
         line.measured > 0
-            ? fmt::format(
-                  "median of {} cached renders of this study; their range {:.4f} to "
-                  "{:.4f} core-h",
-                  line.measured, line.core_seconds_low / 3600.0, line.core_seconds_high / 3600.0)
-            : "built-in rate measured on a 2-core machine, no spread known; none cached yet";
+            ? fmt::format("per-sample rate: median of {} cached renders of this study; their range "
+                          "{:.1f} to {:.1f} core-s",
+                          line.measured, line.core_seconds_low, line.core_seconds_high)
+            : "built-in, measured on a 2-core machine; none cached yet";
     out << fmt::format(
-        "  {:<32} {:>7} renders {:>10.4f} core-h  ({:.3g} core-s per 10^6 "
-        "pixel samples: {})\n",
-        kind, line.renders, line.core_seconds / 3600.0, line.core_seconds_per_msample, basis);
+        "  {:<32} {:>7} renders {:>9.1f} core-s  ({:.3g} core-s each + {:.3g} per 10^6 pixel "
+        "samples + {:.3g} per 10^6 triangles; {})\n",
+        kind, line.renders, line.core_seconds, line.model.fixed, line.model.per_msample,
+        line.model.per_mtriangle, basis);
   }
 }
 

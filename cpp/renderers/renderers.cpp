@@ -242,6 +242,7 @@ ResourceEstimate estimate_resources(RendererKind renderer, const Scene& scene) {
   }
   const double mesh_bytes = triangles * kBytesPerTriangle;
   e.memory_bytes = image_bytes + mesh_bytes;
+  e.triangles = triangles;
   // Every channel a cache entry can hold (the evaluator's 8 floats), plus a
   // header with the scene JSON and attributes: about 2 KiB measured on the
   // shipped scenes; 16 KiB leaves room for long scene files.

@@ -130,6 +130,7 @@ std::string renderer_executable(RendererKind renderer, const RenderSettings& set
 struct ResourceEstimate {
   double memory_bytes = 0.0;
   double output_bytes = 0.0;  // uncompressed EXR: the most the file can take
+  double triangles = 0.0;     // of the mesh the render builds (0: none)
   std::string pointer;        // the scene value that dominates memory
   std::string detail;         // "4096x4096 px: 1.6 GiB, 1.7 M triangles: 0.2 GiB"
 };

@@ -24,48 +24,63 @@ double msamples(const Scene& scene) {
   return double(scene.camera.width) * scene.camera.height * scene.camera.spp / 1e6;
 }
 
-// Core-seconds per 10^6 pixel samples, measured on the default study
-// (`harness/run-main.sh`, cold, version 0.7.0, 2 renders at a time with one
-// thread each) on a 2-core AMD EPYC machine with Blender 3.4.1 and POV-Ray
-// 3.7: the median over its cache entries of each kind, and, for kinds that
-// study does not render, the kind named beside the row. Only used for kinds
-// of which the study's own cache holds no render yet.
-struct BuiltInRate {
+// Core-seconds per render kind: fixed + per 10^6 pixel samples + per 10^6
+// mesh triangles (the displaced truths' and Blender's meshes), fitted to the
+// cache headers of cold runs of the smoke, quick and default studies on a
+// 2-core AMD EPYC (2 renders at a time, one thread each; Blender 3.4.1,
+// POV-Ray 3.7). Kinds those studies do not render are marked "as" the kind
+// they are priced like. Only used for kinds of which the study's own cache
+// holds no render yet.
+struct BuiltInCost {
   RendererKind renderer;
   Representation representation;
   bool tessellated;
-  double core_seconds_per_msample;
+  RenderCostModel model;
 };
-constexpr BuiltInRate kBuiltInRates[] = {
-    {RendererKind::kEvaluator, Representation::kSmooth, false, 0.144},       // as bump
-    {RendererKind::kEvaluator, Representation::kSmooth, true, 0.248},        // 148 renders
-    {RendererKind::kEvaluator, Representation::kBump, false, 0.144},         // 168 renders
-    {RendererKind::kEvaluator, Representation::kBump, true, 0.248},          // as smooth, low-poly
-    {RendererKind::kEvaluator, Representation::kDisplacement, false, 2.48},  // 117 renders
-    {RendererKind::kEvaluator, Representation::kDisplacement, true, 2.48},   // as untessellated
-    {RendererKind::kPovray, Representation::kSmooth, false, 4.55},           // as bump
-    {RendererKind::kPovray, Representation::kSmooth, true, 3.78},            // 21 renders
-    {RendererKind::kPovray, Representation::kBump, false, 4.55},             // 24 renders
-    {RendererKind::kPovray, Representation::kBump, true, 4.55},              // as bump
-    {RendererKind::kPovray, Representation::kDisplacement, false, 54.3},     // 24 renders
-    {RendererKind::kPovray, Representation::kDisplacement, true, 54.3},      // as untessellated
-    {RendererKind::kBlender, Representation::kSmooth, false, 2.42},          // as bump
-    {RendererKind::kBlender, Representation::kSmooth, true, 1.08},           // 57 renders
-    {RendererKind::kBlender, Representation::kBump, false, 2.42},            // 72 renders
-    {RendererKind::kBlender, Representation::kBump, true, 2.42},             // as bump
-    {RendererKind::kBlender, Representation::kDisplacement, false, 15.6},    // 24 renders
-    {RendererKind::kBlender, Representation::kDisplacement, true, 15.6},     // as untessellated
+constexpr BuiltInCost kBuiltInCosts[] = {
+    {RendererKind::kEvaluator, Representation::kSmooth, false, {0.01, 0.144, 0.0}},  // as bump
+    {RendererKind::kEvaluator, Representation::kSmooth, true, {0.01, 0.248, 0.0}},
+    {RendererKind::kEvaluator, Representation::kBump, false, {0.01, 0.144, 0.0}},
+    {RendererKind::kEvaluator, Representation::kBump, true, {0.01, 0.248, 0.0}},  // as smooth
+    {RendererKind::kEvaluator, Representation::kDisplacement, false, {0.05, 0.8, 0.12}},
+    {RendererKind::kEvaluator, Representation::kDisplacement, true, {0.05, 0.8, 0.12}},
+    {RendererKind::kPovray, Representation::kSmooth, false, {0.5, 4.55, 0.0}},  // as bump
+    {RendererKind::kPovray, Representation::kSmooth, true, {0.5, 3.78, 0.0}},
+    {RendererKind::kPovray, Representation::kBump, false, {0.5, 4.55, 0.0}},
+    {RendererKind::kPovray, Representation::kBump, true, {0.5, 4.55, 0.0}},  // as bump
+    {RendererKind::kPovray, Representation::kDisplacement, false, {0.8, 54.3, 0.0}},
+    {RendererKind::kPovray, Representation::kDisplacement, true, {0.8, 54.3, 0.0}},
+    {RendererKind::kBlender, Representation::kSmooth, false, {0.3, 2.42, 0.0}},  // as bump
+    {RendererKind::kBlender, Representation::kSmooth, true, {0.3, 1.08, 0.0}},
+    {RendererKind::kBlender, Representation::kBump, false, {0.3, 2.42, 0.0}},
+    {RendererKind::kBlender, Representation::kBump, true, {0.3, 2.42, 0.0}},  // as bump
+    {RendererKind::kBlender, Representation::kDisplacement, false, {1.0, 2.0, 1.5}},
+    {RendererKind::kBlender, Representation::kDisplacement, true, {1.0, 2.0, 1.5}},
 };
 
-double rate_for(const Kind& kind) {
-  if (const auto rate = built_in_rate(std::get<0>(kind), std::get<1>(kind), std::get<2>(kind)))
-    return *rate;
+// Starting a serving Blender (once per worker that renders with it) and
+// probing the renderers' versions, core-seconds.
+constexpr double kBlenderStartSeconds = 5.0;
+constexpr double kProbeSeconds = 2.0;
+// The comparisons (metrics, intervals, pictures) and the figures, wall
+// seconds on 2 cores: fixed + per comparison (default study: 2,136
+// comparisons, about 90 s; smoke study: 64, about 9 s).
+constexpr double kReportFixedSeconds = 6.0;
+constexpr double kReportSecondsPerComparison = 0.04;
+
+RenderCostModel model_for(const Kind& kind) {
+  if (const auto m = built_in_cost(std::get<0>(kind), std::get<1>(kind), std::get<2>(kind)))
+    return *m;
   // A kind missing from the table is priced like the dearest, so that an
   // estimate errs on the safe side (the tests keep the table complete).
-  double dearest = 0.0;
-  for (const BuiltInRate& r : kBuiltInRates)
-    dearest = std::max(dearest, r.core_seconds_per_msample);
+  RenderCostModel dearest;
+  for (const BuiltInCost& c : kBuiltInCosts)
+    dearest.per_msample = std::max(dearest.per_msample, c.model.per_msample);
   return dearest;
+}
+
+double mtriangles(const Job& job) {
+  return job.resources.triangles / 1e6;
 }
 
 std::optional<double> parse_number(const std::string& text) {
@@ -87,7 +102,9 @@ std::optional<double> measured_rate(const Job& job, const RenderCache& cache) {
   const auto wall = parse_number(attributes[kCostWallAttribute]);
   const auto threads = parse_number(attributes[kCostThreadsAttribute]);
   if (!wall || !threads || *threads < 1.0) return std::nullopt;
-  return *wall * *threads / msamples(job.scene);
+  const RenderCostModel m = model_for(kind_of(job));
+  return std::max(0.0, *wall * *threads - m.fixed - m.per_mtriangle * mtriangles(job)) /
+         msamples(job.scene);
 }
 
 double median(std::vector<double> values) {
@@ -100,27 +117,27 @@ double median(std::vector<double> values) {
 
 }  // namespace
 
-std::optional<double> built_in_rate(RendererKind renderer, Representation representation,
-                                    bool tessellated) {
-  for (const BuiltInRate& r : kBuiltInRates)
-    if (r.renderer == renderer && r.representation == representation &&
-        r.tessellated == tessellated)
-      return r.core_seconds_per_msample;
+std::optional<RenderCostModel> built_in_cost(RendererKind renderer, Representation representation,
+                                             bool tessellated) {
+  for (const BuiltInCost& c : kBuiltInCosts)
+    if (c.renderer == renderer && c.representation == representation &&
+        c.tessellated == tessellated)
+      return c.model;
   return std::nullopt;
 }
 
-CostEstimate estimate_cost(const Plan& plan, const RenderCache& cache,
-                           const std::vector<char>& to_render) {
+namespace {
+
+// Per kind with renders to do: the line, priced from the cache where it can.
+std::map<Kind, CostLine> price_lines(const Plan& plan, const RenderCache& cache,
+                                     const std::vector<char>& to_render) {
   constexpr std::size_t kMaxMeasured = 64;
   std::map<Kind, CostLine> lines;
-  std::map<Kind, double> work;  // 10^6 pixel samples to render
   for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
     if (!to_render[i]) continue;
-    const Kind kind = kind_of(plan.jobs[i]);
-    CostLine& line = lines[kind];
-    std::tie(line.renderer, line.representation, line.tessellated) = kind;
+    CostLine& line = lines[kind_of(plan.jobs[i])];
+    std::tie(line.renderer, line.representation, line.tessellated) = kind_of(plan.jobs[i]);
     ++line.renders;
-    work[kind] += msamples(plan.jobs[i].scene);
   }
   // Headers are read only for kinds that have renders to price.
   std::map<Kind, std::vector<double>> rates;
@@ -129,20 +146,71 @@ CostEstimate estimate_cost(const Plan& plan, const RenderCache& cache,
     if (to_render[i] || !lines.count(kind) || rates[kind].size() >= kMaxMeasured) continue;
     if (const auto rate = measured_rate(plan.jobs[i], cache)) rates[kind].push_back(*rate);
   }
-  CostEstimate estimate;
   for (auto& [kind, line] : lines) {
+    line.model = model_for(kind);
     std::vector<double>& measured = rates[kind];
     line.measured = measured.size();
-    line.core_seconds_per_msample = measured.empty() ? rate_for(kind) : median(measured);
-    line.core_seconds = line.core_seconds_per_msample * work[kind];
-    if (!measured.empty()) {
-      std::sort(measured.begin(), measured.end());
-      line.core_seconds_low = measured.front() * work[kind];
-      line.core_seconds_high = measured.back() * work[kind];
+    if (measured.empty()) continue;
+    std::sort(measured.begin(), measured.end());
+    line.model.per_msample = median(measured);
+    line.core_seconds_low = measured.front();  // rates until the renders are summed
+    line.core_seconds_high = measured.back();
+  }
+  return lines;
+}
+
+double job_core_seconds(const Job& job, const RenderCostModel& m) {
+  return m.core_seconds(msamples(job.scene), mtriangles(job));
+}
+
+// The comparisons a cold run makes: each test render against its own
+// renderer's truth, and an external one also against the evaluator's.
+std::size_t comparison_count(const Plan& plan) {
+  std::size_t n = 0;
+  for (const Job& job : plan.jobs)
+    if (!job.truth) n += job.renderer == RendererKind::kEvaluator ? 1 : 2;
+  return n;
+}
+
+}  // namespace
+
+CostEstimate estimate_cost(const Plan& plan, const RenderCache& cache,
+                           const std::vector<char>& to_render, const std::vector<Job>& first_checks,
+                           int cores) {
+  std::map<Kind, CostLine> lines = price_lines(plan, cache, to_render);
+  std::map<Kind, double> work;  // 10^6 pixel samples to render, per kind
+  CostEstimate estimate;
+  bool blender = false;
+  for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
+    if (!to_render[i]) continue;
+    const Kind kind = kind_of(plan.jobs[i]);
+    lines[kind].core_seconds += job_core_seconds(plan.jobs[i], lines[kind].model);
+    work[kind] += msamples(plan.jobs[i].scene);
+    blender |= plan.jobs[i].renderer == RendererKind::kBlender;
+  }
+  for (auto& [kind, line] : lines) {
+    if (line.measured > 0) {  // price_lines left the slowest and fastest rates here
+      const double median_rate = line.model.per_msample;
+      line.core_seconds_low = line.core_seconds + (line.core_seconds_low - median_rate) * work[kind];
+      line.core_seconds_high =
+          line.core_seconds + (line.core_seconds_high - median_rate) * work[kind];
     }
     estimate.core_seconds += line.core_seconds;
     estimate.lines.push_back(line);
   }
+  for (const Job& check : first_checks)
+    estimate.first_checks_core_seconds += job_core_seconds(check, model_for(kind_of(check)));
+  estimate.first_checks = first_checks.size();
+  estimate.checks_core_seconds = kCheckRoundsRatio * estimate.first_checks_core_seconds;
+  estimate.comparisons = comparison_count(plan);
+  estimate.report_seconds =
+      kReportFixedSeconds + kReportSecondsPerComparison * double(estimate.comparisons);
+  estimate.cores = std::max(1, cores);
+  const double starts =
+      kProbeSeconds + (blender ? kBlenderStartSeconds * double(estimate.cores) : 0.0);
+  estimate.wall_seconds =
+      (estimate.core_seconds + estimate.checks_core_seconds + starts) / double(estimate.cores) +
+      estimate.report_seconds;
   return estimate;
 }
 

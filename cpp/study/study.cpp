@@ -331,9 +331,12 @@ std::vector<VariantConvergence> converge(const Study& study, Plan& plan, const R
 // the run will look up (the bump renders share their truth's samples). A
 // check missing from the cache stops that variant at the settings reached;
 // it is counted as a render to do.
-void dry_run_convergence(const Study& study, Plan& plan, const RenderCache& cache,
-                         const StudyOptions& options, const Renderers& renderers,
-                         StudyRunStats& stats) {
+// The first round of convergence checks that the cache lacks (counted in
+// stats and returned, keyed, for the cost estimate).
+std::vector<Job> dry_run_convergence(const Study& study, Plan& plan, const RenderCache& cache,
+                                     const StudyOptions& options, const Renderers& renderers,
+                                     StudyRunStats& stats) {
+  std::vector<Job> missing;
   const RenderBatch from_cache = [&](const std::vector<Job>& jobs, const std::vector<ChainState>&,
                                      std::vector<std::string>* errors) {
     std::vector<Job> keyed = jobs;
@@ -347,15 +350,18 @@ void dry_run_convergence(const Study& study, Plan& plan, const RenderCache& cach
         (*errors)[i] = "not rendered yet (dry run)";
         ++stats.planned_checks;
         stats.planned_output_bytes += keyed[i].resources.output_bytes;
+        missing.push_back(keyed[i]);
       }
     }
     return images;
   };
   converge_truths(plan, study.ground_truth, options.max_memory_bytes, from_cache);
   assign_keys(plan, renderers.identities);
+  return missing;
 }
 
-void count_planned(const Plan& plan, const RenderCache& cache, StudyRunStats& stats) {
+void count_planned(const Plan& plan, const RenderCache& cache, const std::vector<Job>& checks,
+                   int cores, StudyRunStats& stats) {
   std::vector<char> to_render(plan.jobs.size(), 0);
   for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
     const Job& job = plan.jobs[i];
@@ -369,7 +375,7 @@ void count_planned(const Plan& plan, const RenderCache& cache, StudyRunStats& st
     stats.planned_peak_memory_bytes =
         std::max(stats.planned_peak_memory_bytes, job.resources.memory_bytes);
   }
-  stats.cost = estimate_cost(plan, cache, to_render);
+  stats.cost = estimate_cost(plan, cache, to_render, checks, cores);
 }
 
 // Every comparison, those of images compared before taken from the store.
@@ -414,8 +420,9 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   if (options.log)
     for (const std::string& notice : study.notices) options.log("notice: " + notice);
   if (options.dry_run) {
-    dry_run_convergence(study, plan, cache, options, renderers, stats);
-    count_planned(plan, cache, stats);
+    const std::vector<Job> checks =
+        dry_run_convergence(study, plan, cache, options, renderers, stats);
+    count_planned(plan, cache, checks, options.parallelism.renders * options.parallelism.threads_per_render, stats);
     return stats;
   }
   prepare_folders(out, options, stats);

@@ -53,38 +53,77 @@ class Cost : public TempDirTest {
   }
 };
 
-TEST_F(Cost, EveryKindOfRenderHasAPositiveBuiltInRate) {
+TEST_F(Cost, EveryKindOfRenderHasAPositiveBuiltInModel) {
   for (RendererKind r : {RendererKind::kEvaluator, RendererKind::kPovray, RendererKind::kBlender})
     for (Representation rep :
          {Representation::kSmooth, Representation::kBump, Representation::kDisplacement})
       for (bool tessellated : {false, true}) {
-        const auto rate = built_in_rate(r, rep, tessellated);
-        ASSERT_TRUE(rate.has_value()) << to_string(r) << " " << int(rep) << tessellated;
-        EXPECT_GT(*rate, 0.0);
+        const auto m = built_in_cost(r, rep, tessellated);
+        ASSERT_TRUE(m.has_value()) << to_string(r) << " " << int(rep) << tessellated;
+        EXPECT_GT(m->per_msample, 0.0);
+        EXPECT_GT(m->fixed, 0.0);  // every render costs something however small
+        EXPECT_GE(m->per_mtriangle, 0.0);
       }
 }
 
-TEST_F(Cost, AnEmptyCacheIsPricedAtTheBuiltInRates) {
+TEST_F(Cost, AnEmptyCacheIsPricedAtTheBuiltInModel) {
   const Plan p = plan();
   const RenderCache cache(path("cache"));
-  const CostEstimate e = estimate_cost(p, cache, std::vector<char>(p.jobs.size(), 1));
+  const CostEstimate e = estimate_cost(p, cache, std::vector<char>(p.jobs.size(), 1), {}, 2);
   double total = 0.0;
   std::size_t renders = 0;
   for (const CostLine& line : e.lines) {
     EXPECT_EQ(line.measured, 0u);
-    EXPECT_EQ(line.core_seconds_per_msample,
-              *built_in_rate(line.renderer, line.representation, line.tessellated));
-    // Every job is 32 x 32 x 4 = 4096 pixel samples.
-    EXPECT_DOUBLE_EQ(line.core_seconds,
-                     line.core_seconds_per_msample * double(line.renders) * 4096e-6);
+    const RenderCostModel m = *built_in_cost(line.renderer, line.representation, line.tessellated);
+    EXPECT_EQ(line.model.per_msample, m.per_msample);
+    EXPECT_EQ(line.model.fixed, m.fixed);
+    // Every job is 32 x 32 x 4 = 4096 pixel samples; the truths build a mesh.
+    double expected = 0.0;
+    for (const Job& job : p.jobs)
+      if (job.renderer == line.renderer && job.representation == line.representation)
+        expected += m.core_seconds(4096e-6, job.resources.triangles / 1e6);
+    EXPECT_DOUBLE_EQ(line.core_seconds, expected);
+    if (line.representation == Representation::kDisplacement) {
+      EXPECT_GT(p.jobs[p.variants[0].jobs[0]].resources.triangles, 0.0);
+    }
     total += line.core_seconds;
     renders += line.renders;
   }
   EXPECT_EQ(renders, p.jobs.size());
   EXPECT_DOUBLE_EQ(e.core_seconds, total);
+  // 2 variants x 2 methods, the evaluator alone: 4 comparisons; no checks;
+  // the wall time is the renders (and the renderer probe) on 2 cores plus
+  // the report.
+  EXPECT_EQ(e.comparisons, 4u);
+  EXPECT_EQ(e.checks_core_seconds, 0.0);
+  EXPECT_EQ(e.cores, 2);
+  EXPECT_GT(e.wall_seconds, e.core_seconds / 2 + e.report_seconds);
+  EXPECT_LT(e.wall_seconds, e.core_seconds / 2 + e.report_seconds + 2.0);
 }
 
-TEST_F(Cost, CachedRendersOfTheSameKindSetTheRateAsTheirMedian) {
+TEST_F(Cost, TheConvergenceChecksArePricedFromTheirFirstRound) {
+  const Plan p = plan();
+  const RenderCache cache(path("cache"));
+  // The first round of one truth: its mesh at half the edge length (4x the
+  // triangles) and 4x its samples.
+  Job truth = p.jobs[static_cast<std::size_t>(p.truth(0, RendererKind::kEvaluator))];
+  Job finer = truth, more = truth;
+  finer.resources.triangles *= 4;
+  more.scene.camera.spp *= 4;
+  const CostEstimate none = estimate_cost(p, cache, std::vector<char>(p.jobs.size(), 1));
+  const CostEstimate with = estimate_cost(p, cache, std::vector<char>(p.jobs.size(), 1),
+                                          {finer, more});
+  const RenderCostModel m = *built_in_cost(RendererKind::kEvaluator,
+                                           Representation::kDisplacement, false);
+  const double first = m.core_seconds(4096e-6, finer.resources.triangles / 1e6) +
+                       m.core_seconds(4 * 4096e-6, truth.resources.triangles / 1e6);
+  EXPECT_EQ(with.first_checks, 2u);
+  EXPECT_DOUBLE_EQ(with.first_checks_core_seconds, first);
+  EXPECT_DOUBLE_EQ(with.checks_core_seconds, kCheckRoundsRatio * first);
+  EXPECT_NEAR(with.wall_seconds - none.wall_seconds, kCheckRoundsRatio * first, 1e-9);
+}
+
+TEST_F(Cost, CachedRendersOfTheSameKindSetTheSampleRateAsTheirMedian) {
   const Plan p = plan();
   const RenderCache cache(path("cache"));
   std::vector<char> to_render(p.jobs.size(), 1);
@@ -105,9 +144,11 @@ TEST_F(Cost, CachedRendersOfTheSameKindSetTheRateAsTheirMedian) {
       continue;
     }
     seen = true;
+    const double fixed = line.model.fixed;
     EXPECT_EQ(line.measured, 2u);
-    EXPECT_EQ(line.renders, 2u);                                     // the second variant's
-    EXPECT_DOUBLE_EQ(line.core_seconds_per_msample, 4.0 / 4096e-6);  // median of 2 and 6 core-s
+    EXPECT_EQ(line.renders, 2u);  // the second variant's
+    // The rate left after the fixed part: median of 2 and 6 core-s.
+    EXPECT_DOUBLE_EQ(line.model.per_msample, (4.0 - fixed) / 4096e-6);
     EXPECT_DOUBLE_EQ(line.core_seconds, 2 * 4.0);
     EXPECT_DOUBLE_EQ(line.core_seconds_low, 2 * 2.0);  // the fastest entry's rate
     EXPECT_DOUBLE_EQ(line.core_seconds_high, 2 * 6.0);
