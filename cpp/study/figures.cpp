@@ -69,8 +69,9 @@ class ProgressTail {
 
 }  // namespace
 
-void run_plot_script(const std::vector<std::string>& arguments, const std::string& log_path,
-                     const std::string& python, double timeout_s, const ProgressLog& progress) {
+ProcessResult run_plot_process(const std::vector<std::string>& arguments,
+                               const std::string& log_path, const std::string& python,
+                               double timeout_s, const ProgressLog& progress) {
   std::error_code ignored;
   fs::remove(log_path, ignored);
   const std::string name = python_executable(python);
@@ -97,12 +98,21 @@ void run_plot_script(const std::vector<std::string>& arguments, const std::strin
       },
       timeout_s);
   tail.poll(true);
-  const ProcessResult p = end.value_or(ProcessResult{});
+  return end.value_or(ProcessResult{});
+}
+
+void run_plot_script(const std::vector<std::string>& arguments, const std::string& log_path,
+                     const std::string& python, double timeout_s, const ProgressLog& progress) {
+  const ProcessResult p = run_plot_process(arguments, log_path, python, timeout_s, progress);
   if (!p.ok())
     throw RendererError(
         fmt::format("harness/report.py failed ({}); log {}:\n{}",
                     p.timed_out ? std::string("timed out") : "exit " + std::to_string(p.exit_code),
                     log_path, tail_lines(log_path, 12)));
+}
+
+bool is_progress_line(std::string_view line) {
+  return line.rfind(kProgress, 0) == 0;
 }
 
 namespace {

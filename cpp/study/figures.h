@@ -5,7 +5,10 @@
 
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
+
+#include "util/process.h"
 
 namespace penumbra {
 
@@ -21,6 +24,14 @@ using ProgressLog = std::function<void(const std::string&)>;
 void run_plot_script(const std::vector<std::string>& arguments, const std::string& log_path,
                      const std::string& python = "", double timeout_s = 600.0,
                      const ProgressLog& progress = nullptr);
+// As run_plot_script, but returns how the script ended instead of throwing
+// on a failure (RendererError only when Python or the script is missing):
+// for commands that pass the script's own exit status on (2: bad input).
+ProcessResult run_plot_process(const std::vector<std::string>& arguments,
+                               const std::string& log_path, const std::string& python = "",
+                               double timeout_s = 600.0, const ProgressLog& progress = nullptr);
+// A log line the script wrote as progress ("progress: ..."), not output.
+bool is_progress_line(std::string_view line);
 
 // Draws the figures and report.html of the study folder `folder` (which holds
 // report.json); returns the path of report.html, which links its images
