@@ -33,6 +33,7 @@ namespace {
 
 std::string value_text(const json& v) {
   if (v.is_number_float()) return fmt::format("{:g}", v.get<double>());
+  if (v.is_string()) return v.get<std::string>();  // a compound axis's label, unquoted
   return v.dump();
 }
 

@@ -1,0 +1,210 @@
+#include "analysis/achievable.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <array>
+
+namespace penumbra {
+
+namespace {
+
+// The bins a variant's terminator RMSE is over (compare_profiles): the
+// terminator region, where both profiles hold enough pixels.
+std::vector<std::size_t> terminator_bins(const TallyVariant& v) {
+  const ProfileOptions options;
+  std::vector<std::size_t> bins;
+  const std::size_t n = std::min(v.tally.count.size(), v.truth.count.size());
+  for (std::size_t b = 0; b < n; ++b) {
+    const double centre = (double(b) + 0.5) * v.tally.bin_degrees;
+    if (centre >= kTerminatorBegin && centre < kTerminatorEnd &&
+        v.tally.count[b] >= options.min_count && v.truth.count[b] >= options.min_count)
+      bins.push_back(b);
+  }
+  return bins;
+}
+
+// The normal equations of the mean squared error over variants, in the
+// cells `index` maps to variables (-1: fixed at 1), and the prior.
+struct Quadratic {
+  Eigen::MatrixXd h;  // objective = g' h g - 2 f' g + c
+  Eigen::VectorXd f;
+};
+
+void add_variant(const TallyVariant& v, const std::vector<int>& index, double weight,
+                 Quadratic& q) {
+  const std::vector<std::size_t> bins = terminator_bins(v);
+  if (bins.empty()) return;
+  const double w = weight / double(bins.size());
+  for (std::size_t b : bins) {
+    const double n = double(v.tally.count[b]);
+    double y = v.truth.value[b] - v.tally.rest[b] / n;
+    std::vector<std::pair<int, double>> a;
+    for (const auto& [cell, light] : v.tally.scaled[b]) {
+      if (index[static_cast<std::size_t>(cell)] < 0)
+        y -= light / n;  // a fixed cell: G = 1
+      else
+        a.push_back({index[static_cast<std::size_t>(cell)], light / n});
+    }
+    for (const auto& [i, ai] : a) {
+      q.f[i] += w * ai * y;
+      for (const auto& [j, aj] : a) q.h(i, j) += w * ai * aj;
+    }
+  }
+}
+
+// Squared second differences along each axis and (G - 1)^2, each a mean
+// over its terms.
+void add_prior(const FactorGrid& grid, const std::vector<int>& index,
+               const std::vector<char>& constrained, const FloorOptions& o, Quadratic& q) {
+  const int cells = grid.cells();
+  std::vector<std::array<int, 3>> terms;
+  int stride = 1;
+  for (const FactorAxis& axis : grid.axes) {
+    const int n = axis.cells();
+    for (int c = 0; c < cells; ++c) {
+      const int k = (c / stride) % n;
+      if (k == 0 || k == n - 1) continue;
+      const std::array<int, 3> t{index[std::size_t(c - stride)], index[std::size_t(c)],
+                                 index[std::size_t(c + stride)]};
+      if (t[0] >= 0 && t[1] >= 0 && t[2] >= 0) terms.push_back(t);
+    }
+    stride *= n;
+  }
+  const double w = terms.empty() ? 0.0 : o.smoothness / double(terms.size());
+  const double coefficient[3] = {1.0, -2.0, 1.0};
+  for (const auto& t : terms)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) q.h(t[a], t[b]) += w * coefficient[a] * coefficient[b];
+  // The ridge ties only the cells no variant lights (their G is otherwise
+  // any linear continuation of their neighbours); lit cells stay unbiased.
+  const double r = o.ridge / double(std::max<Eigen::Index>(1, q.f.size()));
+  for (std::size_t c = 0; c < index.size(); ++c)
+    if (index[c] >= 0 && !constrained[c]) q.h(index[c], index[c]) += r, q.f[index[c]] += r;
+}
+
+// The largest violation of the bounded problem's optimality conditions.
+double kkt_residual(const Quadratic& q, const Eigen::VectorXd& x, const FloorOptions& o) {
+  const Eigen::VectorXd grad = 2.0 * (q.h * x - q.f);
+  double worst = 0.0;
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    const double v = x[i] <= o.g_min   ? std::max(0.0, -grad[i])
+                     : x[i] >= o.g_max ? std::max(0.0, grad[i])
+                                       : std::abs(grad[i]);
+    worst = std::max(worst, v);
+  }
+  return worst;
+}
+
+Eigen::VectorXd clamp(Eigen::VectorXd x, const FloorOptions& o) {
+  return x.cwiseMax(o.g_min).cwiseMin(o.g_max);
+}
+
+// Accelerated projected gradient (FISTA) from G = 1: finds the active set.
+Eigen::VectorXd projected_gradient(const Quadratic& q, const FloorOptions& o, int* iterations) {
+  const Eigen::Index n = q.f.size();
+  // A fixed start (not Eigen's Random, which draws from std::rand).
+  Eigen::VectorXd v(n);
+  for (Eigen::Index i = 0; i < n; ++i) v[i] = 1.0 + 0.5 * std::sin(double(i));
+  double lipschitz = 1.0;
+  for (int k = 0; k < 50; ++k) {  // power iteration on the PSD h
+    const Eigen::VectorXd w = q.h * v;
+    lipschitz = w.norm() / std::max(v.norm(), 1e-300);
+    v = w / std::max(w.norm(), 1e-300);
+  }
+  const double step = 1.0 / (2.0 * lipschitz * 1.01 + 1e-300);
+  Eigen::VectorXd x = clamp(Eigen::VectorXd::Ones(n), o), y = x;
+  double t = 1.0;
+  for (*iterations = 0; *iterations < o.max_iterations; ++*iterations) {
+    const Eigen::VectorXd next = clamp(y - step * 2.0 * (q.h * y - q.f), o);
+    const double t_next = 0.5 * (1.0 + std::sqrt(1.0 + 4.0 * t * t));
+    y = next + ((t - 1.0) / t_next) * (next - x);
+    x = next, t = t_next;
+    if (*iterations % 50 == 49 && kkt_residual(q, x, o) < 1e-12) break;
+  }
+  return x;
+}
+
+// Cells strictly inside the bounds solve their normal equations exactly,
+// the others held at their bound; repeated while a solve leaves the bounds
+// or a held cell's gradient points inside.
+Eigen::VectorXd active_set(const Quadratic& q, Eigen::VectorXd x, const FloorOptions& o) {
+  const Eigen::Index n = x.size();
+  for (int round = 0; round < 100; ++round) {
+    const Eigen::VectorXd grad = 2.0 * (q.h * x - q.f);
+    std::vector<Eigen::Index> free;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const bool low = x[i] <= o.g_min && grad[i] >= 0.0;
+      const bool high = x[i] >= o.g_max && grad[i] <= 0.0;
+      if (!low && !high) free.push_back(i);
+    }
+    if (free.empty()) return x;
+    const Eigen::Index m = static_cast<Eigen::Index>(free.size());
+    Eigen::MatrixXd hff(m, m);
+    Eigen::VectorXd rhs(m);
+    for (Eigen::Index a = 0; a < m; ++a) {
+      rhs[a] = q.f[free[a]] - q.h.row(free[a]).dot(x) + q.h.row(free[a])(free).dot(x(free));
+      for (Eigen::Index b = 0; b < m; ++b) hff(a, b) = q.h(free[a], free[b]);
+    }
+    const Eigen::VectorXd solved = hff.ldlt().solve(rhs);
+    const Eigen::VectorXd before = x;
+    for (Eigen::Index a = 0; a < m; ++a) x[free[a]] = solved[a];
+    x = clamp(x, o);
+    if ((x - before).lpNorm<Eigen::Infinity>() < 1e-15) return x;
+  }
+  return x;
+}
+
+}  // namespace
+
+Profile ProfileTally::profile(const std::vector<double>& g) const {
+  Profile p;
+  p.bin_degrees = bin_degrees;
+  p.count = count;
+  p.value.assign(count.size(), 0.0);
+  for (std::size_t b = 0; b < count.size(); ++b) {
+    if (!count[b]) continue;
+    double light = rest[b];
+    for (const auto& [cell, value] : scaled[b]) light += value * g[static_cast<std::size_t>(cell)];
+    p.value[b] = light / double(count[b]);
+  }
+  return p;
+}
+
+double tally_rmse(const TallyVariant& v, const std::vector<double>& g) {
+  return compare_profiles(v.tally.profile(g), v.truth).rmse_terminator;
+}
+
+FloorSolution solve_floor(const FactorGrid& grid, const std::vector<TallyVariant>& variants,
+                          const FloorOptions& options) {
+  const int cells = grid.cells();
+  FloorSolution s;
+  s.constrained.assign(static_cast<std::size_t>(cells), 0);
+  for (const TallyVariant& v : variants)
+    for (std::size_t b : terminator_bins(v))
+      for (const auto& [cell, light] : v.tally.scaled[b])
+        if (light != 0.0) s.constrained[static_cast<std::size_t>(cell)] = 1;
+  // Without a prior, a cell no variant lights is not a variable: it stays 1.
+  std::vector<int> index(static_cast<std::size_t>(cells), -1);
+  int n = 0;
+  for (int c = 0; c < cells; ++c)
+    if (options.smoothness > 0.0 || s.constrained[static_cast<std::size_t>(c)]) index[c] = n++;
+  Quadratic q{Eigen::MatrixXd::Zero(n, n), Eigen::VectorXd::Zero(n)};
+  for (const TallyVariant& v : variants) add_variant(v, index, 1.0 / double(variants.size()), q);
+  add_prior(grid, index, s.constrained, options, q);
+  Eigen::VectorXd x = projected_gradient(q, options, &s.iterations);
+  x = active_set(q, x, options);
+  s.kkt_residual = kkt_residual(q, x, options);
+  s.g.assign(static_cast<std::size_t>(cells), 1.0);
+  for (int c = 0; c < cells; ++c)
+    if (index[c] >= 0) s.g[static_cast<std::size_t>(c)] = x[index[c]];
+  for (const TallyVariant& v : variants) {
+    s.variant_rmse.push_back(tally_rmse(v, s.g));
+    if (std::isfinite(s.variant_rmse.back()))
+      s.objective += s.variant_rmse.back() * s.variant_rmse.back() / double(variants.size());
+  }
+  return s;
+}
+
+}  // namespace penumbra

@@ -1,0 +1,77 @@
+// What any terminator factor of given inputs could achieve: the floor of the
+// terminator-profile error over all functions G on a grid of those inputs
+// (core/factor_table.h), and the G that reaches it.
+//
+// A factor G multiplies raw bump's light at each shading point. Raw bump's
+// render, tallied per terminator-profile bin and grid cell (the evaluator's
+// tally, render/evaluator.h), makes the profile of any G that is constant
+// per cell a linear function of G's cells:
+//   P_b(G) = (r_b + sum_c t_bc G_c) / n_b
+// with n_b the bin's pixels, r_b the light G does not scale (other lobes,
+// points outside the grid), t_bc the light in cell c. The terminator RMSE
+// against the truth's profile Q is then a least-squares residual, and its
+// floor over G in [g_min, g_max] a bounded linear least-squares problem,
+// solved here exactly (to a stated KKT residual): a projected-gradient
+// start, then an active-set solve of the free cells (Eigen's LDLT).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "analysis/metrics.h"
+#include "core/factor_table.h"
+
+namespace penumbra {
+
+// Raw bump's light in one render, by profile bin (as terminator_profile
+// bins pixels: fully covered, by their analysis.theta) and grid cell, in
+// fractions of albedo*E/pi summed over the bin's pixels.
+struct ProfileTally {
+  double bin_degrees = 1.0;
+  std::vector<std::uint64_t> count;  // pixels per bin
+  std::vector<double> rest;          // per bin: light no G of the grid scales
+  // Per bin: (cell, light in that cell), cells ascending, no repeats.
+  std::vector<std::vector<std::pair<int, double>>> scaled;
+  // The profile a factor table would give (the tally's grid; G = 1 is raw bump).
+  Profile profile(const std::vector<double>& g) const;
+};
+
+// One variant of a fit: its tally and its truth's profile.
+struct TallyVariant {
+  std::string id;
+  ProfileTally tally;
+  Profile truth;
+};
+
+// The terminator-region RMSE (analysis/metrics.h) of G on one variant,
+// fraction of albedo*E/pi.
+double tally_rmse(const TallyVariant& v, const std::vector<double>& g);
+
+struct FloorOptions {
+  double g_min = 0.0, g_max = 2.0;
+  // Weight of the squared second differences of G along each grid axis (a
+  // smoothness prior; 0: none), as a mean over them, relative to one
+  // variant's mean squared error; and of (G - 1)^2 in the cells no variant
+  // lights, which only the prior reaches (it fixes their linear trend).
+  double smoothness = 0.0;
+  double ridge = 1e-9;
+  int max_iterations = 5000;
+};
+
+struct FloorSolution {
+  std::vector<double> g;              // per grid cell; 1 where no variant has light
+  std::vector<char> constrained;      // cells some variant has light in
+  std::vector<double> variant_rmse;   // per variant, at g
+  double objective = 0.0;             // mean over variants of the squared RMSE at g (no prior)
+  double kkt_residual = 0.0;          // largest violation of optimality, objective units
+  int iterations = 0;
+};
+
+// The G on `grid` minimising the mean over `variants` of their squared
+// terminator RMSE (plus the prior), with g_min <= G <= g_max.
+FloorSolution solve_floor(const FactorGrid& grid, const std::vector<TallyVariant>& variants,
+                          const FloorOptions& options = {});
+
+}  // namespace penumbra

@@ -1,0 +1,66 @@
+// A terminator factor given as a table: G over a grid of angles at the
+// shading point, constant within each cell. It is what `penumbra fit` fits
+// (analysis/achievable.h) and what the `fitted` method looks up, and the
+// grid on which the evaluator tallies raw bump's light so that the
+// terminator profile of any such G is a linear function of its cells.
+//
+// The inputs are the cosines a factor method can see (Chiang et al. 2019
+// use the first three, Conty Estevez et al. 2019 the first two), as angles:
+//   light      theta_i = acos<Ng,wi>, the light's angle from the geometric normal
+//   deviation  delta   = acos<Ng,Ns>, how far the bump tilts the normal
+//   shading    theta_s = acos<Ns,wi>, the light's angle from the bump normal
+//   view       theta_o = acos<Ng,wo>, the viewer's angle from the geometric normal
+// all in degrees. A point outside the grid (beyond the last cell of an
+// axis) is left to raw bump: G = 1 there.
+#pragma once
+
+#include <array>
+#include <string_view>
+#include <vector>
+
+#include "core/enum_names.h"
+#include "core/vec.h"
+
+namespace penumbra {
+
+enum class FactorInput { kLight, kDeviation, kShading, kView };
+inline constexpr EnumName<FactorInput> kFactorInputNames[] = {{"light", FactorInput::kLight},
+                                                              {"deviation", FactorInput::kDeviation},
+                                                              {"shading", FactorInput::kShading},
+                                                              {"view", FactorInput::kView}};
+
+// One axis of the grid: [min_deg, max_deg) in cells of step_deg degrees.
+struct FactorAxis {
+  FactorInput input = FactorInput::kLight;
+  double min_deg = 0.0, max_deg = 180.0, step_deg = 1.0;
+  int cells() const;
+};
+
+// The four angles of a shading point, degrees.
+struct FactorInputs {
+  std::array<double, 4> deg{};  // indexed by FactorInput
+};
+FactorInputs factor_inputs(const Vec3& ng, const Vec3& ns, const Vec3& wi, const Vec3& wo);
+
+// The grid: the product of its axes, the first axis fastest.
+struct FactorGrid {
+  std::vector<FactorAxis> axes;
+  int cells() const;
+  // The cell of a point, or -1 outside the grid.
+  int cell(const FactorInputs& in) const;
+  // The centre of a cell, degrees, per axis.
+  std::vector<double> centre(int cell) const;
+};
+
+// A factor table: G per cell of the grid, in [0, inf) (a fitted G may
+// exceed 1 where raw bump is too dark).
+struct FactorTable {
+  FactorGrid grid;
+  std::vector<double> values;  // grid.cells() of them
+  double at(const FactorInputs& in) const {
+    const int c = grid.cell(in);
+    return c < 0 ? 1.0 : values[static_cast<std::size_t>(c)];
+  }
+};
+
+}  // namespace penumbra
