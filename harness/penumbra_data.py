@@ -20,7 +20,10 @@ REF = 'evaluator'                 # the renderer whose displacement is truth
 LP_TRUTH = 'analytic'             # low-poly: the untessellated surface
 FRACTION = 'fraction of albedo·E/π'
 GROUND_TRUTH = 'ground truth (displacement)'
+PRIMARY = 'combined_relative_error'   # the one ranking metric (issue 37)
+COMBINED_UNIT = "fraction of raw bump's E_term + E_view in the same variant"
 METRICS = {                       # metric -> (name, unit)
+    PRIMARY: ('combined error C', COMBINED_UNIT),
     'profile.rmse_terminator': ('terminator-region profile RMSE', FRACTION),
     'profile.rmse_overall': ('profile RMSE, all bins', FRACTION),
     'profile.max_error_terminator': ('max terminator error', FRACTION),
@@ -31,8 +34,22 @@ METRICS = {                       # metric -> (name, unit)
     'view.rmse_grazing': ('grazing-view RMSE', FRACTION),
     'view.bias_grazing': ('grazing-view bias', FRACTION),
     'image.rmse': ('image RMSE', 'W m⁻² sr⁻¹'),
-    'image.ssim': ('image SSIM', 'unitless'),
-    'image.mask_iou': ('silhouette IoU', 'unitless')}
+    'image.ssim': ('image SSIM', 'unitless, [-1, 1]'),
+    'image.mask_iou': ('silhouette IoU', 'unitless, [0, 1]')}
+CSV_COLUMNS = {                   # metric -> its metrics.csv column
+    PRIMARY: PRIMARY,
+    'profile.rmse_terminator': 'profile_rmse_terminator_rel',
+    'profile.rmse_overall': 'profile_rmse_overall_rel',
+    'profile.max_error_terminator': 'profile_max_error_terminator_rel',
+    'profile.max_step': 'profile_max_step_rel',
+    'profile.position_error_deg': 'position_error_deg',
+    'profile.width_deg': 'transition_width_deg',
+    'profile.lit_bias': 'lit_bias_rel',
+    'view.rmse_grazing': 'view_rmse_grazing_rel',
+    'view.bias_grazing': 'view_bias_grazing_rel',
+    'image.rmse': 'image_rmse_w_m2_sr',
+    'image.ssim': 'image_ssim',
+    'image.mask_iou': 'image_mask_iou'}
 LP_PANELS = (                     # (metric, name, unit, scale)
     ('shadow.darkened_fraction', 'darkened fraction', '% of the lit pixels',
      100),
@@ -201,18 +218,40 @@ def region(r, default):
 # A page with a section (image grid, profile figure, metrics table) per
 # variant stays readable up to a few dozen variants; a sweep of 10^4 would
 # take hours of plotting and a page no browser opens. Past this many, the
-# page shows variants evenly spaced over the study's order (first and last
-# included) and says so; every number stays in report.json and metrics.csv.
+# page shows a balanced selection and says which (penumbra_headline_html);
+# every number stays in report.json and metrics.csv.
 MAX_VARIANT_SECTIONS = 48
 
 
+def _levels(v):
+    """The (what, value) pairs a variant stands for: its scene and each
+    axis' value."""
+    av = v.get('axis_values') if isinstance(v.get('axis_values'), list) \
+        else []
+    return [('scene', str(v.get('scene')))] + [
+        (k, json.dumps(a, sort_keys=True)) for k, a in enumerate(av)]
+
+
 def shown_variants(variants, limit=MAX_VARIANT_SECTIONS):
-    """The variants that get a section of their own, in study order."""
+    """The variants that get a section of their own, in study order: all
+    up to `limit`, else a balanced pick: each pick the variant whose scene
+    and axis values have been picked least so far (summed), the earlier in
+    study order on a tie. Evenly spaced picks over the study's order
+    skipped a whole amplitude of the default study (72 variants, 48
+    sections: every A = 0.01 variant); this gives each scene and each axis
+    value its share."""
     n = len(variants)
     if n <= limit:
         return list(variants)
-    picks = sorted({round(i * (n - 1) / (limit - 1)) for i in range(limit)})
-    return [variants[i] for i in picks]
+    keys = [_levels(v) for v in variants]
+    counts, picked = {}, [False] * n
+    for _ in range(limit):
+        best = min((i for i in range(n) if not picked[i]),
+                   key=lambda i: (sum(counts.get(k, 0) for k in keys[i]), i))
+        picked[best] = True
+        for k in keys[best]:
+            counts[k] = counts.get(k, 0) + 1
+    return [v for v, p in zip(variants, picked) if p]
 
 
 class Report:

@@ -1,25 +1,51 @@
-"""The composed image grid of a variant (Chiang et al. 2019, Fig. 4 style):
-one figure a reader can put in a paper, figures/grid-<variant>.{png,pdf}.
+"""The composed image grids of a variant (Chiang et al. 2019, Fig. 4 style):
+figures a reader can put in a paper.
 
-Columns: the displacement ground truth, then every method; rows: each
-renderer's renders, each followed by its difference images (method minus
-the same renderer's ground truth, as the page shows them). A cell a
-renderer cannot provide is left blank with a short reason. The images are
+  grid-<variant>.{png,pdf}      the ground truth and the handful of methods
+                                the report highlights (penumbra_stats.
+                                highlighted), every renderer that has one;
+  grid-all-<variant>.{png,pdf}  every method, in bands of at most
+                                BAND_COLUMNS columns (the ground truth
+                                first in each band), each band with only
+                                the renderers that provide one of its
+                                methods: 21 columns of mostly "not
+                                provided" read as nothing.
+
+Columns: the displacement ground truth, then methods; rows: each renderer's
+renders, each followed by its difference images (method minus the same
+renderer's ground truth, as the page shows them), with a labelled
+diverging colour bar (the map the C++ side draws them with,
+study/previews.h). A column no renderer provides is dropped. The images are
 the study's own PNGs (images/), drawn at their pixel size without
 resampling artefacts (nearest neighbour).
 """
 import matplotlib.image as mpimg
+from matplotlib.colors import LinearSegmentedColormap, Normalize
 
-from penumbra_data import GROUND_TRUTH, column, inside, objs, stem
+from penumbra_data import FRACTION, GROUND_TRUTH, column, inside, objs, stem
 from penumbra_plot import plt, save
 
+BAND_COLUMNS = 7
+# study/previews.cpp: blue (darker) - white (equal) - red (brighter),
+# linear, saturating at +-0.25 albedo*E/pi.
+DIFF_LIMIT = 0.25
+DIFF_MAP = LinearSegmentedColormap.from_list(
+    'penumbra-difference', [(0, 0, 1), (1, 1, 1), (1, 0, 0)])
 
-def _cells(var, renderers):
+
+def _cells(var, renderers, methods=None):
     """(columns, rows): rows of (head, [image path relative to OUT or None,
-    per column])."""
+    per column]); the columns of `methods` only (all when None), without
+    those no renderer provides."""
     renders = objs(var.get('renders'))
-    cols = list(dict.fromkeys([GROUND_TRUTH] + [column(r) for r in renders]))
-    at = {(str(r.get('renderer')), column(r)): r for r in renders}
+    keep = [r for r in renders if methods is None or
+            r.get('representation') == 'displacement' or
+            str(r.get('method')) in methods]
+    order = {m: i for i, m in enumerate(methods or [])}
+    cols = list(dict.fromkeys([GROUND_TRUTH] + sorted(
+        (column(r) for r in keep if column(r) != GROUND_TRUTH),
+        key=lambda c: order.get(c.split(' (')[0], 0))))
+    at = {(str(r.get('renderer')), column(r)): r for r in keep}
     rows = []
     for rend in dict.fromkeys(renderers + [k[0] for k in at]):
         rs = [at.get((rend, c)) for c in cols]
@@ -51,20 +77,22 @@ def _extent(shape, i, j, cw, ch):
     return (x0, x0 + w, y0 + h, y0)
 
 
-def grid_figure(var, out, src, renderers, figdir):
-    """figures/grid-<variant>.{png,pdf}; returns the paths written ([]
-    when the variant has no images)."""
-    cols, rows = _cells(var, renderers)
-    if not rows:
-        return []
-    # One axes in cell units for the whole grid: an axes per cell costs
-    # seconds per variant (each builds its own ticks), and a study draws
-    # one grid per variant. save() trims the figure to what was drawn.
-    nr, nc = len(rows), len(cols)
-    fig = plt.figure(figsize=(CELL_W * nc + HEAD_W, CELL_H * nr + HEAD_H))
-    ax = fig.add_axes((HEAD_W / fig.get_figwidth(), 0.0,
-                       CELL_W * nc / fig.get_figwidth(),
-                       CELL_H * nr / fig.get_figheight()))
+def _bands(cols, rows, width):
+    """The grid cut into bands of at most `width` columns, the ground
+    truth first in each; in each band only the rows with an image."""
+    if len(cols) <= width:
+        return [(cols, rows)]
+    out = []
+    for k in range(1, len(cols), width - 1):
+        idx = [0] + list(range(k, min(k + width - 1, len(cols))))
+        band = [(head, [paths[j] for j in idx]) for head, paths in rows]
+        keep = [r for r in band if any(p is not None for p in r[1][1:])]
+        out.append(([cols[j] for j in idx], keep))
+    return out
+
+
+def _draw_band(ax, var, out, src, cols, rows):
+    """One band of the grid on an axes in cell units (rows downwards)."""
     ax.set_axis_off()
     for j, name in enumerate(cols):
         ax.text(j + 0.5, -GAP, name.replace(' (', '\n('), ha='center',
@@ -81,9 +109,52 @@ def grid_figure(var, out, src, renderers, figdir):
             elif not head.endswith('difference'):
                 ax.text(j + 0.5, i + 0.5, 'not\nprovided', ha='center',
                         va='center', fontsize=7, color='0.5')
-    ax.set_xlim(0, nc)  # after imshow, which sets them to each image's extent
-    ax.set_ylim(nr, 0)
+    ax.set_xlim(0, len(cols))  # after imshow, which sets them per image
+    ax.set_ylim(len(rows), 0)
+
+
+def _difference_bar(fig, bottom):
+    """The difference images' colour bar, labelled with its unit, in a
+    strip `bottom` inches high at the foot of the figure."""
+    h = fig.get_figheight()
+    cax = fig.add_axes((HEAD_W / fig.get_figwidth(), 0.45 * bottom / h,
+                        min(0.5, 4.0 / fig.get_figwidth()), 0.12 / h))
+    bar = fig.colorbar(plt.cm.ScalarMappable(
+        Normalize(-DIFF_LIMIT, DIFF_LIMIT), DIFF_MAP), cax=cax,
+        orientation='horizontal', extend='both')
+    bar.set_label(f'difference: method − the same renderer\'s ground truth\n'
+                  f'({FRACTION}); saturates at ±{DIFF_LIMIT:g}; grey: no '
+                  'object', fontsize=8)
+    bar.ax.tick_params(labelsize=8)
+
+
+def grid_figure(var, out, src, renderers, figdir, methods=None):
+    """figures/grid-<variant>.{png,pdf} (the given methods) or, methods
+    None, grid-all-<variant>.{png,pdf} (every method, in bands); returns
+    the paths written ([] when the variant has no images)."""
+    cols, rows = _cells(var, renderers, methods)
+    if not rows:
+        return []
+    bands = _bands(cols, rows, BAND_COLUMNS) if methods is None else \
+        [(cols, rows)]
+    diffs = any(h.endswith('difference') for _, rs in bands for h, _ in rs)
+    # One axes in cell units per band: an axes per cell costs seconds per
+    # variant (each builds its own ticks). save() trims the figure.
+    nc = max(len(c) for c, _ in bands)
+    heights = [CELL_H * len(rs) + HEAD_H for _, rs in bands]
+    bottom = 1.0 if diffs else 0.0
+    fig = plt.figure(figsize=(CELL_W * nc + HEAD_W,
+                              sum(heights) + bottom + 0.5))
+    fw, fh = fig.get_figwidth(), fig.get_figheight()
+    top = fh - 0.5
+    for (bc, rs), hb in zip(bands, heights):
+        top -= hb
+        ax = fig.add_axes((HEAD_W / fw, (top + HEAD_H * 0.5) / fh,
+                           CELL_W * len(bc) / fw, CELL_H * len(rs) / fh))
+        _draw_band(ax, var, out, src, bc, rs)
+    if diffs:
+        _difference_bar(fig, bottom)
     fig.suptitle(str(var.get('label', var.get('id'))), fontsize=9,
-                 wrap=True, va='bottom',
-                 y=(CELL_H * nr + 0.5) / fig.get_figheight())
-    return save(fig, figdir, f'grid-{stem(var.get("id"))}', ('png', 'pdf'))
+                 wrap=True, va='bottom', y=(fh - 0.45) / fh)
+    name = 'grid-all-' if methods is None else 'grid-'
+    return save(fig, figdir, name + stem(var.get('id')), ('png', 'pdf'))
