@@ -129,12 +129,9 @@ def ranking_fig(stats, styles, style, methods=None, metric=PRIMARY):
     given), groups banded and labelled, the rule as the caption."""
     rows = [r for r in stats.rows if methods is None or r['method'] in methods]
     placed = group_rows(rows, metric, stats)
-    n = max(len(placed), 1)
-    w = style.width(6.4)
-    h = 1.5 + 0.24 * (placed[-1]['y'] + 1 if placed else 1)
-    fig, ax = plt.subplots(figsize=(w, h if not style.paper else
-                                    1.2 + 0.15 * (placed[-1]['y'] + 1
-                                                  if placed else 1)),
+    span = placed[-1]['y'] + 1 if placed else 1
+    fig, ax = plt.subplots(figsize=(style.width(6.4), 1.2 + 0.15 * span
+                                    if style.paper else 1.5 + 0.24 * span),
                            layout='constrained')
     base = next((p['value'] for p in placed if p['method'] == 'none'),
                 1.0 if metric == PRIMARY else math.nan)
@@ -151,11 +148,13 @@ def ranking_fig(stats, styles, style, methods=None, metric=PRIMARY):
     what = ('' if metric == PRIMARY else
             f'Not the ranking metric: ordered by the rank groups of '
             f'{stats.primary["name"]}. ')
+    bars = stats.interval_text() if metric == PRIMARY else \
+        '95 % bootstrap interval over variants'
     caption = (f'{what}Points: mean over {stats.overall.get("variants", "?")}'
-               f' variants; bars: {stats.interval_text() if metric == PRIMARY else "95 % bootstrap interval over variants"}'
-               f'; dashed: raw bump (none). Rank groups: {stats.rule}')
+               f' variants; bars: {bars}; dashed: raw bump (none). Rank '
+               f'groups: {stats.rule}')
     fig.supxlabel(wrapped(fig, caption, 7), fontsize=7, ha='center')
-    if n == 0:
+    if not placed:
         ax.text(0.5, 0.5, 'no ranking', transform=ax.transAxes, ha='center')
     return fig
 

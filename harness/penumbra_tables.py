@@ -195,16 +195,37 @@ def tex(s):
                    for c in str(s))
 
 
+# The ranking table's head in LaTeX: short symbols over their units (the
+# caption defines them); a paper column has no room for the page's headings.
+RANKING_TEX = [
+    ['Group', 'Method', '$C$', r'$C - C_\mathrm{leader}$',
+     r'$1 - E_\mathrm{term}/E_\mathrm{term}^\mathrm{none}$',
+     r'$E_\mathrm{view} - E_\mathrm{view}^\mathrm{none}$', r'vs.\ none'],
+    ['', '', '(ratio)', '(ratio)', '(ratio)', r'(albedo$\cdot E/\pi$)', '']]
+
+
+def latex_head(table):
+    """The head rows of a table in LaTeX: the ranking table's symbols, or
+    a level table's axis over its levels' ids."""
+    if 'levels' not in table:
+        return [' & '.join(r) + r' \\' for r in RANKING_TEX]
+    n = len(table['levels'])
+    return [f'Method & \\multicolumn{{{n}}}{{c}}{{{tex(table["axis"]["label"])}'
+            f' ({tex(table["unit"] or table["metric"])})}}' + r' \\',
+            f'\\cmidrule(lr){{2-{n + 1}}}',
+            ' & '.join([''] + [tex(lv['id']) for lv in table['levels']]) +
+            r' \\']
+
+
 def latex(table, caption):
     """A booktabs table environment (\\usepackage{booktabs}); a rule
     between rank groups."""
-    head = [heading(h, u) for h, u, _ in table['head']]
     cols = ''.join('r' if numeric_column(table, k) else 'l'
-                   for k in range(len(head)))
+                   for k in range(len(table['head'])))
     lines = ['% needs \\usepackage{booktabs}',
              '\\begin{table}[tbp]', '\\centering', '\\small',
-             f'\\begin{{tabular}}{{{cols}}}', '\\toprule',
-             ' & '.join(tex(h) for h in head) + r' \\', '\\midrule']
+             f'\\begin{{tabular}}{{{cols}}}', '\\toprule'] + \
+        latex_head(table) + ['\\midrule']
     groups = table.get('groups')
     for k, r in enumerate(formatted(table)):
         if groups and k and groups[k] != groups[k - 1]:
@@ -263,9 +284,12 @@ def table_caption(stats, table):
         if table['axis'].get('computed'):
             what += ' (none: this report.json has no statistics.by_axis)'
     else:
-        what = (f'{stats.primary["name"]} (C; {stats.primary["unit"]}), '
+        what = (f'C: {stats.primary["name"]} ({stats.primary["unit"]}), '
                 f'mean over {stats.overall.get("variants", "?")} variants '
-                f'[{stats.interval_text()}]; other differences with their '
-                '95 % intervals; a difference whose interval contains 0 is '
-                'a tie')
+                f'[{stats.interval_text()}]; C - C_leader: the paired '
+                'difference from its rank group\'s leader; 1 - E_term/'
+                'E_term(none): the share of raw bump\'s terminator error '
+                'removed; E_view - E_view(none): the grazing-view RMSE added '
+                f'({FRACTION}); the others with 95 % intervals; a difference '
+                'whose interval contains 0 is a tie')
     return f'{what}. Rank groups: {stats.rule}'

@@ -33,7 +33,8 @@ def png(path, rgb, size=8):
     def chunk(kind, data):
         body = kind + data
         return struct.pack('>I', len(data)) + body + struct.pack('>I', zlib.crc32(body))
-    data = (b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', size, size, 8, 2, 0, 0, 0))
+    head = struct.pack('>IIBBBBB', size, size, 8, 2, 0, 0, 0)
+    data = (b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', head)
             + chunk(b'IDAT', zlib.compress(raw, 9)) + chunk(b'IEND', b''))
     with open(path, 'wb') as f:
         f.write(data)
@@ -52,11 +53,11 @@ def factor(method, k, amp):
     return 0.75 + 0.03 * k
 
 
-def variants():
+def variants(scenes=SCENES, lights=LIGHTS):
     out = []
-    for s, scene in enumerate(SCENES):
+    for s, scene in enumerate(scenes):
         for a, amp in enumerate(AMPLITUDES):
-            for l, light in enumerate(LIGHTS):
+            for l, light in enumerate(lights):
                 for m, shading in enumerate(SHADING):
                     out.append({'id': f'v{len(out):03d}', 'scene': scene,
                                 'label': f'{scene}, A={amp}, {LIGHT_LABELS[l]}, {shading}',
@@ -76,7 +77,8 @@ def profile(method, k, wiggle):
 
 def renders_and_comparisons(v, out, methods):
     renders, comps = [], []
-    for rend, meths in (('evaluator', methods), ('povray', ['none', 'chiang2019'])):
+    external = [m for m in ('none', 'chiang2019') if m in methods]
+    for rend, meths in (('evaluator', methods), ('povray', external)):
         for rep, meth in [('displacement', 'none')] + [('bump', m) for m in meths]:
             name = f'images/{v["id"]}-{rend}-{rep}-{meth}'.replace('(', '_').replace(')', '_')
             png(os.path.join(out, name + '.png'), (120, 120, 120))
@@ -89,14 +91,17 @@ def renders_and_comparisons(v, out, methods):
                 r['difference'] = name + '-diff.png'
                 f = factor(meth, methods.index(meth), v['amp'])
                 term = 0.05 * (1 + v['wiggle']) * f
-                comps.append({'variant': v['id'], 'scene': v['scene'], 'renderer': rend,
-                              'method': meth, 'reference': f'{rend}:displacement',
-                              'profile': {'rmse_terminator': term, 'rmse_terminator_ci': [term * 0.9, term * 1.1],
-                                          'rmse_overall': term / 2, 'max_error_terminator': term * 2,
-                                          'max_step': 0.01, 'position_error_deg': 2 * f,
-                                          'width_deg': 10.0, 'lit_bias': 0.001},
-                              'view': {'rmse_grazing': 0.02 * f * (1 + v['wiggle']), 'bias_grazing': -0.01},
-                              'image': {'rmse': 0.01 * f, 'ssim': 0.95, 'mask_iou': 1.0}})
+                comps.append({
+                    'variant': v['id'], 'scene': v['scene'], 'renderer': rend,
+                    'method': meth, 'reference': f'{rend}:displacement',
+                    'profile': {'rmse_terminator': term,
+                                'rmse_terminator_ci': [term * 0.9, term * 1.1],
+                                'rmse_overall': term / 2, 'max_error_terminator': term * 2,
+                                'max_step': 0.01, 'position_error_deg': 2 * f,
+                                'width_deg': 10.0, 'lit_bias': 0.001},
+                    'view': {'rmse_grazing': 0.02 * f * (1 + v['wiggle']),
+                             'bias_grazing': -0.01},
+                    'image': {'rmse': 0.01 * f, 'ssim': 0.95, 'mask_iou': 1.0}})
             renders.append(r)
     return renders, comps
 
@@ -141,13 +146,13 @@ def ranking_stats(vs, methods, scene=None):
             'pairs': [], 'headline': [f'{rows[0]["method"]} has the lowest combined error.']}
 
 
-def by_axis(vs, methods):
+def by_axis(vs, methods, lights):
     axes = []
     for k, (pointer, label, values, labels, ids, numeric) in enumerate((
             ('/height/amplitude', 'amplitude A (scene units)', AMPLITUDES,
              [str(a) for a in AMPLITUDES], [str(a) for a in AMPLITUDES], True),
-            ('/light/direction', 'light direction (towards the light)', LIGHTS, LIGHT_LABELS,
-             ['az101-el0', 'az68-el0'], False),
+            ('/light/direction', 'light direction (towards the light)', lights,
+             LIGHT_LABELS[:len(lights)], ['az101-el0', 'az68-el0'][:len(lights)], False),
             ('shading', 'material, and the lobes a factor scales', SHADING, SHADING,
              ['lambert', 'ggx-diffuse', 'ggx-all'], False))):
         levels = [{'value': val, 'value_label': lab, 'value_id': vid,
@@ -166,13 +171,13 @@ def by_axis(vs, methods):
     return axes
 
 
-def statistics(vs, methods, new_fields):
+def statistics(vs, methods, new_fields, scenes, lights):
     st = {'definition': 'C = (E_term + E_view) / (E_term(none) + E_view(none))',
           'confidence': 0.95, 'interval': 'percentile bootstrap over variants',
           'test': 'sign test', 'baseline': 'none', 'reference': 'evaluator:displacement',
           'overall': ranking_stats(vs, methods),
           'per_scene': [ranking_stats([v for v in vs if v['scene'] == s], methods, s)
-                        for s in SCENES]}
+                        for s in scenes]}
     if new_fields:
         st.update({
             'primary_metric': {'id': 'combined_relative_error',
@@ -181,7 +186,7 @@ def statistics(vs, methods, new_fields):
                                        'variant (1 = raw bump, lower is better)'},
             'rule': 'A rank group is the best method not yet grouped and every later method '
                     'whose paired interval with it contains 0.',
-            'by_axis': by_axis(vs, methods),
+            'by_axis': by_axis(vs, methods, lights),
             'headline': ['estevez2019 leads the best rank group.',
                          'At A = 0.02 chiang2019 removes 45 % [30, 60] of raw bump\'s error; '
                          'at A = 0.005 it adds 60 % [40, 80]: its benefit depends on amplitude.',
@@ -197,25 +202,27 @@ def statistics(vs, methods, new_fields):
     return st
 
 
-def axes(new_fields):
+def axes(new_fields, lights):
     out = [{'pointer': '/height/amplitude', 'label': 'amplitude A (scene units)',
             'values': AMPLITUDES, 'value_labels': [str(a) for a in AMPLITUDES]},
            {'pointer': '/light/direction', 'label': 'light direction (towards the light)',
-            'values': LIGHTS, 'value_labels': LIGHT_LABELS},
+            'values': lights, 'value_labels': LIGHT_LABELS[:len(lights)]},
            {'pointer': 'shading', 'label': 'material, and the lobes a factor scales',
             'values': SHADING, 'value_labels': SHADING}]
     if new_fields:
         for a, ids in zip(out, ([str(a) for a in AMPLITUDES], ['az101-el0', 'az68-el0'],
                                 ['lambert', 'ggx-diffuse', 'ggx-all'])):
-            a['value_ids'] = ids
+            a['value_ids'] = ids[:len(a['values'])]
     return out
 
 
-def write_fixture(out, new_fields=True, with_none=True, name='fixture <b>&amp;'):
-    """Writes out/report.json and out/images/*.png; returns the document."""
+def write_fixture(out, new_fields=True, with_none=True, name='fixture <b>&amp;',
+                  scenes=SCENES, lights=LIGHTS, methods=METHODS):
+    """Writes out/report.json and out/images/*.png; returns the document.
+    A smaller study: fewer scenes, lights or methods (the first of each)."""
     os.makedirs(os.path.join(out, 'images'), exist_ok=True)
-    methods = METHODS if with_none else METHODS[1:]
-    vs = variants()
+    methods = [m for m in methods if with_none or m != 'none']
+    vs = variants(scenes, lights)
     comps, doc_vs = [], []
     for v in vs:
         renders, c = renders_and_comparisons(v, out, methods)
@@ -231,9 +238,10 @@ def write_fixture(out, new_fields=True, with_none=True, name='fixture <b>&amp;')
         'study': {'name': name, 'file': 'studies/fixture.json'},
         'units': {'profile': FRACTION, 'terminator_region_deg': [60, 100],
                   'lit_region_deg': [0, 60], 'image': 'W m^-2 sr^-1'},
-        'axes': axes(new_fields),
+        'axes': axes(new_fields, lights),
         'renderers': [{'id': 'evaluator', 'version': '0.10.0', 'methods': methods, 'note': ''},
-                      {'id': 'povray', 'version': '3.7', 'methods': ['none', 'chiang2019'],
+                      {'id': 'povray', 'version': '3.7',
+                       'methods': [m for m in ('none', 'chiang2019') if m in methods],
                        'note': 'two methods'}],
         'variants': doc_vs, 'comparisons': comps,
         'ranking': {'metric': 'profile.rmse_terminator', 'reference': 'evaluator:displacement',
@@ -245,7 +253,7 @@ def write_fixture(out, new_fields=True, with_none=True, name='fixture <b>&amp;')
         'plots': [{'metric': 'profile.rmse_terminator', 'x': 0, 'y': 1, 'kind': 'heatmap',
                    'renderer': 'evaluator'}]}
     if with_none:
-        doc['statistics'] = statistics(vs, methods, new_fields)
+        doc['statistics'] = statistics(vs, methods, new_fields, scenes, lights)
     if new_fields:
         doc['provenance'] = {'penumbra': '0.10.0', 'commit': 'a' * 40, 'dirty': False,
                              'date': '2026-11-27T06:00:00Z',
