@@ -11,6 +11,7 @@ import os
 import tempfile
 
 from penumbra_data import METRICS, PRIMARY, BadInput, Report, objs
+from penumbra_grid_figure import grid_fig
 from penumbra_figures import (
     figure_methods, profile_fig, report_methods, report_styles)
 from penumbra_paper_figures import line_fig, ranking_fig
@@ -23,7 +24,7 @@ from penumbra_tables import (
 FIGURE_OPTIONS = ('--kind', '--x', '--y', '--metric', '--methods',
                   '--variant', '--scene', '--style', '--columns', '-o')
 TABLE_OPTIONS = ('--format', '--by', '--metric', '-o')
-KINDS = ('line', 'profile', 'ranking', 'heatmap')
+KINDS = ('line', 'profile', 'ranking', 'heatmap', 'grid')
 
 
 def parse(argv, allowed):
@@ -99,7 +100,7 @@ def axis_of(stats, opts, opt='--x'):
 
 def figure_of(kind, opts, report, stats, style):
     """The Figure a `figure` command asks for (every option checked)."""
-    styles = report_styles(report)
+    styles = report_styles(report, stats)
     methods = method_list(opts, report, stats)
     if kind == 'line':
         metric = choice(opts, '--metric', MEAN_METRICS, PRIMARY)
@@ -112,12 +113,20 @@ def figure_of(kind, opts, report, stats, style):
         metric = choice(opts, '--metric', MEAN_METRICS, PRIMARY)
         return ranking_fig(stats, styles, style, opts.get('--methods') and
                            methods, metric)
-    if kind == 'profile':
+    if kind in ('profile', 'grid'):
         ids = [str(v.get('id')) for v in report.variants]
-        vid = choice(opts, '--variant', ids, ids[0] if ids else None)
-        var = report.variants[ids.index(vid)]
-        return profile_fig(var, styles, report.terminator, methods, style,
-                           marks=len(methods) > 5)
+        var = report.variants[ids.index(
+            choice(opts, '--variant', ids, ids[0] if ids else None))]
+        if kind == 'profile':
+            return profile_fig(var, styles, report.terminator, methods,
+                               style, marks=len(methods) > 5)
+        fig = grid_fig(var, report.out, report.src,
+                       [str(r.get('id')) for r in report.renderers],
+                       None if opts.get('--methods') == 'all' else methods,
+                       style.width(None))
+        if fig is None:
+            raise BadInput('--variant', f'{var.get("id")} has no images')
+        return fig
     return heatmap_of(opts, report, methods, style)
 
 

@@ -50,19 +50,25 @@ CSV_COLUMNS = {                   # metric -> its metrics.csv column
     'image.rmse': 'image_rmse_w_m2_sr',
     'image.ssim': 'image_ssim',
     'image.mask_iou': 'image_mask_iou'}
-LP_PANELS = (                     # (metric, name, unit, scale)
-    ('shadow.darkened_fraction', 'darkened fraction', '% of the lit pixels',
-     100),
-    ('shadow.max_darkening', 'max darkening', '% of albedo·E/π', 100),
-    ('profile.rmse_terminator', 'terminator profile RMSE',
-     '% of albedo·E/π', 100))
+# (metric, name, unit, scale): fractions, as lowpoly.csv gives them (its
+# column in LP_COLUMNS); the page's low-poly tables say "%" where they
+# show percent.
+LP_PANELS = (
+    ('shadow.darkened_fraction', 'darkened share of the lit pixels',
+     'fraction of pixels', 1),
+    ('shadow.max_darkening', 'max darkening', FRACTION, 1),
+    ('profile.rmse_terminator', 'terminator profile RMSE', FRACTION, 1))
 LP_SIDE = (
-    ('shadow.lost_shadow_fraction', 'lost cast shadow',
-     '% of the analytic shadow', 100),
+    ('shadow.lost_shadow_fraction', 'lost share of the analytic cast shadow',
+     'fraction of pixels', 1),
     ('shadow.shadow_shift_px', 'cast-shadow shift', 'pixels', 1),
-    ('shadow.darkened_fraction', 'darkened fraction', '% of the lit pixels',
-     100))
-
+    ('shadow.darkened_fraction', 'darkened share of the lit pixels',
+     'fraction of pixels', 1))
+LP_COLUMNS = {'shadow.darkened_fraction': 'darkened_fraction',
+              'shadow.max_darkening': 'max_darkening_rel',
+              'profile.rmse_terminator': 'profile_rmse_terminator_rel',
+              'shadow.lost_shadow_fraction': 'lost_shadow_fraction',
+              'shadow.shadow_shift_px': 'shadow_shift_px'}
 
 class BadInput(Exception):
     """Bad input: reported as 'report.py: <file>: <what>', exit status 2."""
@@ -232,22 +238,32 @@ def _levels(v):
         (k, json.dumps(a, sort_keys=True)) for k, a in enumerate(av)]
 
 
+def evenly_spaced(n, k):
+    """k indices evenly spaced over range(n), the first and last included."""
+    return sorted({round(i * (n - 1) / (k - 1)) for i in range(k)})
+
+
 def shown_variants(variants, limit=MAX_VARIANT_SECTIONS):
     """The variants that get a section of their own, in study order: all
     up to `limit`, else a balanced pick: each pick the variant whose scene
-    and axis values have been picked least so far (summed), the earlier in
-    study order on a tie. Evenly spaced picks over the study's order
-    skipped a whole amplitude of the default study (72 variants, 48
-    sections: every A = 0.01 variant); this gives each scene and each axis
-    value its share."""
+    and axis values have been picked least so far (summed); on a tie, the
+    first of the evenly spaced variants (first and last included), then
+    the others in study order. Evenly spaced picks alone skipped a whole
+    amplitude of the default study (72 variants, 48 sections: every
+    A = 0.01 variant); this gives each scene and each axis value its
+    share, and is the evenly spaced pick where every variant has values of
+    its own (one axis)."""
     n = len(variants)
     if n <= limit:
         return list(variants)
+    even = evenly_spaced(n, limit)
+    priority = {i: r for r, i in enumerate(
+        even + [i for i in range(n) if i not in set(even)])}
     keys = [_levels(v) for v in variants]
     counts, picked = {}, [False] * n
     for _ in range(limit):
-        best = min((i for i in range(n) if not picked[i]),
-                   key=lambda i: (sum(counts.get(k, 0) for k in keys[i]), i))
+        best = min((i for i in range(n) if not picked[i]), key=lambda i: (
+            sum(counts.get(k, 0) for k in keys[i]), priority[i]))
         picked[best] = True
         for k in keys[best]:
             counts[k] = counts.get(k, 0) + 1

@@ -42,10 +42,15 @@ def report_methods(report):
         [str(c.get('method')) for c in report.comps]))
 
 
-def report_styles(report):
+def report_styles(report, stats):
     """{method: {'color', 'ls', 'marker'}}: one look per method in every
-    figure of the report and of `report.py figure`."""
-    return series_styles(report_methods(report))
+    figure of the report and of `report.py figure`. The palette is dealt
+    in this order: the highlighted methods (so the handful a figure shows
+    by default have nine colours to themselves, and solid lines), then
+    the rank order, then every other method as the report names it."""
+    methods = report_methods(report)
+    return series_styles(figure_methods(report, stats) + stats.methods +
+                         methods)
 
 
 def profile_xy(p):
@@ -199,13 +204,13 @@ def profile_fig(var, styles, region, methods=None, style=SCREEN,
 
 def profile_figure(var, styles, region, figdir, methods=None):
     """figures/profiles-<variant>.{png,svg,pdf} (the given methods) or,
-    methods None, profiles-all-<variant>.{png,pdf} (every method, markers
+    methods None, all-methods-profiles-<variant>.{png,pdf} (every method, markers
     along the lines)."""
     every = methods is None
     fig = profile_fig(var, styles, region, methods, marks=every)
     # PNG and PDF for every method's: an SVG of 20 dense lines per panel
     # is slow to write and to open, and the page embeds the PNG.
-    return save(fig, figdir, ('profiles-all-' if every else 'profiles-') +
+    return save(fig, figdir, ('all-methods-profiles-' if every else 'profiles-') +
                 stem(var.get('id')), ('png', 'pdf') if every else
                 ('png', 'svg', 'pdf'))
 
@@ -325,7 +330,7 @@ def report_figures(report, stats):
     entry, PNG, SVG, PDF per metric], 'written': [every path]."""
     figdir = os.path.join(report.out, 'figures')
     os.makedirs(figdir, exist_ok=True)
-    styles = report_styles(report)
+    styles = report_styles(report, stats)
     shown = figure_methods(report, stats)
     progress('ranking, statistics and line figures')
     figs = statistics_figures(report, stats, styles, shown, figdir)

@@ -1,15 +1,13 @@
 """The composed image grids of a variant (Chiang et al. 2019, Fig. 4 style):
 figures a reader can put in a paper.
 
-  grid-<variant>.{png,pdf}      the ground truth and the handful of methods
-                                the report highlights (penumbra_stats.
-                                highlighted), every renderer that has one;
-  grid-all-<variant>.{png,pdf}  every method, in bands of at most
-                                BAND_COLUMNS columns (the ground truth
-                                first in each band), each band with only
-                                the renderers that provide one of its
-                                methods: 21 columns of mostly "not
-                                provided" read as nothing.
+  grid-<variant>.{png,pdf}     the ground truth and the handful of
+      methods the report highlights (penumbra_stats.highlighted), every
+      renderer that has one;
+  all-methods-grid-<variant>.{png,pdf}     every method, in bands of at
+      most BAND_COLUMNS columns (the ground truth first in each band),
+      each band with only the renderers that provide one of its methods:
+      21 columns of mostly "not provided" read as nothing.
 
 Columns: the displacement ground truth, then methods; rows: each renderer's
 renders, each followed by its difference images (method minus the same
@@ -19,6 +17,8 @@ study/previews.h). A column no renderer provides is dropped. The images are
 the study's own PNGs (images/), drawn at their pixel size without
 resampling artefacts (nearest neighbour).
 """
+import re
+
 import matplotlib.image as mpimg
 from matplotlib.colors import LinearSegmentedColormap, Normalize
 
@@ -60,7 +60,7 @@ def _cells(var, renderers, methods=None):
 
 # Inches: a cell, the margins for the row and column heads, the gap
 # between cells (a fraction of a cell).
-CELL_W, CELL_H, HEAD_W, HEAD_H, GAP = 1.7, 1.75, 0.9, 0.9, 0.02
+CELL_W, CELL_H, HEAD_W, GAP = 1.7, 1.75, 0.9, 0.02
 
 
 def _extent(shape, i, j, cw, ch):
@@ -91,21 +91,58 @@ def _bands(cols, rows, width):
     return out
 
 
-def _draw_band(ax, var, out, src, cols, rows):
-    """One band of the grid on an axes in cell units (rows downwards)."""
+def _head(name, chars):
+    """A column head in lines of about `chars` characters, broken at
+    spaces, after a '-' or before a '(' (method ids have no spaces)."""
+    marked = name.replace('-', '-\0').replace('(', '\0(')
+    lines = ['']
+    for token in re.findall(r'[^ \0]+[ \0]?', marked):
+        if lines[-1] and len((lines[-1] + token).replace('\0', '').rstrip()) > chars:
+            lines.append('')
+        lines[-1] += token
+    return '\n'.join(t.replace('\0', '').rstrip() for t in lines)
+
+
+def _heads(cols, width):
+    """(font size, heads in lines, slanted?) of the column heads of cells
+    `width` inches wide: too narrow for a word of a head, every head is
+    slanted, on one line."""
+    size = 8 if width >= 1.4 else 7
+    chars = int(width * 72 / (0.6 * size))
+    heads = [_head(name, chars) for name in cols]
+    slant = max(len(w) for h in heads for w in h.split('\n')) > chars
+    return size, heads, slant
+
+
+def _head_height(cols, width):
+    """Inches above a band for its column heads."""
+    size, heads, slant = _heads(cols, width)
+    if not slant:
+        return 0.15 + 0.17 * max(h.count('\n') + 1 for h in heads) * size / 8
+    return 0.15 + 0.55 * size / 72 * max(map(len, cols)) * 0.58
+
+
+def _draw_band(ax, var, out, src, cols, rows, cell):
+    """One band of the grid on an axes in cell units (rows downwards);
+    cell: a cell's (width, height) in inches."""
     ax.set_axis_off()
+    size, heads, slant = _heads(cols, cell[0])
     for j, name in enumerate(cols):
-        ax.text(j + 0.5, -GAP, name.replace(' (', '\n('), ha='center',
-                va='bottom', fontsize=8)
+        if slant:
+            ax.text(j + 0.25, -GAP, name, ha='left', va='bottom',
+                    fontsize=size, rotation=35, rotation_mode='anchor')
+        else:
+            ax.text(j + 0.5, -GAP, heads[j], ha='center', va='bottom',
+                    fontsize=size)
     for i, (head, paths) in enumerate(rows):
-        ax.text(-GAP, i + 0.5, head, ha='right', va='center', fontsize=8,
+        ax.text(-GAP, i + 0.5, head, ha='right', va='center', fontsize=size,
                 rotation=90, multialignment='center')
         for j, rel in enumerate(paths):
             if rel is not None:
                 ctx = f'variant {var.get("id")}: image'
                 img = mpimg.imread(inside(out, rel, src, ctx))
                 ax.imshow(img, interpolation='nearest', aspect='auto',
-                          extent=_extent(img.shape, i, j, CELL_W, CELL_H))
+                          extent=_extent(img.shape, i, j, *cell))
             elif not head.endswith('difference'):
                 ax.text(j + 0.5, i + 0.5, 'not\nprovided', ha='center',
                         va='center', fontsize=7, color='0.5')
@@ -113,12 +150,13 @@ def _draw_band(ax, var, out, src, cols, rows):
     ax.set_ylim(len(rows), 0)
 
 
-def _difference_bar(fig, bottom):
+def _difference_bar(fig, bottom, left):
     """The difference images' colour bar, labelled with its unit, in a
-    strip `bottom` inches high at the foot of the figure."""
-    h = fig.get_figheight()
-    cax = fig.add_axes((HEAD_W / fig.get_figwidth(), 0.45 * bottom / h,
-                        min(0.5, 4.0 / fig.get_figwidth()), 0.12 / h))
+    strip `bottom` inches high at the foot of the figure, `left` inches
+    from its left edge."""
+    h, w = fig.get_figheight(), fig.get_figwidth()
+    cax = fig.add_axes((left / w, 0.62 * bottom / h,
+                        min(0.9 - left / w, 4.0 / w), 0.12 / h))
     bar = fig.colorbar(plt.cm.ScalarMappable(
         Normalize(-DIFF_LIMIT, DIFF_LIMIT), DIFF_MAP), cax=cax,
         orientation='horizontal', extend='both')
@@ -128,33 +166,49 @@ def _difference_bar(fig, bottom):
     bar.ax.tick_params(labelsize=8)
 
 
-def grid_figure(var, out, src, renderers, figdir, methods=None):
-    """figures/grid-<variant>.{png,pdf} (the given methods) or, methods
-    None, grid-all-<variant>.{png,pdf} (every method, in bands); returns
-    the paths written ([] when the variant has no images)."""
+def grid_fig(var, out, src, renderers, methods=None, width=None):
+    """The grid of the given methods (every method, in bands, when None)
+    as a Figure, or None when the variant has no images; `width` (inches,
+    the paper style's column) scales the cells to fit it exactly, without
+    the title (a paper's caption names the variant)."""
     cols, rows = _cells(var, renderers, methods)
     if not rows:
-        return []
+        return None
     bands = _bands(cols, rows, BAND_COLUMNS) if methods is None else \
         [(cols, rows)]
     diffs = any(h.endswith('difference') for _, rs in bands for h, _ in rs)
-    # One axes in cell units per band: an axes per cell costs seconds per
-    # variant (each builds its own ticks). save() trims the figure.
     nc = max(len(c) for c, _ in bands)
-    heights = [CELL_H * len(rs) + HEAD_H for _, rs in bands]
-    bottom = 1.0 if diffs else 0.0
-    fig = plt.figure(figsize=(CELL_W * nc + HEAD_W,
-                              sum(heights) + bottom + 0.5))
+    head = HEAD_W if width is None else 0.3
+    cw = CELL_W if width is None else (width - head) / nc
+    ch = cw * CELL_H / CELL_W
+    title = 0.5 if width is None else 0.0
+    # A band: its rows and, above them, its column heads (two lines).
+    heights = [ch * len(rs) + _head_height(bc, cw) for bc, rs in bands]
+    bottom = 0.9 if diffs else 0.0
+    fig = plt.figure(figsize=(cw * nc + head, sum(heights) + bottom + title))
     fw, fh = fig.get_figwidth(), fig.get_figheight()
-    top = fh - 0.5
+    top = fh - title
+    # One axes in cell units per band: an axes per cell costs seconds per
+    # variant (each builds its own ticks).
     for (bc, rs), hb in zip(bands, heights):
         top -= hb
-        ax = fig.add_axes((HEAD_W / fw, (top + HEAD_H * 0.5) / fh,
-                           CELL_W * len(bc) / fw, CELL_H * len(rs) / fh))
-        _draw_band(ax, var, out, src, bc, rs)
+        ax = fig.add_axes((head / fw, (top + 0.02) / fh,
+                           cw * len(bc) / fw, ch * len(rs) / fh))
+        _draw_band(ax, var, out, src, bc, rs, (cw, ch))
     if diffs:
-        _difference_bar(fig, bottom)
-    fig.suptitle(str(var.get('label', var.get('id'))), fontsize=9,
-                 wrap=True, va='bottom', y=(fh - 0.45) / fh)
-    name = 'grid-all-' if methods is None else 'grid-'
+        _difference_bar(fig, bottom, head)
+    if width is None:
+        fig.suptitle(str(var.get('label', var.get('id'))), fontsize=9,
+                     wrap=True, va='bottom', y=(fh - 0.45) / fh)
+    return fig
+
+
+def grid_figure(var, out, src, renderers, figdir, methods=None):
+    """figures/grid-<variant>.{png,pdf} (the given methods) or, methods
+    None, all-methods-grid-<variant>.{png,pdf} (every method, in bands);
+    returns the paths written ([] when the variant has no images)."""
+    fig = grid_fig(var, out, src, renderers, methods)
+    if fig is None:
+        return []
+    name = 'all-methods-grid-' if methods is None else 'grid-'
     return save(fig, figdir, name + stem(var.get('id')), ('png', 'pdf'))

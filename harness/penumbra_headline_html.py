@@ -151,11 +151,12 @@ def variants_context(report):
         return {'note': None, 'rest': []}
     ids = {id(v) for v in shown}
     rest = [v for v in report.variants if id(v) not in ids]
-    note = (f'{len(shown)} of {n} variants have a section below (a page of '
-            f'{n} sections does not read). They are picked so that every scene '
-            'and every value of every axis appears about equally often: each '
-            'pick is the variant whose scene and axis values have appeared '
-            'least so far (the earlier in the study\'s order on a tie). '
+    note = (f'{n} variants: the {len(shown)} sections below show a balanced '
+            f'pick of them (a page of {n} sections does not read), so that every '
+            'scene and every value of every axis appears about equally often: '
+            'each pick is the variant whose scene and axis values have appeared '
+            'least so far (on a tie, the first of the variants evenly spaced '
+            'over the study\'s order). '
             f'Shown: {level_counts(report, shown)}. The other {len(rest)} are '
             'listed after the sections, with links to their images; every '
             'variant\'s numbers are in metrics.csv and report.json, and the '

@@ -104,7 +104,7 @@ def variant_context(var, report, figs, k, missing):
                 figs['profiles'][k], f'profiles {vid}',
                 f'figures/profiles-{stem(vid)}.{{png,svg,pdf}}: '
                 f'{", ".join(figs["shown"])} (the highlighted methods); '
-                f'every method: figures/profiles-all-{stem(vid)}.'
+                f'every method: figures/all-methods-profiles-{stem(vid)}.'
                 '{png,svg,pdf}'),
             'profiles_all': os.path.relpath(figs['profiles_all'][k],
                                             report.out),

@@ -30,7 +30,7 @@ import numpy as np
 
 from penumbra_data import METRICS, PRIMARY, fmt, metric_label, num, objs
 from penumbra_plot import geometric, plt
-from penumbra_stats import depends, key_needed, mean_of, ranked
+from penumbra_stats import depends, mean_of, numbered_key, ranked
 
 BAND = '0.93'                     # the shading of every other rank group
 
@@ -83,8 +83,10 @@ def interval_points(ax, rows, styles, lim, size=5):
         if v > lim[1]:
             ax.plot([lim[1]], [r['y']], marker='>', color=st['color'],
                     ms=size + 1, clip_on=False, ls='')
-            ax.text(lim[1], r['y'], f'{fmt(v)} [{fmt(lo)}, {fmt(hi)}] ',
-                    ha='right', va='center', fontsize=7, color=st['color'])
+            ax.annotate(f'{fmt(v)} [{fmt(lo)}, {fmt(hi)}]', (lim[1], r['y']),
+                        xytext=(-2 * size, 0), textcoords='offset points',
+                        ha='right', va='center', fontsize=7,
+                        color=st['color'])
             continue
         err = [[max(v - lo, 0) if math.isfinite(lo) else 0],
                [max(hi - v, 0) if math.isfinite(hi) else 0]]
@@ -214,7 +216,7 @@ def line_positions(axis, n_methods):
         log = geometric(xs)
         span = (np.log(xs.max() / xs.min()) if log else xs.max() - xs.min()) \
             if xs.size > 1 and xs.min() > 0 else 1.0
-        step = 0.012 * span
+        step = 0.02 * span
 
         def dodge(k):
             d = (k - (n_methods - 1) / 2) * step
@@ -293,10 +295,8 @@ def line_caption(stats, axis, metric, marked):
     if axis.get('computed'):
         parts.append('Computed by the harness from the comparisons '
                      '(this report.json has no statistics.by_axis)')
-    if key_needed({'values': [lv['value'] for lv in axis['levels']],
-                   'value_labels': [lv['label'] for lv in axis['levels']]}):
-        parts.append('Levels: ' + '; '.join(
-            f'{lv["id"]}: {lv["label"]}' for lv in axis['levels']))
+    if numbered_key(axis['levels']):
+        parts.append('Levels: ' + numbered_key(axis['levels']))
     return '. '.join(parts) + '.'
 
 

@@ -89,29 +89,33 @@ def primary_metric(st):
     return p
 
 
+def unquoted(t):
+    """A label without the JSON quotes older report.json files put around
+    a named axis' string values."""
+    return t[1:-1] if len(t) >= 2 and t[0] == t[-1] == '"' else t
+
+
 def short_ids(axis):
     """Short labels of an axis' values for ticks and file names: its
     value_ids, else numbers as %g, light directions as 'az A°, el E°',
-    other short labels as they are, long ones as '#1', '#2' (the caption
-    keys them: key_needed)."""
+    other short labels as they are, long ones as '#1', '#2' (a caption
+    keys them: numbered_key)."""
     vals = axis.get('values') if isinstance(axis.get('values'), list) else []
     ids = axis.get('value_ids')
     if isinstance(ids, list) and len(ids) == len(vals) and all(
             isinstance(t, str) for t in ids):
         return list(ids)
-    labels = axis_labels(axis)
     out = []
-    for i, (v, t) in enumerate(zip(vals, labels)):
-        t = t.replace('azimuth ', 'az ').replace('elevation ', 'el ')
+    for i, t in enumerate(axis_labels(axis)):
+        t = unquoted(t).replace('azimuth ', 'az ').replace('elevation ', 'el ')
         out.append(t if len(t) <= 16 else f'#{i + 1}')
     return out
 
 
-def key_needed(axis):
-    """'#1: long label; #2: ...' when short_ids numbered the values."""
-    ids, labels = short_ids(axis), axis_labels(axis)
-    pairs = [f'{i}: {t}' for i, t in zip(ids, labels) if i.startswith('#')]
-    return '; '.join(pairs)
+def numbered_key(levels):
+    """'#2: long label; #3: ...' of the levels short_ids numbered."""
+    return '; '.join(f'{lv["id"]}: {lv["label"]}' for lv in levels
+                     if lv['id'].startswith('#'))
 
 
 class Stats:
@@ -226,7 +230,8 @@ def computed_axes(report):
         numeric = bool(vals) and all(math.isfinite(num(v)) for v in vals)
         order = sorted(range(len(vals)), key=lambda i: num(vals[i])) \
             if numeric else range(len(vals))
-        labels, ids = axis_labels(axis), short_ids(axis)
+        labels = [unquoted(t) for t in axis_labels(axis)]
+        ids = short_ids(axis)
         levels = []
         for i in order:
             at = {v.get('id') for v in report.variants
@@ -273,12 +278,13 @@ def depends(axis):
 
 def level_leaders(stats):
     """The leaders of the best rank group in each level of each axis, in
-    axis and level order (the methods that win somewhere)."""
+    axis and level order (the methods that win somewhere); without rank
+    groups (computed by_axis), each level's lowest mean."""
     out = []
     for axis in stats.by_axis():
         for lv in axis['levels']:
             rows = ranked(lv['ranking'])
-            if rows and rows[0]['group'] is not None:
+            if rows:
                 out.append(rows[0]['leader'])
     return out
 

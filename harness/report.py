@@ -23,7 +23,7 @@ Usage (Debian's Python, with python3-matplotlib and python3-jinja2):
       OUT/report.html, which links its images (relative URLs into
       OUT/images and OUT/figures: keep the folder together), or with
       --self-contained embeds every image as a data: URI (one file).
-  /usr/bin/python3 harness/report.py figure OUT --kind line|profile|ranking|heatmap
+  /usr/bin/python3 harness/report.py figure OUT --kind line|profile|ranking|heatmap|grid
           [--x POINTER] [--y POINTER] [--metric M] [--methods a,b,c|all]
           [--variant ID] [--scene S] [--style paper|screen] [--columns 1|2]
           -o FILE.(pdf|svg|png)
@@ -39,7 +39,10 @@ Usage (Debian's Python, with python3-matplotlib and python3-jinja2):
                  interval, in rank-group order;
         heatmap  a comparison metric over two axes (--x, --y; default the
                  study's first plot), one panel per method, one scene
-                 (--scene) or all pooled.
+                 (--scene) or all pooled;
+        grid     a variant's images and difference images (--variant),
+                 ground truth and methods side by side (--methods all: in
+                 bands of 7 columns).
       --methods: a subset, in the order given (default: `none`, the
       methods report.json's figures.methods names, the best rank group's
       leader overall and per level, then the next best: at most 5;
@@ -140,7 +143,8 @@ def run_contour(path, outdir):
 
 
 USAGE = ('usage: report.py report OUT [--self-contained] | '
-         'report.py figure OUT --kind line|profile|ranking|heatmap [options] '
+         'report.py figure OUT --kind line|profile|ranking|heatmap|grid '
+         '[options] '
          '-o FILE | report.py table OUT --format latex|markdown|csv '
          '[--by POINTER] [-o FILE] | '
          'report.py contour CONTOUR.json OUTDIR | '

@@ -44,7 +44,7 @@ sys.dont_write_bytecode = True
 
 import report_fixture as fx  # noqa: E402
 from penumbra_data import (  # noqa: E402
-    CSV_COLUMNS, PRIMARY, Report, shown_variants)
+    CSV_COLUMNS, LP_COLUMNS, LP_PANELS, LP_SIDE, PRIMARY, Report, shown_variants)
 from penumbra_figures import profile_fig, report_styles  # noqa: E402
 from penumbra_paper_figures import (  # noqa: E402
     line_fig, mean_rmse_fig, ranking_fig, statistics_fig)
@@ -140,7 +140,7 @@ class RankGroups(unittest.TestCase):
         self.assertEqual([x['method'] for x in rows], list(self.expected))
 
     def test_figure(self):
-        fig = ranking_fig(self.stats, report_styles(self.report), SCREEN)
+        fig = ranking_fig(self.stats, report_styles(self.report, self.stats), SCREEN)
         ax = fig.axes[0]
         names = {round(y, 3): t.get_text() for y, t in zip(ax.get_yticks(),
                                                             ax.get_yticklabels())}
@@ -166,7 +166,7 @@ class Units(unittest.TestCase):
     def setUpClass(cls):
         cls.report = Report(folder('new'))
         cls.stats = Stats(cls.report)
-        cls.styles = report_styles(cls.report)
+        cls.styles = report_styles(cls.report, cls.stats)
         cls.units = csv_units()
 
     def check(self, fig, metric, where):
@@ -200,6 +200,17 @@ class Units(unittest.TestCase):
         plt.close(fig)
         # L and its difference: the profile columns' unit; theta: degrees.
         self.assertTrue({self.units['profile_rmse_terminator_rel'], 'degrees'} <= got, got)
+
+
+class LowPolyUnits(unittest.TestCase):
+    def test_panels_state_the_csv_unit(self):
+        with open(os.path.join(HARNESS, 'csv-columns.json'), encoding='utf-8') as f:
+            cols = {c['name']: c['unit'] for c in json.load(f)['files']['lowpoly.csv']['columns']
+                    if 'name' in c}
+        for metric, name, unit, scale in LP_PANELS + LP_SIDE:
+            # The figures' y label is f'{name} ({unit})' of values * scale.
+            self.assertEqual(unit_of(f'{name} ({unit})'), cols[LP_COLUMNS[metric]], metric)
+            self.assertEqual(scale, 1, metric)
 
 
 def media_box(path):
@@ -295,7 +306,8 @@ class TableCommand(unittest.TestCase):
         self.assertIn('\\toprule', tex)
         self.assertIn('shading-offset(s=0.3)', tex)
         self.assertIn('method\\_06', tex)
-        for line in tex.splitlines()[1:]:  # after the '% needs' comment
+        body = tex.split('\\midrule', 1)[1]  # the rows (the head is ours, in math)
+        for line in body.splitlines():
             self.assertIsNone(re.search(r'(?<!\\)[_%#]', line), line)
         self.assertIn('E\\_term', tex)
         self.assertEqual(penumbra_tables.tex('a_b & 50% #1 {x} ~ π·°'),
