@@ -204,15 +204,15 @@ def profile_fig(var, styles, region, methods=None, style=SCREEN,
 
 def profile_figure(var, styles, region, figdir, methods=None):
     """figures/profiles-<variant>.{png,svg,pdf} (the given methods) or,
-    methods None, all-methods-profiles-<variant>.{png,pdf} (every method, markers
-    along the lines)."""
+    methods None, all-methods-profiles-<variant>.png (every method,
+    markers along the lines)."""
     every = methods is None
     fig = profile_fig(var, styles, region, methods, marks=every)
-    # PNG and PDF for every method's: an SVG of 20 dense lines per panel
-    # is slow to write and to open, and the page embeds the PNG.
-    return save(fig, figdir, ('all-methods-profiles-' if every else 'profiles-') +
-                stem(var.get('id')), ('png', 'pdf') if every else
-                ('png', 'svg', 'pdf'))
+    # Every method's as PNG only: the page links it, and a figure for a
+    # paper is the handful's or `report.py figure --methods all` (PDF).
+    return save(fig, figdir, ('all-methods-profiles-' if every else
+                              'profiles-') + stem(var.get('id')),
+                ('png',) if every else ('png', 'svg', 'pdf'))
 
 
 _SHARED = {}  # set before a pool forks: the workers inherit it

@@ -4,7 +4,7 @@ figures a reader can put in a paper.
   grid-<variant>.{png,pdf}     the ground truth and the handful of
       methods the report highlights (penumbra_stats.highlighted), every
       renderer that has one;
-  all-methods-grid-<variant>.{png,pdf}     every method, in bands of at
+  all-methods-grid-<variant>.png     every method, in bands of at
       most BAND_COLUMNS columns (the ground truth first in each band),
       each band with only the renderers that provide one of its methods:
       21 columns of mostly "not provided" read as nothing.
@@ -33,10 +33,12 @@ DIFF_MAP = LinearSegmentedColormap.from_list(
     'penumbra-difference', [(0, 0, 1), (1, 1, 1), (1, 0, 0)])
 
 
-def _cells(var, renderers, methods=None):
-    """(columns, rows): rows of (head, [image path relative to OUT or None,
-    per column]); the columns of `methods` only (all when None), without
-    those no renderer provides."""
+def grid_renders(var, renderers, methods=None):
+    """(columns, [(renderer, [its render or None per column])]): the
+    ground truth, then the bump renders of `methods` (all when None) in
+    that order, without columns no renderer provides; renderers in the
+    given order, then any other, each only if it has a render. The page's
+    grid (penumbra_html) and the figures share it."""
     renders = objs(var.get('renders'))
     keep = [r for r in renders if methods is None or
             r.get('representation') == 'displacement' or
@@ -49,8 +51,17 @@ def _cells(var, renderers, methods=None):
     rows = []
     for rend in dict.fromkeys(renderers + [k[0] for k in at]):
         rs = [at.get((rend, c)) for c in cols]
-        if not any(rs):
-            continue
+        if any(rs):
+            rows.append((rend, rs))
+    return cols, rows
+
+
+def _cells(var, renderers, methods=None):
+    """(columns, rows): rows of (head, [image path relative to OUT or None,
+    per column]), each renderer's images, then its differences."""
+    cols, renders = grid_renders(var, renderers, methods)
+    rows = []
+    for rend, rs in renders:
         rows.append((rend, [r.get('image') if r else None for r in rs]))
         diffs = [r.get('difference') if r else None for r in rs]
         if any(d is not None for d in diffs):
@@ -205,10 +216,13 @@ def grid_fig(var, out, src, renderers, methods=None, width=None):
 
 def grid_figure(var, out, src, renderers, figdir, methods=None):
     """figures/grid-<variant>.{png,pdf} (the given methods) or, methods
-    None, all-methods-grid-<variant>.{png,pdf} (every method, in bands);
+    None, all-methods-grid-<variant>.png (every method, in bands: for the
+    page; `report.py figure --kind grid --methods all` draws its PDF);
     returns the paths written ([] when the variant has no images)."""
     fig = grid_fig(var, out, src, renderers, methods)
     if fig is None:
         return []
-    name = 'all-methods-grid-' if methods is None else 'grid-'
-    return save(fig, figdir, name + stem(var.get('id')), ('png', 'pdf'))
+    if methods is None:
+        return save(fig, figdir, 'all-methods-grid-' + stem(var.get('id')),
+                    ('png',))
+    return save(fig, figdir, 'grid-' + stem(var.get('id')), ('png', 'pdf'))

@@ -19,11 +19,11 @@ from penumbra_context import (
     ci_cell, figure, figure_file, grid_cell, table)
 from penumbra_filtering_html import filtering_context, interplay_context
 from penumbra_data import (
-    GROUND_TRUTH, METRICS, column, get_metric, metric_label, num, obj, objs,
-    stem)
+    METRICS, get_metric, metric_label, num, obj, objs, stem)
 from penumbra_headline_html import (
     headline_context, lines_context, mean_rmse_context, provenance_context,
     variants_context)
+from penumbra_grid_figure import grid_renders
 from penumbra_lowpoly_html import lowpoly_context
 from penumbra_tables import ranking_table, table_caption
 
@@ -43,21 +43,17 @@ VARIANT_METRICS = (               # (metric, scale, column head)
     ('image.ssim', 1, 'SSIM'))
 
 
-def image_grid(var, uris, missing, renderers):
+def image_grid(var, uris, missing, renderers, methods):
     """Rows: renderers (image row, then difference row); columns: ground
-    truth, then methods (Chiang 2019, Fig. 4)."""
-    renders = objs(var.get('renders'))
-    cols = list(dict.fromkeys([GROUND_TRUTH] + [column(r) for r in renders]))
-    at = {(str(r.get('renderer')), column(r)): r for r in renders}
+    truth, then the highlighted methods (Chiang 2019, Fig. 4); every
+    method is in the all-methods grid figure the section links."""
+    cols, renders = grid_renders(var, renderers, methods)
 
     def img(rel, alt, cap):
         return grid_cell(figure(uris[rel], alt, cap) if rel is not None
                          else None)
     rows = []
-    for rend in dict.fromkeys(renderers + [k[0] for k in at]):
-        rs = [at.get((rend, c)) for c in cols]
-        if not any(rs):
-            continue
+    for rend, rs in renders:
         rows.append({'head': rend, 'cells': [
             img(r.get('image'), f'{rend} {c}', f'{rend} / {c}') if r else
             grid_cell(na=missing.get((rend, c), 'not rendered'))
@@ -98,14 +94,16 @@ def variant_context(var, report, figs, k, missing):
     return {'anchor': f'v-{stem(vid)}', 'id': vid,
             'label': str(var.get('label', '')),
             'grid': image_grid(var, report.uris, missing,
-                               [str(r.get('id')) for r in report.renderers]),
+                               [str(r.get('id')) for r in report.renderers],
+                               figs['shown']),
             'composed': composed,
             'profiles': figure_file(
                 figs['profiles'][k], f'profiles {vid}',
                 f'figures/profiles-{stem(vid)}.{{png,svg,pdf}}: '
                 f'{", ".join(figs["shown"])} (the highlighted methods); '
-                f'every method: figures/all-methods-profiles-{stem(vid)}.'
-                '{png,svg,pdf}'),
+                f'every method: figures/all-methods-profiles-{stem(vid)}.png '
+                f'(as PDF: report.py figure OUT --kind profile --variant {vid} '
+                '--methods all -o FILE.pdf)'),
             'profiles_all': os.path.relpath(figs['profiles_all'][k],
                                             report.out),
             'metrics': table(head, rows) if rows else None}

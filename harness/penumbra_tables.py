@@ -13,9 +13,9 @@
 Rank groups come from penumbra_stats.ranked (the one reading every figure
 and the page use). Numbers are fractions, as in report.json and metrics.csv
 (the headings say of what). Digits: per column, enough decimals that the
-narrowest interval's width shows two significant digits (at most 4), so a
-column's numbers line up and no digit claims more than the interval
-supports. The CSV writes every number in full (shortest round-trip form)
+median interval's width shows two significant digits (at most 4), so a
+column's numbers line up and no digit claims much more than the intervals
+support. The CSV writes every number in full (shortest round-trip form)
 for analysis. LaTeX uses booktabs and escapes every string.
 """
 import csv
@@ -58,8 +58,9 @@ class Num:
 
 
 def decimals(cells):
-    """Decimals of a column: two significant digits of its narrowest
-    interval (or of its smallest non-zero value without intervals)."""
+    """Decimals of a column: two significant digits of its median interval
+    width (of its median non-zero magnitude without intervals), at most 4:
+    the typical interval, not the narrowest (raw bump's own is 0 wide)."""
     widths = [c.width() for c in cells if isinstance(c, Num)]
     widths = [w for w in widths if math.isfinite(w) and w > 0]
     if not widths:
@@ -67,7 +68,8 @@ def decimals(cells):
                   math.isfinite(c.value) and c.value != 0]
     if not widths:
         return 2
-    return min(4, max(0, 1 - math.floor(math.log10(min(widths)))))
+    typical = sorted(widths)[len(widths) // 2]
+    return min(4, max(0, 1 - math.floor(math.log10(typical))))
 
 
 def verdict(entry):
@@ -149,6 +151,9 @@ def formatted(table):
     digits = [decimals([c[0] if isinstance(c, tuple) else c
                         for c in (row[k] for row in rows)])
               for k in range(len(table['head']))]
+    if 'levels' in table:  # one quantity in every level's column
+        digits[1:] = [decimals([c[0] for row in rows for c in row[1:]])] * \
+            (len(digits) - 1)
     out = []
     for row in rows:
         line = []
