@@ -63,15 +63,18 @@ def profile_xy(p):
     return ((np.arange(v.size) + 0.5) * b)[ok], v[ok]
 
 
-def _profile_style(r, styles, marks):
-    """(legend label, line style) of one render in its renderer's panel;
-    marks: markers along the line too (the all-methods figure, where
-    colour and dash alone repeat past 9 and 36 series)."""
+def _profile_style(r, styles, marks, k):
+    """(legend label, line style) of the k-th render in its renderer's
+    panel; marks: markers along the line too (the all-methods figure,
+    where colour and dash alone repeat past 9 and 36 series). Without
+    marks each line is thinner than the one before, so that a method
+    whose profile equals an earlier one's still shows under it."""
     meth, lab = str(r.get('method')), column(r)
     if lab == GROUND_TRUTH:
         return lab, dict(color='k', lw=2.4, zorder=5)
     st = styles.get(meth, {'color': 'k', 'ls': '-', 'marker': ''})
-    style = dict(color=st['color'], ls=st['ls'], lw=1.3)
+    style = dict(color=st['color'], ls=st['ls'],
+                 lw=1.3 if marks else max(0.7, 2.2 - 0.35 * k))
     if marks and st['marker']:
         style.update(marker=st['marker'], ms=3.5, markevery=0.12)
     return lab, style
@@ -125,8 +128,8 @@ def _profile_panels(ax, ad, rend, g, gt, look):
     if rend != REF and gt is not None:
         ax.plot(*gt, color='0.6', lw=3.5, zorder=1,
                 label=f'{REF} ground truth')
-    for r, xy in g['series']:
-        lab, style = _profile_style(r, styles, marks)
+    for k, (r, xy) in enumerate(g['series']):
+        lab, style = _profile_style(r, styles, marks, k)
         span = (xy[0][-1] - xy[0][0]) / num(r['profile']['bin_degrees'])
         if xy[0].size < 0.6 * span and 'marker' not in style:
             style.update(marker='.', ms=4)  # sparse: mark the bins
@@ -150,24 +153,51 @@ def _profile_panels(ax, ad, rend, g, gt, look):
                  else f'no {rend} displacement render', fontsize=8)
 
 
-def _profile_legend(fig, axs, region, style):
+def _profile_legend(fig, axs, region, lax=None, ncol=3):
     """One legend for every panel: beside them on screen (the tight
-    bounding box of save() takes it in), below them on paper (the page's
-    width is fixed)."""
+    bounding box of save() takes it in), or on paper in `lax`, an empty
+    axes row under them (the page's width is fixed, and constrained
+    layout in matplotlib 3.6 makes room for an axes, not a figure
+    legend)."""
     handles = {}
     for a in axs.flat:
         for h, lab in zip(*a.get_legend_handles_labels()):
             handles.setdefault(lab, h)
     handles[f'terminator region {region[0]:g}–{region[1]:g}°'] = \
         plt.Rectangle((0, 0), 1, 1, color='0.92')
-    if style.paper:
-        axs[-1][axs.shape[1] // 2].legend(
-            handles.values(), handles.keys(), loc='upper center',
-            bbox_to_anchor=(0.5 if axs.shape[1] % 2 else 0.0, -0.3),
-            ncol=3 if style.columns == 2 else 2, frameon=False)
+    if lax is not None:
+        lax.set_axis_off()
+        lax.legend(handles.values(), handles.keys(), loc='center',
+                   ncol=ncol, frameon=False, handlelength=1.5,
+                   columnspacing=1.0)
     else:
         fig.legend(handles.values(), handles.keys(), loc='upper left',
                    bbox_to_anchor=(1.0, 0.95))
+
+
+def _profile_axes(n, style, entries):
+    """(figure, 2 x n data axes, legend axes or None)."""
+    if not style.paper:
+        fig, axs = plt.subplots(2, n, sharex=True, sharey='row',
+                                squeeze=False, height_ratios=[3, 2],
+                                layout='constrained',
+                                figsize=(4.6 * n + 2.2, 6.8))
+        return fig, axs, None
+    rows = -(-entries // (style.columns + 1))  # the legend's rows
+    fig = plt.figure(layout='constrained', figsize=(
+        style.width(0), (3.0 if style.columns == 1 else 3.2) + 0.16 * rows))
+    gs = fig.add_gridspec(3, n, height_ratios=[3, 2, 0.3 * rows])
+    axs = np.empty((2, n), dtype=object)
+    for k in range(n):
+        axs[0][k] = fig.add_subplot(gs[0, k], sharex=axs[0][0] if k else None,
+                                    sharey=axs[0][0] if k else None)
+        axs[1][k] = fig.add_subplot(gs[1, k], sharex=axs[0][0],
+                                    sharey=axs[1][0] if k else None)
+        axs[0][k].tick_params(labelbottom=False)
+        if k:
+            for a in axs[:, k]:
+                a.tick_params(labelleft=False)
+    return fig, axs, fig.add_subplot(gs[2, :])
 
 
 def profile_fig(var, styles, region, methods=None, style=SCREEN,
@@ -176,25 +206,27 @@ def profile_fig(var, styles, region, methods=None, style=SCREEN,
     only, all when None), a column per renderer (its methods over the
     evaluator's truth) and, below, each method minus the same renderer's
     displacement truth; the angle axis cropped to the data; empty bins
-    bridged (dots mark the bins when they are sparse)."""
+    bridged (dots mark the bins when they are sparse). On paper one column
+    wide, the evaluator's column only (three do not fit 3.5 in)."""
     groups = _by_renderer(objs(var.get('renders')), methods) or \
         {REF: {'truth': None, 'series': []}}
     gt = groups.get(REF, {}).get('truth')
-    n = len(groups)
-    fig, axs = plt.subplots(
-        2, n, sharex=True, sharey='row', squeeze=False,
-        height_ratios=[3, 2], layout='constrained',
-        figsize=(style.width(4.6 * n + 2.2),
-                 (3.2 if style.columns == 1 else 4.2) if style.paper else 6.8))
+    if style.paper and style.columns == 1:  # 3.5 in: the evaluator's alone
+        groups = {k: g for k, g in groups.items() if k == REF} or groups
+    fig, axs, lax = _profile_axes(len(groups), style, 2 + len(
+        {str(r.get('method')) for g in groups.values() for r, _ in g['series']})
+        + len(groups))
     for k, (rend, g) in enumerate(groups.items()):
         _profile_panels(axs[0][k], axs[1][k], rend, g, gt,
                         (styles, region, marks))
-        axs[1][k].set_xlabel(THETA_LABEL)
+        axs[1][k].set_xlabel('θ (degrees)' if style.paper else THETA_LABEL)
+        if style.paper:
+            axs[1][k].set_title(f'− {rend} truth', fontsize=7)
     if any(g['series'] for g in groups.values()):
         axs[0][0].set_xlim(*profile_xlim(groups, region))
     axs[0][0].set_ylabel(L_LABEL.replace(' (', '\n(', 1))
     axs[1][0].set_ylabel(('Δ' + L_LABEL).replace(' (', '\n(', 1))
-    _profile_legend(fig, axs, region, style)
+    _profile_legend(fig, axs, region, lax, style.columns + 1)
     if not style.paper:
         fig.suptitle(fitted_title(
             fig, f'terminator profiles: {var.get("label", var.get("id"))}' +
