@@ -172,6 +172,10 @@ def figure_command(argv):
     report = Report(argv[0])
     with style.active():
         fig = figure_of(kind, opts, report, Stats(report), style)
+    if fig is None:
+        raise BadInput(report.src, f'no values to draw a {kind} figure '
+                       'from (a study without raw bump `none` has no '
+                       'combined error)')
     return [write_figure(fig, path, style)], None
 
 

@@ -50,6 +50,8 @@ def provenance_context(doc):
 def headline_context(report, stats):
     """The lead sentences, the rank-group table with the rule, or why there
     is no ranking."""
+    if not report.variants:
+        return {'skipped': None, 'sentences': [], 'table': None}
     if not stats.present or not stats.rows:
         return {'skipped': 'No ranking: this report.json has no ranking '
                 'statistics. A ranking needs raw bump (`none`), the '

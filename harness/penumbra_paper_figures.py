@@ -83,7 +83,7 @@ def interval_points(ax, rows, styles, lim, size=5):
         if v > lim[1]:
             ax.plot([lim[1]], [r['y']], marker='>', color=st['color'],
                     ms=size + 1, clip_on=False, ls='')
-            ax.annotate(f'{fmt(v)} [{fmt(lo)}, {fmt(hi)}]', (lim[1], r['y']),
+            ax.annotate(f'{v:#.3g} [{lo:#.3g}, {hi:#.3g}]', (lim[1], r['y']),
                         xytext=(-2 * size, 0), textcoords='offset points',
                         ha='right', va='center', fontsize=7,
                         color=st['color'])
@@ -128,8 +128,11 @@ def mark_groups(ax, placed):
 def ranking_fig(stats, styles, style, methods=None, metric=PRIMARY):
     """The primary metric (or another `means` metric) per method with its
     interval, methods in rank-group order (a subset when `methods` is
-    given), groups banded and labelled, the rule as the caption."""
+    given), groups banded and labelled, the rule as the caption; None
+    without a ranking."""
     rows = [r for r in stats.rows if methods is None or r['method'] in methods]
+    if not rows:
+        return None
     placed = group_rows(rows, metric, stats)
     span = placed[-1]['y'] + 1 if placed else 1
     fig, ax = plt.subplots(figsize=(style.width(6.4), 1.2 + 0.15 * span
@@ -156,8 +159,6 @@ def ranking_fig(stats, styles, style, methods=None, metric=PRIMARY):
                f' variants; bars: {bars}; dashed: raw bump (none). Rank '
                f'groups: {stats.rule}')
     fig.supxlabel(wrapped(fig, caption, 7), fontsize=7, ha='center')
-    if not placed:
-        ax.text(0.5, 0.5, 'no ranking', transform=ax.transAxes, ha='center')
     return fig
 
 
@@ -239,7 +240,11 @@ def line_series(axis, metric, method):
 
 def line_fig(stats, axis, metric, methods, styles, style):
     """A metric against one axis' levels, a line per method with interval
-    bars (dodged sideways so that they do not cover each other)."""
+    bars (dodged sideways so that they do not cover each other); None
+    when no method has a value (a study without raw bump has no C)."""
+    if not any(np.isfinite(line_series(axis, metric, m)[0]).any()
+               for m in methods):
+        return None
     narrow = style.paper and style.columns == 1
     fig, ax = plt.subplots(figsize=(style.width(6.4), 3.9 if narrow else
                                     3.4 if style.paper else 4.2),
