@@ -281,10 +281,6 @@ def line_fig_by(stats, styles, pointer, methods):
                     SCREEN)
 
 
-def _mean_rmse(stats, styles, style):
-    return mean_rmse_fig(stats.report.ranking, styles, style)
-
-
 def statistics_figures(report, stats, styles, shown, figdir):
     """The ranking, statistics, mean-RMSE and line figures: {'ranking',
     'statistics', 'mean_rmse': PNG or None, 'lines': [(axis entry, PNG)],
@@ -292,7 +288,7 @@ def statistics_figures(report, stats, styles, shown, figdir):
     stats.by_axis()  # computed once, before the workers fork
     _SHARED.update(stats=stats, styles=styles, figdir=figdir)
     tasks = _stats_tasks(report, stats, shown) + [
-        ('mean_rmse', ('mean-rmse-terminator', _mean_rmse, (SCREEN,)))]
+        ('mean_rmse', ('mean-rmse-terminator', mean_rmse_fig, (SCREEN,)))]
     out = {'ranking': None, 'statistics': None, 'mean_rmse': None,
            'lines': [], 'written': []}
     with worker_pool(len(tasks)) as pool:

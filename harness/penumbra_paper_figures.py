@@ -20,8 +20,9 @@ Every value axis is in the unit of the matching metrics.csv column
 
 Points far off the scale (a method several times worse than raw bump) would
 squeeze the differences that matter (0.8 to 1.0 of raw bump's error) into a
-sliver, so value axes end near the upper quartile of the intervals and a
-point beyond is drawn at the edge as a triangle with its number.
+sliver, so value axes end at the largest interval end within 1.3 x the upper
+quartile of the ends, and a point beyond is drawn at the edge as a triangle
+with its number and interval.
 """
 import math
 import textwrap
@@ -53,16 +54,16 @@ def value_label(metric, stats, width=40):
 
 
 def focus_limits(lo, hi, must=()):
-    """(low, high) of a value axis: every interval when they are of one
-    scale, else up to 1.15 x the upper quartile of the intervals' ends
-    (values in `must` always inside)."""
+    """(low, high) of a value axis: up to the largest interval end within
+    1.3 x the upper quartile of the ends (values in `must` always inside);
+    ends beyond are off the scale."""
     ends = [v for v in list(lo) + list(hi) + list(must) if math.isfinite(v)]
     if not ends:
         return 0.0, 1.0
     top = [v for v in list(hi) + list(must) if math.isfinite(v)]
-    cap = max([np.percentile(top, 75)] + [v for v in must if
-                                          math.isfinite(v)])
-    high = max(top) if max(top) <= 1.6 * cap else 1.15 * cap
+    cap = 1.3 * max([np.percentile(top, 75)] + [v for v in must if
+                                                math.isfinite(v)])
+    high = max(v for v in top if v <= cap)
     low = min(ends)
     pad = 0.04 * (high - low if high > low else abs(high) or 1.0)
     # From 0 when the values are near it: a ratio's distance from 0 reads.
@@ -83,7 +84,8 @@ def interval_points(ax, rows, styles, lim, size=5):
         if v > lim[1]:
             ax.plot([lim[1]], [r['y']], marker='>', color=st['color'],
                     ms=size + 1, clip_on=False, ls='')
-            ax.annotate(f'{v:#.3g} [{lo:#.3g}, {hi:#.3g}]', (lim[1], r['y']),
+            ci = f' [{lo:#.3g}, {hi:#.3g}]' if math.isfinite(lo + hi) else ''
+            ax.annotate(f'{v:#.3g}{ci}', (lim[1], r['y']),
                         xytext=(-2 * size, 0), textcoords='offset points',
                         ha='right', va='center', fontsize=7,
                         color=st['color'])
@@ -305,33 +307,48 @@ def line_caption(stats, axis, metric, marked):
     return '. '.join(parts) + '.'
 
 
-def mean_rmse_fig(rk, styles, style):
-    """report.json `ranking` (the mean absolute terminator RMSE over
-    variants, a different quantity from the ranking metric), overall;
-    None when empty."""
-    overall = [e for e in objs(rk.get('overall'))]
-    if not overall:
-        return None
+def mean_rmse_fig(stats, styles, style):
+    """The mean absolute terminator RMSE per method over variants (report.
+    json `ranking`'s metric; a different quantity from the ranking
+    metric), lowest first, with its 95 % interval where statistics'
+    `means` give one; None when there is none."""
+    rk = stats.report.ranking
     metric = str(rk.get('metric', 'profile.rmse_terminator'))
+    rows = [(r['method'],) + mean_of(r['entry'], metric) for r in stats.rows]
+    rows = [x for x in rows if math.isfinite(x[1])]
+    with_ci = bool(rows)
+    rows = rows or [(str(e.get('method')), num(e.get('mean')), math.nan,
+                     math.nan) for e in objs(rk.get('overall'))]
+    if not rows:
+        return None
+    rows.sort(key=lambda x: (not math.isfinite(x[1]), x[1]
+                             if math.isfinite(x[1]) else 0))
+    placed = [{'method': m, 'y': y, 'value': v, 'lo': lo, 'hi': hi}
+              for y, (m, v, lo, hi) in enumerate(rows)]
     fig, ax = plt.subplots(figsize=(style.width(6.4), (1.3 if style.paper
                                                        else 1.6) +
                                     (0.15 if style.paper else 0.24) *
-                                    len(overall)), layout='constrained')
-    y = np.arange(len(overall))
-    vals = [num(e.get('mean')) for e in overall]
-    ax.barh(y, np.nan_to_num(vals), color=[
-        styles.get(str(e.get('method')), {'color': 'grey'})['color']
-        for e in overall])
-    for yi, v in zip(y, vals):
-        ax.text(np.nan_to_num(v), yi, ' ' + fmt(v), va='center', fontsize=7)
-    ax.set_yticks(y, [str(e.get('method')) for e in overall])
-    ax.invert_yaxis()
-    ax.margins(x=0.15)
+                                    len(rows)), layout='constrained')
+    base = next((p['value'] for p in placed if p['method'] == 'none'),
+                math.nan)
+    lim = focus_limits([p['lo'] if with_ci else p['value'] for p in placed],
+                       [p['hi'] if with_ci else p['value'] for p in placed],
+                       [base, 0.0])
+    if math.isfinite(base):
+        ax.axvline(base, color='0.3', lw=0.8, ls='--', zorder=1)
+    interval_points(ax, placed, styles, lim)
+    ax.set_yticks([p['y'] for p in placed], [p['method'] for p in placed])
+    ax.set_ylim(len(placed) - 0.5, -0.5)
+    ax.grid(axis='x', alpha=0.3)
     ax.set_xlabel(('mean absolute ' + metric_label(metric)).replace(
         ' (', '\n(', 1))
+    bars = ('bars: 95 % bootstrap interval over variants' if with_ci else
+            'this report.json gives no interval for it')
     fig.supxlabel(wrapped(fig, 'Mean over variants of the absolute error '
                           f'({rk.get("renderer", "?")} against '
-                          f'{rk.get("reference", "?")}): NOT the ranking '
-                          'metric; large-amplitude variants dominate it '
-                          '(see statistics.notes).', 7), fontsize=7)
+                          f'{rk.get("reference", "?")}); {bars}; dashed: '
+                          'raw bump. NOT the ranking metric: the variants '
+                          'with the largest errors (the largest '
+                          'amplitudes) weigh most (see statistics.notes).',
+                          7), fontsize=7)
     return fig

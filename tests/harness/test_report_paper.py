@@ -184,7 +184,7 @@ class Units(unittest.TestCase):
             self.check(ranking_fig(self.stats, self.styles, SCREEN, None, metric),
                        metric, 'ranking')
         self.check(statistics_fig(self.stats, self.styles, SCREEN), PRIMARY, 'statistics')
-        self.check(mean_rmse_fig(self.report.ranking, self.styles, SCREEN),
+        self.check(mean_rmse_fig(self.stats, self.styles, SCREEN),
                    'profile.rmse_terminator', 'mean-rmse-terminator')
 
     def test_heatmaps(self):
