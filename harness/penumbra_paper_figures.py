@@ -158,8 +158,8 @@ def ranking_fig(stats, styles, style, methods=None, metric=PRIMARY):
     bars = stats.interval_text() if metric == PRIMARY else \
         '95 % bootstrap interval over variants'
     caption = (f'{what}Points: mean over {stats.overall.get("variants", "?")}'
-               f' variants; bars: {bars}; dashed: raw bump (none). Rank '
-               f'groups: {stats.rule}')
+               f' variants; bars: {bars}; dashed: raw bump (none). '
+               f'{stats.rule}')
     fig.supxlabel(wrapped(fig, caption, 7), fontsize=7, ha='center')
     return fig
 

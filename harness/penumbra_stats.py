@@ -25,7 +25,7 @@ from penumbra_data import (
     obj, objs)
 
 MEAN_METRICS = (PRIMARY, 'profile.rmse_terminator', 'view.rmse_grazing',
-                'profile.position_error_deg', 'image.rmse')
+                'profile.position_error_deg', 'image.rmse', 'image.ssim')
 BOOTSTRAP = 2000
 # The handful of methods a profile, line or grid figure shows by default
 # (raw bump included): more lines than this in one panel no longer read.
@@ -132,9 +132,13 @@ class Stats:
         self.methods = [r['method'] for r in self.rows]
         self.scenes = [(str(s.get('scene')), s)
                        for s in objs(st.get('per_scene'))]
-        self.rule = str(st.get('rule') or (
-            'rank groups as this report.json ranks them: ' +
+        rule = str(st.get('rule') or (
+            'as this report.json ranks them: ' +
             str(st.get('test', 'methods tied by the tests share a rank'))))
+        # One sentence that names itself: "Rank groups: ..." (the C++
+        # side's rule may already begin so).
+        self.rule = rule if rule.lower().startswith('rank groups') else \
+            'Rank groups: ' + rule
         self.headline = strings(st.get('headline')) or strings(
             self.overall.get('headline'))[:1]
         self.notes = strings(st.get('notes'))

@@ -297,4 +297,4 @@ def table_caption(stats, table):
                 'removed; E_view - E_view(none): the grazing-view RMSE added '
                 f'({FRACTION}); the others with 95 % intervals; a difference '
                 'whose interval contains 0 is a tie')
-    return f'{what}. Rank groups: {stats.rule}'
+    return f'{what}. {stats.rule}'

@@ -122,7 +122,8 @@ def ranking_stats(vs, methods, scene=None):
         c, ci = mean_ci(cs)
         means = {'combined_relative_error': {'mean': c, 'ci': ci}}
         for key, unit_scale in (('profile.rmse_terminator', 0.05), ('view.rmse_grazing', 0.02),
-                                ('profile.position_error_deg', 2.0), ('image.rmse', 0.01)):
+                                ('profile.position_error_deg', 2.0), ('image.rmse', 0.01),
+                                ('image.ssim', 0.9)):
             mm, mci = mean_ci([x * unit_scale for x in cs])
             means[key] = {'mean': mm, 'ci': mci}
         imp, ici = mean_ci([1 - x for x in cs])

@@ -261,7 +261,7 @@ class FigureCommand(unittest.TestCase):
             (['--kind', 'line', '--columns', '3', '-o', target], '--columns'),
             (['--kind', 'line', '--bogus', '1', '-o', target], '--bogus'),
             (['--kind', 'profile', '--variant', 'v999', '-o', target], '--variant'),
-            (['--kind', 'line', '--metric', 'image.ssim', '-o', target], '--metric'),
+            (['--kind', 'line', '--metric', 'image.mask_iou', '-o', target], '--metric'),
             (['--kind', 'line', '-o', os.path.join(self.dir, 'no', 'such.pdf')], '-o')]
         for args, what in cases:
             before = set(os.listdir(self.dir))
