@@ -93,6 +93,15 @@ filter,levels[],methods[],compared_against,truth,truth_check{},units,
 rows[{level,method,rmse_terminator,rmse_terminator_ci,rmse_overall,
 position_error_deg,image}],findings[]}). image, difference, json and csv are
 paths relative to OUT.
+Read when present (issue 37; older files fall back, penumbra_stats.py):
+provenance{penumbra,commit,dirty,date,machine{},renderers{},study_sha256}
+and notices[] (shown on the page only; no figure depends on them),
+axes[].value_ids[], figures{methods[]} (the methods the profile, line and
+grid figures show), statistics{primary_metric{id,name,unit}, rule,
+headline[], notes[], by_axis[{pointer,label,numeric,levels[{value,
+value_label,value_id,ranking}],interactions[{method,p,p_holm,depends,
+levels[]}]}]} and, in every ranking's methods[], rank (the rank group),
+group_leader, versus_leader{mean_difference,ci}, means{METRIC:{mean,ci}}.
 
 The low-poly section (after the bump one) draws figures/lowpoly-convergence-
 <group>.* (evaluator offsets vs evaluator:analytic over the convergence axis),
