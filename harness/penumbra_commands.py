@@ -15,7 +15,7 @@ from penumbra_grid_figure import grid_fig
 from penumbra_figures import (
     figure_methods, profile_fig, report_methods, report_styles)
 from penumbra_paper_figures import line_fig, ranking_fig
-from penumbra_stats import MEAN_METRICS, Stats
+from penumbra_stats import MEAN_METRICS, Stats, line_methods
 from penumbra_style import Style, write_figure
 from penumbra_sweeps import heatmap_fig
 from penumbra_tables import (
@@ -104,8 +104,10 @@ def figure_of(kind, opts, report, stats, style):
     methods = method_list(opts, report, stats)
     if kind == 'line':
         metric = choice(opts, '--metric', MEAN_METRICS, PRIMARY)
-        return line_fig(stats, axis_of(stats, opts), metric, methods,
-                        styles, style)
+        axis = axis_of(stats, opts)
+        if '--methods' not in opts:
+            methods = line_methods(methods, axis)
+        return line_fig(stats, axis, metric, methods, styles, style)
     if kind == 'ranking':
         if not stats.rows:
             raise BadInput(report.src, 'no ranking statistics (the study '

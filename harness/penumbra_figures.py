@@ -22,7 +22,7 @@ from penumbra_lowpoly_figures import lowpoly_figures
 from penumbra_paper_figures import (
     line_fig, mean_rmse_fig, ranking_fig, statistics_fig)
 from penumbra_plot import fitted_title, plt, progress, save, worker_pool
-from penumbra_stats import highlighted
+from penumbra_stats import highlighted, line_methods
 from penumbra_style import SCREEN, series_styles
 from penumbra_sweeps import sweep_figures
 
@@ -271,7 +271,8 @@ def _stats_tasks(report, stats, shown):
              ('statistics', ('statistics', statistics_fig, (SCREEN,)))]
     tasks += [(('line', a['pointer']),
                (f'line-{axis_stem(a["pointer"])}', line_fig_by,
-                (a['pointer'], shown))) for a in stats.by_axis()]
+                (a['pointer'], line_methods(shown, a))))
+              for a in stats.by_axis()]
     return tasks
 
 

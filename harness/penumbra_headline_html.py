@@ -11,7 +11,7 @@ import urllib.parse
 
 from penumbra_context import figure_file
 from penumbra_data import REF, axis_index, fmt, obj, objs, stem
-from penumbra_stats import depends, short_ids
+from penumbra_stats import depends, flips, line_methods, short_ids
 from penumbra_tables import (
     formatted, heading, level_table, numeric_column, ranking_table,
     table_caption)
@@ -73,12 +73,27 @@ def interaction_sentence(axis, i):
     for lv in objs(i.get('levels')):
         ci = lv.get('combined_ci')
         ends = ci if isinstance(ci, list) and len(ci) == 2 else [None, None]
-        parts.append(f'{lv.get("verdict", "?")} at {lv.get("value_id", lv.get("value_label"))} '
-                     f'(C {fmt(lv.get("combined"))} [{fmt(ends[0])}, '
+        at = lv.get('value_id', lv.get('value_label'))
+        parts.append(f'{lv.get("verdict", "?")} at {at} (C '
+                     f'{fmt(lv.get("combined"))} [{fmt(ends[0])}, '
                      f'{fmt(ends[1])}])')
     return (f'{i.get("method")}: its effect depends on {axis["label"]} '
             f'(interaction, Holm-adjusted p = {fmt(i.get("p_holm"), digits=2)})'
             + (': ' + '; '.join(parts) if parts else '') + '.')
+
+
+def axis_findings(axis):
+    """A sentence per method that helps at one level and hurts at
+    another, then one naming the others whose effect depends on the
+    level."""
+    turn = flips(axis)
+    rest = [m for m in depends(axis) if m not in turn]
+    out = [interaction_sentence(axis, i) for i in turn.values()]
+    if rest:
+        out.append(f'Also depends on {axis["label"]} (Holm-adjusted p < '
+                   '0.05), without turning from help to harm: ' +
+                   ', '.join(rest) + '.')
+    return out
 
 
 def lines_context(report, stats, figs):
@@ -89,18 +104,19 @@ def lines_context(report, stats, figs):
         if axis is None:
             continue
         t = level_table(stats, axis)
-        name = f'figures/line-{stem(axis["pointer"].strip("/").replace("/", "-"))}'
+        name = 'figures/line-' + stem(axis['pointer'].strip('/').replace(
+            '/', '-'))
+        shown = ', '.join(line_methods(figs['shown'], axis))
         out.append({
             'title': axis['label'], 'pointer': axis['pointer'],
-            'figure': figure_file(png, f'error against {axis["label"]}',
-                                  f'{name}.{{png,svg,pdf}}: combined error C '
-                                  f'against {axis["label"]} for the '
-                                  f'highlighted methods ({", ".join(figs["shown"])})'
-                                  '; redraw any subset with report.py figure '
-                                  f'--kind line --x {axis["pointer"]}.')
-            if png else None,
-            'findings': [interaction_sentence(axis, i)
-                         for i in depends(axis).values()],
+            'figure': figure_file(
+                png, f'error against {axis["label"]}',
+                f'{name}.{{png,svg,pdf}}: combined error C against '
+                f'{axis["label"]} for the highlighted methods and those '
+                f'that help at one level and hurt at another ({shown}); '
+                'redraw any subset with report.py figure OUT --kind line '
+                f'--x {axis["pointer"]} --methods a,b,c.') if png else None,
+            'findings': axis_findings(axis),
             'table': html_table(t), 'caption': table_caption(stats, t)})
     return out
 

@@ -31,7 +31,8 @@ import numpy as np
 
 from penumbra_data import METRICS, PRIMARY, fmt, metric_label, num, objs
 from penumbra_plot import geometric, plt
-from penumbra_stats import depends, mean_of, numbered_key, ranked
+from penumbra_stats import (
+    depends, level_confidence, mean_of, numbered_key, ranked)
 
 BAND = '0.93'                     # the shading of every other rank group
 
@@ -155,8 +156,7 @@ def ranking_fig(stats, styles, style, methods=None, metric=PRIMARY):
     what = ('' if metric == PRIMARY else
             f'Not the ranking metric: ordered by the rank groups of '
             f'{stats.primary["name"]}. ')
-    bars = stats.interval_text() if metric == PRIMARY else \
-        '95 % bootstrap interval over variants'
+    bars = stats.interval_text(metric)
     caption = (f'{what}Points: mean over {stats.overall.get("variants", "?")}'
                f' variants; bars: {bars}; dashed: raw bump (none). '
                f'{stats.rule}')
@@ -252,7 +252,7 @@ def line_fig(stats, axis, metric, methods, styles, style):
                                     3.4 if style.paper else 4.2),
                            layout='constrained')
     xs, dodge, log = line_positions(axis, len(methods))
-    marked = depends(axis)
+    marked = {m: i for m, i in depends(axis).items() if m in methods}
     for k, m in enumerate(methods):
         y, lo, hi = line_series(axis, metric, m)
         st = styles.get(m, {'color': 'k', 'ls': '-', 'marker': 'o'})
@@ -292,7 +292,7 @@ def line_caption(stats, axis, metric, marked):
     """What the points and bars of a line figure are."""
     n = [lv['ranking'].get('variants', '?') for lv in axis['levels']]
     parts = [f'Points: mean over each level\'s variants ({", ".join(map(str, n))})'
-             f'; bars: 95 % bootstrap interval over variants'
+             f'; bars: {stats.interval_text(metric, level_confidence(axis))}'
              + ('; dotted: raw bump (C = 1)' if metric == PRIMARY else '')]
     if marked:
         parts.append('†: the effect depends on the level (interaction, '

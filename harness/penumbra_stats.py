@@ -43,13 +43,15 @@ def pair(ci):
 
 
 def mean_of(entry, metric):
-    """(mean, lo, hi) of a MethodStats entry's metric: its `means` entry,
-    or for the primary metric the entry's own combined value."""
+    """(mean, lo, hi) of a MethodStats entry's metric: for the primary
+    metric the entry's own combined value and interval (at the ranking's
+    confidence, the one the rank groups and the headline use), else its
+    `means` entry (95 %)."""
+    if metric == PRIMARY and math.isfinite(num(entry.get(PRIMARY))):
+        return (num(entry.get(PRIMARY)),) + pair(entry.get('combined_ci'))
     m = obj(obj(entry.get('means')).get(metric))
     if m:
         return (num(m.get('mean')),) + pair(m.get('ci'))
-    if metric == PRIMARY:
-        return (num(entry.get(PRIMARY)),) + pair(entry.get('combined_ci'))
     return (math.nan,) * 3
 
 
@@ -137,6 +139,7 @@ class Stats:
             str(st.get('test', 'methods tied by the tests share a rank'))))
         # One sentence that names itself: "Rank groups: ..." (the C++
         # side's rule may already begin so).
+        rule = rule.rstrip().rstrip('.') + '.'
         self.rule = rule if rule.lower().startswith('rank groups') else \
             'Rank groups: ' + rule
         self.headline = strings(st.get('headline')) or strings(
@@ -162,20 +165,21 @@ class Stats:
         return next((a for a in self.by_axis() if a['pointer'] == pointer),
                     None)
 
-    def interval_text(self):
-        """What the primary metric's intervals are, for captions."""
-        c = self.confidence
-        if math.isfinite(c) and c < 0.99:
-            return f'{c * 100:g} % bootstrap interval over variants'
-        return ('simultaneous 95 % intervals (each at '
-                f'{fmt(c * 100, digits=4)} %, Bonferroni over the methods)'
-                if math.isfinite(c) else '95 % interval')
+    def interval_text(self, metric=PRIMARY, confidence=None):
+        """What a metric's intervals are, for captions: the primary
+        metric's at the ranking's confidence (`confidence`, default the
+        overall ranking's), any other's 95 %."""
+        c = self.confidence if confidence is None else num(confidence)
+        if metric != PRIMARY or not math.isfinite(c) or c < 0.99:
+            return '95 % bootstrap interval over variants'
+        return ('simultaneous 95 % intervals over variants (each at '
+                f'{fmt(c * 100, digits=4)} %, Bonferroni over the methods)')
 
 
 def axis_entry(a):
     """A by_axis entry of report.json, normalised."""
     levels = [{'value': lv.get('value'),
-               'label': str(lv.get('value_label', lv.get('value'))),
+               'label': unquoted(str(lv.get('value_label', lv.get('value')))),
                'id': str(lv.get('value_id', lv.get('value_label', ''))),
                'ranking': obj(lv.get('ranking'))}
               for lv in objs(a.get('levels'))]
@@ -273,11 +277,39 @@ def level_ranking(table, variants):
     return {'variants': len(variants), 'methods': methods}
 
 
+def level_confidence(axis):
+    """The confidence of an axis' level rankings (the first that says)."""
+    return next((lv['ranking']['confidence'] for lv in axis['levels']
+                 if 'confidence' in lv['ranking']), None)
+
+
 def depends(axis):
     """{method: interaction} of the methods whose effect depends on the
     axis' level."""
     return {str(i.get('method')): i for i in axis['interactions']
             if i.get('depends') is True}
+
+
+def flips(axis):
+    """{method: interaction} of the methods whose effect depends on the
+    axis' level and that help at one level and hurt at another (the
+    finding a paper needs), most significant first."""
+    out = [i for i in depends(axis).values()
+           if {'helps', 'hurts'} <= {lv.get('verdict')
+                                     for lv in objs(i.get('levels'))}]
+    out.sort(key=lambda i: (num(i.get('p_holm')), str(i.get('method'))))
+    return {str(i.get('method')): i for i in out}
+
+
+FLIPS_SHOWN = 2
+
+
+def line_methods(shown, axis):
+    """A line figure's default methods: the highlighted ones and up to
+    FLIPS_SHOWN more that help at one level of this axis and hurt at
+    another."""
+    return list(shown) + [m for m in flips(axis) if m not in shown][
+        :FLIPS_SHOWN]
 
 
 def level_leaders(stats):

@@ -23,7 +23,8 @@ import io
 import math
 
 from penumbra_data import FRACTION, PRIMARY, num
-from penumbra_stats import mean_of, metric_unit, pair, ranked
+from penumbra_stats import (
+    level_confidence, mean_of, metric_unit, pair, ranked)
 
 RATIO = "fraction of raw bump's"
 
@@ -282,11 +283,12 @@ def full(x):
 def table_caption(stats, table):
     """What the table's numbers are, with the rank rule."""
     if 'levels' in table:
-        what = (f'{table["metric"]} per level of {table["axis"]["label"]} '
+        axis = table['axis']
+        bars = stats.interval_text(table['metric'], level_confidence(axis))
+        what = (f'{table["metric"]} per level of {axis["label"]} '
                 f'({table["unit"]}): mean over the level\'s variants '
-                '[95 % bootstrap interval over variants]; (gN): the '
-                "method's rank group in that level")
-        if table['axis'].get('computed'):
+                f'[{bars}]; (gN): the method\'s rank group in that level')
+        if axis.get('computed'):
             what += ' (none: this report.json has no statistics.by_axis)'
     else:
         what = (f'C: {stats.primary["name"]} ({stats.primary["unit"]}), '

@@ -147,6 +147,16 @@ def ranking_stats(vs, methods, scene=None):
             'pairs': [], 'headline': [f'{rows[0]["method"]} has the lowest combined error.']}
 
 
+def interaction_level(lv, method):
+    """A level of an interaction entry: the method's C there and whether it
+    helps (interval below 1), hurts (above) or ties."""
+    r = next(r for r in lv['ranking']['methods'] if r['method'] == method)
+    lo, hi = r['combined_ci']
+    return {'value_label': lv['value_label'], 'value_id': lv['value_id'],
+            'combined': r['combined_relative_error'], 'combined_ci': [lo, hi],
+            'verdict': 'helps' if hi < 1 else 'hurts' if lo > 1 else 'tie'}
+
+
 def by_axis(vs, methods, lights):
     axes = []
     for k, (pointer, label, values, labels, ids, numeric) in enumerate((
@@ -162,10 +172,7 @@ def by_axis(vs, methods, lights):
         inter = [{'method': m, 'p': 0.0001 if m == 'chiang2019' and k == 0 else 0.5,
                   'p_holm': 0.002 if m == 'chiang2019' and k == 0 else 1.0,
                   'depends': m == 'chiang2019' and k == 0,
-                  'levels': [{'value_label': lv['value_label'], 'value_id': lv['value_id'],
-                              'combined': next(r['combined_relative_error'] for r in
-                                               lv['ranking']['methods'] if r['method'] == m),
-                              'combined_ci': [0.5, 0.7], 'verdict': 'tie'} for lv in levels]}
+                  'levels': [interaction_level(lv, m) for lv in levels]}
                  for m in methods if m != 'none']
         axes.append({'pointer': pointer, 'label': label, 'numeric': numeric,
                      'levels': levels, 'interactions': inter})
