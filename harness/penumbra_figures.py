@@ -305,39 +305,34 @@ def statistics_figures(report, stats, styles, shown, figdir):
 
 
 def _variant_figures(task):
-    """A variant's profile figures and composed image grids, the
-    highlighted methods' and every method's (run in a worker process:
-    each figure depends on its inputs alone, so the bytes are the same
-    whichever process draws it)."""
+    """A variant's profile figures, the highlighted methods' and every
+    method's, and its image grid (run in a worker process: each figure
+    depends on its inputs alone, so the bytes are the same whichever
+    process draws it)."""
     v, shown, names = task
     styles, region, out, src, figdir = _SHARED['variant']
     return (profile_figure(v, styles, region, figdir, shown),
             profile_figure(v, styles, region, figdir, None),
-            grid_figure(v, out, src, names, figdir, shown),
-            grid_figure(v, out, src, names, figdir, None))
+            grid_figure(v, out, src, names, figdir, shown))
 
 
 def variant_figures(report, styles, shown, figdir):
     """Every shown variant's figures: {'profiles', 'profiles_all': [PNG
-    per shown variant], 'grids', 'grids_all': [[PNG, PDF] or []],
-    'written': [paths]}."""
+    per shown variant], 'grids': [[PNG, PDF] or []], 'written': [paths]}."""
     names = [str(r.get('id')) for r in report.renderers]
     _SHARED['variant'] = (styles, report.terminator, report.out, report.src,
                           figdir)
-    out = {'profiles': [], 'profiles_all': [], 'grids': [], 'grids_all': [],
-           'written': []}
+    out = {'profiles': [], 'profiles_all': [], 'grids': [], 'written': []}
     tasks = [(v, shown, names) for v in report.shown]
     with worker_pool(len(tasks)) as pool:
-        for k, (p, pa, g, ga) in enumerate(pool.imap(_variant_figures,
-                                                     tasks)):
-            progress(f'profiles and image grids of '
+        for k, (p, pa, g) in enumerate(pool.imap(_variant_figures, tasks)):
+            progress(f'profiles and image grid of '
                      f'{report.shown[k].get("id")} ({k + 1}/'
                      f'{len(report.shown)} variants)')
             out['profiles'].append(p[0])
             out['profiles_all'].append(pa[0])
             out['grids'].append(g)
-            out['grids_all'].append(ga)
-            out['written'] += p + pa + g + ga
+            out['written'] += p + pa + g
     return out
 
 

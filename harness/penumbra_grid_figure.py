@@ -1,13 +1,11 @@
-"""The composed image grids of a variant (Chiang et al. 2019, Fig. 4 style):
-figures a reader can put in a paper.
-
-  grid-<variant>.{png,pdf}     the ground truth and the handful of
-      methods the report highlights (penumbra_stats.highlighted), every
-      renderer that has one;
-  all-methods-grid-<variant>.png     every method, in bands of at
-      most BAND_COLUMNS columns (the ground truth first in each band),
-      each band with only the renderers that provide one of its methods:
-      21 columns of mostly "not provided" read as nothing.
+"""The composed image grid of a variant (Chiang et al. 2019, Fig. 4 style):
+a figure a reader can put in a paper, figures/grid-<variant>.{png,pdf}: the
+ground truth and the handful of methods the report highlights (penumbra_
+stats.highlighted), every renderer that has one. Every method's grid, in
+bands of at most BAND_COLUMNS columns (the ground truth first in each band,
+each band with only the renderers that provide one of its methods: 21
+columns of mostly "not provided" read as nothing), is the page's (bands()
+serves both) and `report.py figure --kind grid --methods all`.
 
 Columns: the displacement ground truth, then methods; rows: each renderer's
 renders, each followed by its difference images (method minus the same
@@ -88,9 +86,12 @@ def _extent(shape, i, j, cw, ch):
     return (x0, x0 + w, y0 + h, y0)
 
 
-def _bands(cols, rows, width):
-    """The grid cut into bands of at most `width` columns, the ground
-    truth first in each; in each band only the rows with an image."""
+def bands(cols, rows, width=None):
+    """The grid cut into bands of at most `width` (BAND_COLUMNS) columns,
+    the ground truth first in each; in each band only the rows with
+    something besides the ground truth. rows: (head, [cell or None per
+    column]), image paths or renders."""
+    width = width or BAND_COLUMNS
     if len(cols) <= width:
         return [(cols, rows)]
     out = []
@@ -185,23 +186,22 @@ def grid_fig(var, out, src, renderers, methods=None, width=None):
     cols, rows = _cells(var, renderers, methods)
     if not rows:
         return None
-    bands = _bands(cols, rows, BAND_COLUMNS) if methods is None else \
-        [(cols, rows)]
-    diffs = any(h.endswith('difference') for _, rs in bands for h, _ in rs)
-    nc = max(len(c) for c, _ in bands)
+    parts = bands(cols, rows) if methods is None else [(cols, rows)]
+    diffs = any(h.endswith('difference') for _, rs in parts for h, _ in rs)
+    nc = max(len(c) for c, _ in parts)
     head = HEAD_W if width is None else 0.3
     cw = CELL_W if width is None else (width - head) / nc
     ch = cw * CELL_H / CELL_W
     title = 0.5 if width is None else 0.0
     # A band: its rows and, above them, its column heads (two lines).
-    heights = [ch * len(rs) + _head_height(bc, cw) for bc, rs in bands]
+    heights = [ch * len(rs) + _head_height(bc, cw) for bc, rs in parts]
     bottom = 0.9 if diffs else 0.0
     fig = plt.figure(figsize=(cw * nc + head, sum(heights) + bottom + title))
     fw, fh = fig.get_figwidth(), fig.get_figheight()
     top = fh - title
     # One axes in cell units per band: an axes per cell costs seconds per
     # variant (each builds its own ticks).
-    for (bc, rs), hb in zip(bands, heights):
+    for (bc, rs), hb in zip(parts, heights):
         top -= hb
         ax = fig.add_axes((head / fw, (top + 0.02) / fh,
                            cw * len(bc) / fw, ch * len(rs) / fh))
@@ -214,15 +214,12 @@ def grid_fig(var, out, src, renderers, methods=None, width=None):
     return fig
 
 
-def grid_figure(var, out, src, renderers, figdir, methods=None):
-    """figures/grid-<variant>.{png,pdf} (the given methods) or, methods
-    None, all-methods-grid-<variant>.png (every method, in bands: for the
-    page; `report.py figure --kind grid --methods all` draws its PDF);
-    returns the paths written ([] when the variant has no images)."""
+def grid_figure(var, out, src, renderers, figdir, methods):
+    """figures/grid-<variant>.{png,pdf} of the given methods; returns the
+    paths written ([] when the variant has no images). Every method's
+    grid is the page's (in bands, HTML) or `report.py figure --kind grid
+    --methods all`."""
     fig = grid_fig(var, out, src, renderers, methods)
     if fig is None:
         return []
-    if methods is None:
-        return save(fig, figdir, 'all-methods-grid-' + stem(var.get('id')),
-                    ('png',))
     return save(fig, figdir, 'grid-' + stem(var.get('id')), ('png', 'pdf'))

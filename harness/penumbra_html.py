@@ -23,7 +23,7 @@ from penumbra_data import (
 from penumbra_headline_html import (
     headline_context, lines_context, mean_rmse_context, provenance_context,
     variants_context)
-from penumbra_grid_figure import grid_renders
+from penumbra_grid_figure import bands, grid_renders
 from penumbra_lowpoly_html import lowpoly_context
 from penumbra_tables import ranking_table, table_caption
 
@@ -43,12 +43,17 @@ VARIANT_METRICS = (               # (metric, scale, column head)
     ('image.ssim', 1, 'SSIM'))
 
 
-def image_grid(var, uris, missing, renderers, methods):
-    """Rows: renderers (image row, then difference row); columns: ground
-    truth, then the highlighted methods (Chiang 2019, Fig. 4); every
-    method is in the all-methods grid figure the section links."""
-    cols, renders = grid_renders(var, renderers, methods)
+def image_grid(var, uris, missing, renderers):
+    """Every method's images, in bands of at most BAND_COLUMNS columns
+    (ground truth, then methods; Chiang 2019, Fig. 4): per band, rows of
+    renderers (image row, then difference row) with something in it."""
+    cols, renders = grid_renders(var, renderers)
+    return [band_cells(bc, rs, uris, missing)
+            for bc, rs in bands(cols, renders)]
 
+
+def band_cells(cols, renders, uris, missing):
+    """One band of the page's grid: {'cols', 'rows'} of grid cells."""
     def img(rel, alt, cap):
         return grid_cell(figure(uris[rel], alt, cap) if rel is not None
                          else None)
@@ -89,13 +94,11 @@ def variant_context(var, report, figs, k, missing):
             for c in comps]
     head = ['renderer', 'method', 'reference'] + [
         h for *_, h in VARIANT_METRICS]
-    composed = [os.path.relpath(p, report.out) for p in
-                figs['grids'][k] + figs['grids_all'][k]]
+    composed = [os.path.relpath(p, report.out) for p in figs['grids'][k]]
     return {'anchor': f'v-{stem(vid)}', 'id': vid,
             'label': str(var.get('label', '')),
             'grid': image_grid(var, report.uris, missing,
-                               [str(r.get('id')) for r in report.renderers],
-                               figs['shown']),
+                               [str(r.get('id')) for r in report.renderers]),
             'composed': composed,
             'profiles': figure_file(
                 figs['profiles'][k], f'profiles {vid}',

@@ -138,7 +138,7 @@ def level_table(stats, axis, metric=PRIMARY):
         [m for m, _ in cells]))
     rows = [[m] + [cells.get((m, j), (Num(math.nan), None))
                    for j in range(len(levels))] for m in order]
-    unit = RATIO if metric == PRIMARY else metric_unit(metric)
+    unit = metric_unit(metric)
     head = [('method', '', 'method')] + [
         (f'{axis["label"]} = {lv["id"]}', '', lv['id']) for lv in levels]
     return {'head': head, 'rows': rows, 'groups': None, 'levels': levels,
@@ -216,8 +216,9 @@ def latex_head(table):
     if 'levels' not in table:
         return [' & '.join(r) + r' \\' for r in RANKING_TEX]
     n = len(table['levels'])
+    unit = '$C$, ratio' if table['metric'] == PRIMARY else tex(table['unit'])
     return [f'Method & \\multicolumn{{{n}}}{{c}}{{{tex(table["axis"]["label"])}'
-            f' ({tex(table["unit"] or table["metric"])})}}' + r' \\',
+            f' ({unit})}}' + r' \\',
             f'\\cmidrule(lr){{2-{n + 1}}}',
             ' & '.join([''] + [tex(lv['id']) for lv in table['levels']]) +
             r' \\']
