@@ -265,7 +265,7 @@ def axis_stem(pointer):
     return stem(str(pointer).strip('/').replace('/', '-'))
 
 
-def _stats_tasks(report, stats, shown):
+def _stats_tasks(stats, shown):
     """(key, task) of every statistics figure, in the order drawn."""
     tasks = [('ranking', ('ranking', ranking_fig, (SCREEN,))),
              ('statistics', ('statistics', statistics_fig, (SCREEN,)))]
@@ -282,13 +282,13 @@ def line_fig_by(stats, styles, pointer, methods):
                     SCREEN)
 
 
-def statistics_figures(report, stats, styles, shown, figdir):
+def statistics_figures(stats, styles, shown, figdir):
     """The ranking, statistics, mean-RMSE and line figures: {'ranking',
     'statistics', 'mean_rmse': PNG or None, 'lines': [(axis entry, PNG)],
     'written': [paths]}."""
     stats.by_axis()  # computed once, before the workers fork
     _SHARED.update(stats=stats, styles=styles, figdir=figdir)
-    tasks = _stats_tasks(report, stats, shown) + [
+    tasks = _stats_tasks(stats, shown) + [
         ('mean_rmse', ('mean-rmse-terminator', mean_rmse_fig, (SCREEN,)))]
     out = {'ranking': None, 'statistics': None, 'mean_rmse': None,
            'lines': [], 'written': []}
@@ -357,7 +357,7 @@ def report_figures(report, stats):
     styles = report_styles(report, stats)
     shown = figure_methods(report, stats)
     progress('ranking, statistics and line figures')
-    figs = statistics_figures(report, stats, styles, shown, figdir)
+    figs = statistics_figures(stats, styles, shown, figdir)
     written = figs.pop('written')
     figs.update(variant_figures(report, styles, shown, figdir), shown=shown,
                 stats=stats, sweeps=[], lowpoly=None, filtering=[])

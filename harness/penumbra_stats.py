@@ -346,7 +346,6 @@ def highlighted(stats, available, named=()):
 
 
 def metric_unit(metric):
-    """The unit of a metric as figures and tables state it."""
-    if metric == PRIMARY:
-        return COMBINED_UNIT
+    """The unit of a metric as figures and tables state it (the CSV
+    column's)."""
     return METRICS.get(metric, (metric, ''))[1]
