@@ -20,7 +20,10 @@ REF = 'evaluator'                 # the renderer whose displacement is truth
 LP_TRUTH = 'analytic'             # low-poly: the untessellated surface
 FRACTION = 'fraction of albedo·E/π'
 GROUND_TRUTH = 'ground truth (displacement)'
+PRIMARY = 'combined_relative_error'   # the one ranking metric (issue 37)
+COMBINED_UNIT = "fraction of raw bump's E_term + E_view in the same variant"
 METRICS = {                       # metric -> (name, unit)
+    PRIMARY: ('combined error C', COMBINED_UNIT),
     'profile.rmse_terminator': ('terminator-region profile RMSE', FRACTION),
     'profile.rmse_overall': ('profile RMSE, all bins', FRACTION),
     'profile.max_error_terminator': ('max terminator error', FRACTION),
@@ -31,21 +34,41 @@ METRICS = {                       # metric -> (name, unit)
     'view.rmse_grazing': ('grazing-view RMSE', FRACTION),
     'view.bias_grazing': ('grazing-view bias', FRACTION),
     'image.rmse': ('image RMSE', 'W m⁻² sr⁻¹'),
-    'image.ssim': ('image SSIM', 'unitless'),
-    'image.mask_iou': ('silhouette IoU', 'unitless')}
-LP_PANELS = (                     # (metric, name, unit, scale)
-    ('shadow.darkened_fraction', 'darkened fraction', '% of the lit pixels',
-     100),
-    ('shadow.max_darkening', 'max darkening', '% of albedo·E/π', 100),
-    ('profile.rmse_terminator', 'terminator profile RMSE',
-     '% of albedo·E/π', 100))
+    'image.ssim': ('image SSIM', 'unitless, [-1, 1]'),
+    'image.mask_iou': ('silhouette IoU', 'unitless, [0, 1]')}
+CSV_COLUMNS = {                   # metric -> its metrics.csv column
+    PRIMARY: PRIMARY,
+    'profile.rmse_terminator': 'profile_rmse_terminator_rel',
+    'profile.rmse_overall': 'profile_rmse_overall_rel',
+    'profile.max_error_terminator': 'profile_max_error_terminator_rel',
+    'profile.max_step': 'profile_max_step_rel',
+    'profile.position_error_deg': 'position_error_deg',
+    'profile.width_deg': 'transition_width_deg',
+    'profile.lit_bias': 'lit_bias_rel',
+    'view.rmse_grazing': 'view_rmse_grazing_rel',
+    'view.bias_grazing': 'view_bias_grazing_rel',
+    'image.rmse': 'image_rmse_w_m2_sr',
+    'image.ssim': 'image_ssim',
+    'image.mask_iou': 'image_mask_iou'}
+# (metric, name, unit, scale): fractions, as lowpoly.csv gives them (its
+# column in LP_COLUMNS); the page's low-poly tables say "%" where they
+# show percent.
+LP_PANELS = (
+    ('shadow.darkened_fraction', 'darkened share of the lit pixels',
+     'fraction of pixels', 1),
+    ('shadow.max_darkening', 'max darkening', FRACTION, 1),
+    ('profile.rmse_terminator', 'terminator profile RMSE', FRACTION, 1))
 LP_SIDE = (
-    ('shadow.lost_shadow_fraction', 'lost cast shadow',
-     '% of the analytic shadow', 100),
+    ('shadow.lost_shadow_fraction', 'lost share of the analytic cast shadow',
+     'fraction of pixels', 1),
     ('shadow.shadow_shift_px', 'cast-shadow shift', 'pixels', 1),
-    ('shadow.darkened_fraction', 'darkened fraction', '% of the lit pixels',
-     100))
-
+    ('shadow.darkened_fraction', 'darkened share of the lit pixels',
+     'fraction of pixels', 1))
+LP_COLUMNS = {'shadow.darkened_fraction': 'darkened_fraction',
+              'shadow.max_darkening': 'max_darkening_rel',
+              'profile.rmse_terminator': 'profile_rmse_terminator_rel',
+              'shadow.lost_shadow_fraction': 'lost_shadow_fraction',
+              'shadow.shadow_shift_px': 'shadow_shift_px'}
 
 class BadInput(Exception):
     """Bad input: reported as 'report.py: <file>: <what>', exit status 2."""
@@ -201,18 +224,50 @@ def region(r, default):
 # A page with a section (image grid, profile figure, metrics table) per
 # variant stays readable up to a few dozen variants; a sweep of 10^4 would
 # take hours of plotting and a page no browser opens. Past this many, the
-# page shows variants evenly spaced over the study's order (first and last
-# included) and says so; every number stays in report.json and metrics.csv.
+# page shows a balanced selection and says which (penumbra_headline_html);
+# every number stays in report.json and metrics.csv.
 MAX_VARIANT_SECTIONS = 48
 
 
+def _levels(v):
+    """The (what, value) pairs a variant stands for: its scene and each
+    axis' value."""
+    av = v.get('axis_values') if isinstance(v.get('axis_values'), list) \
+        else []
+    return [('scene', str(v.get('scene')))] + [
+        (k, json.dumps(a, sort_keys=True)) for k, a in enumerate(av)]
+
+
+def evenly_spaced(n, k):
+    """k indices evenly spaced over range(n), the first and last included."""
+    return sorted({round(i * (n - 1) / (k - 1)) for i in range(k)})
+
+
 def shown_variants(variants, limit=MAX_VARIANT_SECTIONS):
-    """The variants that get a section of their own, in study order."""
+    """The variants that get a section of their own, in study order: all
+    up to `limit`, else a balanced pick: each pick the variant whose scene
+    and axis values have been picked least so far (summed); on a tie, the
+    first of the evenly spaced variants (first and last included), then
+    the others in study order. Evenly spaced picks alone skipped a whole
+    amplitude of the default study (72 variants, 48 sections: every
+    A = 0.01 variant); this gives each scene and each axis value its
+    share, and is the evenly spaced pick where every variant has values of
+    its own (one axis)."""
     n = len(variants)
     if n <= limit:
         return list(variants)
-    picks = sorted({round(i * (n - 1) / (limit - 1)) for i in range(limit)})
-    return [variants[i] for i in picks]
+    even = evenly_spaced(n, limit)
+    priority = {i: r for r, i in enumerate(
+        even + [i for i in range(n) if i not in set(even)])}
+    keys = [_levels(v) for v in variants]
+    counts, picked = {}, [False] * n
+    for _ in range(limit):
+        best = min((i for i in range(n) if not picked[i]), key=lambda i: (
+            sum(counts.get(k, 0) for k in keys[i]), priority[i]))
+        picked[best] = True
+        for k in keys[best]:
+            counts[k] = counts.get(k, 0) + 1
+    return [v for v, p in zip(variants, picked) if p]
 
 
 class Report:

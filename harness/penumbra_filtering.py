@@ -11,7 +11,8 @@ per filter with its 95 % interval as error bars. PNG, SVG and PDF.
 import numpy as np
 
 from penumbra_data import BadInput, farray, load_json, num, obj, objs
-from penumbra_plot import method_colors, plt, save
+from penumbra_plot import plt, save
+from penumbra_style import method_colors
 
 METRICS = (('profile_error', 'profile error (L2 / reference)', 0.0),
            ('width_ratio', 'highlight width / reference', 1.0),

@@ -19,9 +19,13 @@ from penumbra_context import (
     ci_cell, figure, figure_file, grid_cell, table)
 from penumbra_filtering_html import filtering_context, interplay_context
 from penumbra_data import (
-    FRACTION, GROUND_TRUTH, METRICS, column, get_metric, metric_label, num,
-    obj, objs, stem)
+    METRICS, get_metric, metric_label, num, obj, objs, stem)
+from penumbra_headline_html import (
+    headline_context, lines_context, mean_rmse_context, provenance_context,
+    variants_context)
+from penumbra_grid_figure import bands, grid_renders
 from penumbra_lowpoly_html import lowpoly_context
+from penumbra_tables import ranking_table, table_caption
 
 TEMPLATES = os.path.join(os.path.dirname(os.path.abspath(__file__)),
                          'templates')
@@ -40,20 +44,21 @@ VARIANT_METRICS = (               # (metric, scale, column head)
 
 
 def image_grid(var, uris, missing, renderers):
-    """Rows: renderers (image row, then difference row); columns: ground
-    truth, then methods (Chiang 2019, Fig. 4)."""
-    renders = objs(var.get('renders'))
-    cols = list(dict.fromkeys([GROUND_TRUTH] + [column(r) for r in renders]))
-    at = {(str(r.get('renderer')), column(r)): r for r in renders}
+    """Every method's images, in bands of at most BAND_COLUMNS columns
+    (ground truth, then methods; Chiang 2019, Fig. 4): per band, rows of
+    renderers (image row, then difference row) with something in it."""
+    cols, renders = grid_renders(var, renderers)
+    return [band_cells(bc, rs, uris, missing)
+            for bc, rs in bands(cols, renders)]
 
+
+def band_cells(cols, renders, uris, missing):
+    """One band of the page's grid: {'cols', 'rows'} of grid cells."""
     def img(rel, alt, cap):
         return grid_cell(figure(uris[rel], alt, cap) if rel is not None
                          else None)
     rows = []
-    for rend in dict.fromkeys(renderers + [k[0] for k in at]):
-        rs = [at.get((rend, c)) for c in cols]
-        if not any(rs):
-            continue
+    for rend, rs in renders:
         rows.append({'head': rend, 'cells': [
             img(r.get('image'), f'{rend} {c}', f'{rend} / {c}') if r else
             grid_cell(na=missing.get((rend, c), 'not rendered'))
@@ -77,8 +82,9 @@ def metric_cell(comp, metric, scale):
     return (get_metric(comp, metric), scale)
 
 
-def variant_context(var, report, fig, missing, grid=()):
-    """One variant's section: image grid, profile figure, metrics table."""
+def variant_context(var, report, figs, k, missing):
+    """One variant's section (the k-th shown): image grid, profile
+    figures, metrics table."""
     vid = str(var.get('id'))
     comps = [c for c in report.comps if c.get('variant') == var.get('id')]
     # "evaluator: displacement": a space lets the narrow column wrap there.
@@ -88,68 +94,37 @@ def variant_context(var, report, fig, missing, grid=()):
             for c in comps]
     head = ['renderer', 'method', 'reference'] + [
         h for *_, h in VARIANT_METRICS]
+    composed = [os.path.relpath(p, report.out) for p in figs['grids'][k]]
     return {'anchor': f'v-{stem(vid)}', 'id': vid,
             'label': str(var.get('label', '')),
             'grid': image_grid(var, report.uris, missing,
                                [str(r.get('id')) for r in report.renderers]),
-            'composed': [os.path.relpath(p, report.out) for p in grid],
+            'composed': composed,
             'profiles': figure_file(
-                fig, f'profiles {vid}',
-                f'figures/profiles-{stem(vid)}.{{png,svg,pdf}}'),
+                figs['profiles'][k], f'profiles {vid}',
+                f'figures/profiles-{stem(vid)}.{{png,svg,pdf}}: '
+                f'{", ".join(figs["shown"])} (the highlighted methods); '
+                f'every method: figures/all-methods-profiles-{stem(vid)}.png '
+                f'(as PDF: report.py figure OUT --kind profile --variant {vid} '
+                '--methods all -o FILE.pdf)'),
+            'profiles_all': os.path.relpath(figs['profiles_all'][k],
+                                            report.out),
             'metrics': table(head, rows) if rows else None}
 
 
 def ranking_context(report):
-    """The headline: ranking tables (overall, per scene)."""
+    """The mean absolute error per method (report.json `ranking`), overall
+    and per scene: NOT the ranking metric (statistics.notes says where and
+    why it orders methods otherwise), in its metric's own unit."""
     rk = report.ranking
     name, unit = METRICS.get(rk.get('metric'), (rk.get('metric'), ''))
-    scale = 100 if unit == FRACTION else 1
-    head = ['method', f'mean {name} ({"%" if scale == 100 else unit})',
-            'rank', 'count']
+    head = ['method', f'mean absolute {name} ({unit}; not the ranking '
+            'metric)', 'order', 'variants']
     return [{'title': str(group), 'table': table(head, [
-        [str(e.get('method')), (e.get('mean'), scale),
+        [str(e.get('method')), (e.get('mean'), 1),
          i + 1 if math.isfinite(num(e.get('mean'))) else None,
          e.get('count')] for i, e in enumerate(entries)])}
         for group, entries in report.ranking_groups() if entries]
-
-
-def verdict(m):
-    """Better, worse or tied with raw bump: whether the combined relative
-    error's 95 % interval lies below 1, above 1, or contains it."""
-    if m.get('method') == 'none':
-        return 'baseline'
-    ci = m.get('combined_ci')
-    if not isinstance(ci, list) or len(ci) != 2 or None in ci:
-        return 'n/a'
-    lo, hi = num(ci[0]), num(ci[1])
-    return 'better' if hi < 1 else 'worse' if lo > 1 else 'tie'
-
-
-def statistics_rows(methods):
-    """The headline table's rows: every number in percent with its 95 %
-    interval in the same cell."""
-    rows = []
-    for m in methods:
-        term, view = m.get('terminator_vs_none') or {}, m.get('view_vs_none') or {}
-        label = str(m.get('method'))
-        if m.get('rejected'):
-            label += ' (rejected)'
-        rows.append([
-            m.get('rank'), label, verdict(m),
-            ci_cell(m.get('combined_relative_error'), m.get('combined_ci')),
-            ci_cell(m.get('terminator_improvement'),
-                    m.get('terminator_improvement_ci'), digits=0),
-            f'{term.get("better", 0)}/{m.get("variants", 0)}',
-            ci_cell(view.get('mean_difference'), view.get('ci'), digits=2),
-            ci_cell(m.get('view_bias'), m.get('view_bias_ci'), digits=2)])
-    return rows
-
-
-STATISTICS_HEAD = [
-    'rank', 'method', 'vs raw bump', 'combined error (% of raw bump’s) [95 % CI]',
-    'terminator RMSE removed (%) [95 % CI]', 'better than raw bump (variants)',
-    'grazing-view RMSE minus raw bump (% of albedo·E/π) [95 % CI]',
-    'grazing-view signed error (% of albedo·E/π) [95 % CI]']
 
 
 def agreement_table(report):
@@ -185,30 +160,24 @@ def agreement_table(report):
 
 
 def statistics_context(report):
-    """The headline: a lead sentence, the method table and the
-    cross-renderer table (every number in % with its 95 % interval), then
-    the same findings in sentences; methods the literature rejects
-    labelled."""
+    """The findings in sentences (the overall ranking's), the
+    cross-renderer table and the ground truth's convergence; None
+    without statistics."""
     st = report.doc.get('statistics')
     if not isinstance(st, dict) or not isinstance(st.get('overall'), dict):
         return None
-    overall = st['overall']
-    methods = objs(overall.get('methods'))
-    rows = statistics_rows(methods)
-    rejected = [f'{m.get("method")}: {m.get("rejected")}'
-                for m in methods if m.get('rejected')]
+    methods = objs(st['overall'].get('methods'))
     agreement = obj(report.doc.get('agreement'))
-    sentences = [str(x) for x in overall.get('headline') or []]
-    return {'lead': sentences[0] if sentences else '',
-            'sentences': sentences[1:],
+    return {'sentences': [str(x) for x in st['overall'].get('headline')
+                          or []],
             'agreement': [str(x) for x in agreement.get('headline') or []],
             'agreement_table': agreement_table(report),
             'ground_truth': ground_truth_context(report),
-            'table': table(STATISTICS_HEAD, rows) if rows else None,
             'definition': str(st.get('definition', '')),
             'interval': str(st.get('interval', '')),
             'test': str(st.get('test', '')),
-            'rejected': rejected}
+            'rejected': [f'{m.get("method")}: {m.get("rejected")}'
+                         for m in methods if m.get('rejected')]}
 
 
 def ground_truth_context(report):
@@ -267,48 +236,42 @@ def sweeps_context(report, sweeps):
             for k, s in enumerate(sweeps)]
 
 
-def variants_note(report):
-    """Says which variants have a section when not all of them do."""
-    n, k = len(report.variants), len(report.shown)
-    if k == n:
-        return None
-    return (f'{n} variants: the {k} sections below show variants evenly '
-            f'spaced over the study\'s order (the first and the last '
-            f'included). Every variant\'s numbers are in metrics.csv and '
-            f'report.json; the ranking, statistics and sweeps above and '
-            f'below use them all.')
-
-
 def report_context(report, figs):
     """The template context of the whole page."""
-    rk, study = report.ranking, report.study
+    rk, study, stats = report.ranking, report.study, figs['stats']
     name = str(study.get('name', 'study'))
     missing = {(str(m.get('renderer')), str(m.get('method'))):
                str(m.get('why', '')) for m in objs(report.doc.get('missing'))}
-    ranking_fig = figs['ranking']
-    stats_fig = figs.get('statistics')
     return {
         'title': f'Penumbra report: {name}',
         'study': {'name': str(study.get('name', '')),
                   'file': str(study.get('file', ''))},
         'penumbra': str(report.doc.get('penumbra', '?')),
+        'provenance': provenance_context(report.doc),
+        'notices': [str(x) for x in report.doc.get('notices') or []
+                    if isinstance(report.doc.get('notices'), list)],
+        'headline': headline_context(report, stats),
         'ranking': {k: str(rk.get(k, '?'))
                     for k in ('metric', 'renderer', 'reference')},
-        'ranking_tables': ranking_context(report),
+        'mean_rmse': mean_rmse_context(report, stats, figs,
+                                       ranking_context(report)),
         'statistics': statistics_context(report),
         'ranking_figure': figure_file(
-            ranking_fig, 'ranking', 'figures/ranking.{png,svg,pdf}')
-        if ranking_fig else None,
+            figs['ranking'], 'ranking',
+            'figures/ranking.{png,svg,pdf}: ' + table_caption(
+                stats, ranking_table(stats))) if figs['ranking'] else None,
         'statistics_figure': figure_file(
-            stats_fig, 'combined relative error with 95 % intervals',
-            'figures/statistics.{png,svg,pdf}: combined error per method in % '
-            'of raw bump\'s, with its 95 % bootstrap interval over variants '
-            '(dashed: raw bump, 100 %)') if stats_fig else None,
+            figs['statistics'], 'combined error per scene',
+            'figures/statistics.{png,svg,pdf}: combined error C per method '
+            '(fraction of raw bump\'s; 1 = raw bump), overall and per '
+            f'scene, with {stats.interval_text()}')
+        if figs['statistics'] else None,
+        'lines': lines_context(report, stats, figs),
+        'shown_methods': figs['shown'],
         **renderer_tables(report),
-        'variants': [variant_context(v, report, f, missing, g)
-                     for v, f, g in zip(report.shown, figs['profiles'],
-                                        figs['grids'])],
-        'variants_note': variants_note(report),
+        'variants': [variant_context(v, report, figs, k, missing)
+                     for k, v in enumerate(report.shown)],
+        'selection': variants_context(report),
         'sweeps': sweeps_context(report, figs['sweeps']),
         'has_plots': bool(report.doc.get('plots')),
         'lowpoly': lowpoly_context(report.lowpoly, figs['lowpoly'],

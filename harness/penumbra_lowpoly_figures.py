@@ -12,7 +12,8 @@ import matplotlib.ticker
 import numpy as np
 
 from penumbra_data import LP_PANELS, LP_SIDE, LP_TRUTH, REF, num, stem
-from penumbra_plot import method_colors, plt, save, worker_pool
+from penumbra_plot import plt, save, worker_pool
+from penumbra_style import method_colors
 
 MARKERS = 'osD^vPX*<>p'
 RENDERER_DASHES = ['-', (0, (5, 2)), (0, (6, 2, 1, 2)), (0, (2, 1.5))]

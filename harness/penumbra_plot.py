@@ -4,12 +4,14 @@ Importing this module selects the Agg backend (no display) and the rcParams
 that make the output reproducible: the same input gives the same bytes,
 with no dates or versions in the files and a fixed SVG hash salt.
 """
+import math
 import multiprocessing
 import os
 import sys
 import textwrap
 
 import matplotlib
+import numpy as np
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.font_manager import FontProperties  # noqa: E402
@@ -82,20 +84,20 @@ def worker_pool(tasks):
     return multiprocessing.get_context('fork').Pool(min(cores, tasks))
 
 
-def method_colors(names):
-    """A stable colour per method, in order of first appearance; 'none' is
-    grey."""
-    palette = [c for i, c in enumerate(plt.get_cmap('tab10').colors)
-               if i != 7] + list(plt.get_cmap('Dark2').colors)
-    colors = {'none': (0.5, 0.5, 0.5)}
-    for m in names:
-        colors.setdefault(m, palette[(len(colors) - 1) % len(palette)])
-    return colors
-
-
 def contour_lines(ax, X, Y, z, levels, label_fmt):
     """Labelled black contour lines at the levels inside z's range."""
     inner = [v for v in levels if z.count() and z.min() < v < z.max()]
     if inner:
         cs = ax.contour(X, Y, z, levels=inner, colors='k', linewidths=0.6)
         ax.clabel(cs, fontsize=7, fmt=label_fmt)
+
+
+def geometric(v):
+    """Whether positive values are more evenly spaced on a log scale."""
+    v = np.sort(np.asarray(v, dtype=float))
+    if v.size < 3 or v[0] <= 0:
+        return False
+
+    def cv(d):
+        return np.std(d) / np.mean(d) if np.mean(d) > 0 else math.inf
+    return cv(np.diff(np.log(v))) < cv(np.diff(v))

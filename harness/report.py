@@ -3,8 +3,16 @@
 point (argument handling, exit status, messages); the work is done by
   penumbra_data.py      reading and checking report.json (and the low-poly
                         section's model)
-  penumbra_plot.py, penumbra_figures.py, penumbra_lowpoly_figures.py,
+  penumbra_stats.py     the ranking statistics (rank groups, by-axis
+                        levels, the highlighted methods), with fall-backs
+                        for older report.json files
+  penumbra_plot.py, penumbra_style.py (screen and paper styles, the
+  palette), penumbra_figures.py, penumbra_paper_figures.py,
+  penumbra_sweeps.py, penumbra_grid_figure.py, penumbra_lowpoly_figures.py,
   penumbra_contour.py   the matplotlib figures
+  penumbra_tables.py    the ranking and per-level tables (HTML, LaTeX,
+                        Markdown, CSV)
+  penumbra_commands.py  the figure and table commands
   penumbra_html.py, penumbra_lowpoly_html.py, penumbra_context.py
                         report.html's context, rendered by Jinja2 from
                         templates/ (report.html.j2 and what it includes)
@@ -15,13 +23,48 @@ Usage (Debian's Python, with python3-matplotlib and python3-jinja2):
       OUT/report.html, which links its images (relative URLs into
       OUT/images and OUT/figures: keep the folder together), or with
       --self-contained embeds every image as a data: URI (one file).
+  /usr/bin/python3 harness/report.py figure OUT --kind line|profile|ranking|heatmap|grid
+          [--x POINTER] [--y POINTER] [--metric M] [--methods a,b,c|all]
+          [--variant ID] [--scene S] [--style paper|screen] [--columns 1|2]
+          -o FILE.(pdf|svg|png)
+      redraws one figure from OUT/report.json, without rendering:
+        line     a metric (--metric: combined_relative_error, the default,
+                 profile.rmse_terminator, view.rmse_grazing,
+                 profile.position_error_deg or image.rmse) against the
+                 levels of one axis (--x: its pointer or name; default the
+                 first), a line per method with 95 % interval bars;
+        profile  a variant's terminator profiles (--variant; default the
+                 first);
+        ranking  the primary metric (or --metric) per method with its
+                 interval, in rank-group order;
+        heatmap  a comparison metric over two axes (--x, --y; default the
+                 study's first plot), one panel per method, one scene
+                 (--scene) or all pooled;
+        grid     a variant's images and difference images (--variant),
+                 ground truth and methods side by side (--methods all: in
+                 bands of 7 columns).
+      --methods: a subset, in the order given (default: `none`, the
+      methods report.json's figures.methods names, the best rank group's
+      leader overall and per level, then the next best: at most 5;
+      penumbra_stats.highlighted). --style paper: 8-pt text, exactly 3.5
+      in (--columns 1) or 7 in (2, the default) wide, TrueType fonts in
+      the PDF; screen: the report's look.
+  /usr/bin/python3 harness/report.py table OUT --format latex|markdown|csv
+          [--by POINTER] [--metric M] [-o FILE]
+      the ranking table (rank group, method, combined error C with its
+      interval, C minus the group leader's, terminator error removed,
+      grazing-view difference, verdict), or with --by the per-level table
+      (methods x the axis' levels, each cell mean [interval] (rank group
+      in that level); CSV in long form); to stdout without -o. LaTeX:
+      booktabs, every string escaped.
   /usr/bin/python3 harness/report.py contour CONTOUR.json OUTDIR
       writes OUTDIR/contour-<method>.*, contour-diff-<a>-<b>.* for every
       pair of methods in the given order, and the combined contour.*.
 
 Prints every written file, one a line. Exit status 0 ok; 2 bad input
-(missing file, malformed JSON, wrong format or version, a path outside OUT),
-one line on stderr: "report.py: <file>: <what>"; 1 an output error.
+(missing file, malformed JSON, wrong format or version, a path outside OUT,
+a bad option), one line on stderr: "report.py: <file or option>: <what>",
+and nothing written; 1 an output error.
 Nothing from the JSON is executed; every string from it is HTML-escaped
 (by the template's autoescape).
 The same input gives the same bytes (no dates or versions in the files).
@@ -50,6 +93,15 @@ filter,levels[],methods[],compared_against,truth,truth_check{},units,
 rows[{level,method,rmse_terminator,rmse_terminator_ci,rmse_overall,
 position_error_deg,image}],findings[]}). image, difference, json and csv are
 paths relative to OUT.
+Read when present (issue 37; older files fall back, penumbra_stats.py):
+provenance{penumbra,commit,dirty,date,machine{},renderers{},study_sha256}
+and notices[] (shown on the page only; no figure depends on them),
+axes[].value_ids[], figures{methods[]} (the methods the profile, line and
+grid figures show), statistics{primary_metric{id,name,unit}, rule,
+headline[], notes[], by_axis[{pointer,label,numeric,levels[{value,
+value_label,value_id,ranking}],interactions[{method,p,p_holm,depends,
+levels[]}]}]} and, in every ranking's methods[], rank (the rank group),
+group_leader, versus_leader{mean_difference,ci}, means{METRIC:{mean,ci}}.
 
 The low-poly section (after the bump one) draws figures/lowpoly-convergence-
 <group>.* (evaluator offsets vs evaluator:analytic over the convergence axis),
@@ -75,12 +127,14 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 sys.dont_write_bytecode = True
 
+from penumbra_commands import figure_command, table_command  # noqa: E402
 from penumbra_contour import contour_figures, load_contour  # noqa: E402
 from penumbra_data import BadInput, PageImages, Report  # noqa: E402
 from penumbra_figures import report_figures  # noqa: E402
 from penumbra_filtering import filtering_figures  # noqa: E402
 from penumbra_html import write_report  # noqa: E402
 from penumbra_plot import progress  # noqa: E402
+from penumbra_stats import Stats  # noqa: E402
 
 
 def run_report(out, self_contained=False):
@@ -88,7 +142,7 @@ def run_report(out, self_contained=False):
     every path written, report.html last."""
     PageImages.embed, PageImages.out = self_contained, out
     report = Report(out)
-    figs = report_figures(report)
+    figs = report_figures(report, Stats(report))
     progress('report.html' + (' (self-contained)' if self_contained else ''))
     return figs['written'] + [write_report(report, figs)]
 
@@ -97,19 +151,31 @@ def run_contour(path, outdir):
     return contour_figures(*load_contour(path), outdir)
 
 
+USAGE = ('usage: report.py report OUT [--self-contained] | '
+         'report.py figure OUT --kind line|profile|ranking|heatmap|grid '
+         '[options] '
+         '-o FILE | report.py table OUT --format latex|markdown|csv '
+         '[--by POINTER] [-o FILE] | '
+         'report.py contour CONTOUR.json OUTDIR | '
+         'report.py filtering FILTERING.json OUTDIR')
+
+
 def main(argv):
+    text = None
     try:
         if len(argv) in (2, 3) and argv[0] == 'report' and \
                 argv[2:] in ([], ['--self-contained']):
             written = run_report(argv[1], len(argv) == 3)
+        elif argv[:1] == ['figure']:
+            written, _ = figure_command(argv[1:])
+        elif argv[:1] == ['table']:
+            written, text = table_command(argv[1:])
         elif len(argv) == 3 and argv[0] == 'contour':
             written = run_contour(argv[1], argv[2])
         elif len(argv) == 3 and argv[0] == 'filtering':
             written = filtering_figures(argv[1], argv[2])
         else:
-            print('usage: report.py report OUT [--self-contained] | '
-                  'report.py contour CONTOUR.json OUTDIR | '
-                  'report.py filtering FILTERING.json OUTDIR', file=sys.stderr)
+            print(USAGE, file=sys.stderr)
             return 2
     except BadInput as e:
         print(f'report.py: {e}', file=sys.stderr)
@@ -118,7 +184,10 @@ def main(argv):
         print(f'report.py: {e.filename or "output"}: {e.strerror or e}',
               file=sys.stderr)
         return 1
-    print('\n'.join(written))
+    if text is not None:
+        sys.stdout.write(text)
+    else:
+        print('\n'.join(written))
     return 0
 
 
