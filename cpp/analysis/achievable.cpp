@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <array>
+#include <map>
+#include <stdexcept>
 
 namespace penumbra {
 
@@ -157,6 +159,37 @@ Eigen::VectorXd active_set(const Quadratic& q, Eigen::VectorXd x, const FloorOpt
 }
 
 }  // namespace
+
+ProfileTally profile_tally(const Image& image, const PixelTally& tally, double radiance_scale,
+                           const ProfileOptions& options) {
+  const int alpha = image.channel_index("A"), theta = image.channel_index("analysis.theta");
+  if (alpha < 0 || theta < 0)
+    throw std::invalid_argument("a tally needs the evaluator's A and analysis.theta channels");
+  if (tally.width != image.width || tally.height != image.height)
+    throw std::invalid_argument("the tally and the image differ in size");
+  ProfileTally t;
+  t.bin_degrees = options.bin_degrees;
+  const std::size_t bins = static_cast<std::size_t>(std::ceil(180.0 / options.bin_degrees));
+  t.count.assign(bins, 0);
+  t.rest.assign(bins, 0.0);
+  std::vector<std::map<int, double>> scaled(bins);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      if (image.at(x, y, alpha) < options.min_coverage) continue;
+      const double angle = image.at(x, y, theta);
+      if (!std::isfinite(angle)) continue;
+      const auto k =
+          std::min(bins - 1, static_cast<std::size_t>(std::max(0.0, angle) / options.bin_degrees));
+      const std::size_t p = static_cast<std::size_t>(y) * std::size_t(image.width) + std::size_t(x);
+      ++t.count[k];
+      t.rest[k] += tally.rest[p] / radiance_scale;
+      for (std::uint32_t e = tally.offsets[p]; e < tally.offsets[p + 1]; ++e)
+        scaled[k][tally.cells[e]] += tally.light[e] / radiance_scale;
+    }
+  t.scaled.resize(bins);
+  for (std::size_t k = 0; k < bins; ++k) t.scaled[k].assign(scaled[k].begin(), scaled[k].end());
+  return t;
+}
 
 Profile ProfileTally::profile(const std::vector<double>& g) const {
   Profile p;

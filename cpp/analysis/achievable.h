@@ -38,6 +38,12 @@ struct ProfileTally {
   Profile profile(const std::vector<double>& g) const;
 };
 
+// A render's pixel tally binned as terminator_profile bins its pixels (fully
+// covered ones, by analysis.theta): tally.profile(all ones) is the render's
+// own profile, to float rounding. `radiance_scale`: albedo*E/pi.
+ProfileTally profile_tally(const Image& image, const PixelTally& tally, double radiance_scale,
+                           const ProfileOptions& options = {});
+
 // One variant of a fit: its tally and its truth's profile.
 struct TallyVariant {
   std::string id;

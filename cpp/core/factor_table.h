@@ -15,6 +15,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <string_view>
 #include <vector>
 
@@ -61,6 +62,18 @@ struct FactorTable {
     const int c = grid.cell(in);
     return c < 0 ? 1.0 : values[static_cast<std::size_t>(c)];
   }
+};
+
+// Raw bump's light in each pixel of a render, split by the grid's cells:
+// what a factor table G would make of the pixel is rest + sum light * G
+// (W m^-2 sr^-1, already divided by the samples per pixel). Pixel p's
+// entries are [offsets[p], offsets[p + 1]) of cells and light.
+struct PixelTally {
+  int width = 0, height = 0;
+  std::vector<double> rest;  // per pixel: light no cell's G scales
+  std::vector<std::uint32_t> offsets;
+  std::vector<int> cells;
+  std::vector<double> light;
 };
 
 }  // namespace penumbra

@@ -239,14 +239,16 @@ RankingStatistics ranking_statistics(const Plan& plan, const std::vector<Compari
 }
 
 std::string rank_rule_text(std::size_t methods) {
+  const std::size_t comparisons = methods > 1 ? methods - 1 : 1;
   return fmt::format(
       "Rank groups: methods in order of their mean combined error; the best method not yet "
       "grouped leads the next group, which holds every later method whose paired difference "
       "from the leader (over the same variants) has an interval containing 0. Intervals of the "
       "combined error are {:.2f} % percentile-bootstrap intervals over variants, so that the "
-      "{} comparisons of a step hold together at 95 % (Bonferroni).",
-      100.0 * simultaneous_confidence(kRankingFamilyConfidence, methods > 1 ? methods - 1 : 1),
-      methods > 1 ? methods - 1 : 1);
+      "{} {} of a step {} together at 95 % (Bonferroni over the {} methods ranked).",
+      100.0 * simultaneous_confidence(kRankingFamilyConfidence, comparisons), comparisons,
+      comparisons == 1 ? "comparison" : "comparisons", comparisons == 1 ? "holds" : "hold",
+      methods);
 }
 
 std::vector<AgreementSummary> agreement_summaries(const std::vector<AgreementRow>& rows) {
