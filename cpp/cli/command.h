@@ -62,6 +62,7 @@ Command add_status_command(CLI::App& app, SharedOptions& shared);
 Command add_report_command(CLI::App& app, SharedOptions& shared);
 Command add_figure_command(CLI::App& app, SharedOptions& shared);
 Command add_table_command(CLI::App& app, SharedOptions& shared);
+Command add_fit_command(CLI::App& app, SharedOptions& shared);
 Command add_contour_command(CLI::App& app, SharedOptions& shared);
 Command add_bench_command(CLI::App& app, SharedOptions& shared);
 Command add_pyramid_command(CLI::App& app, SharedOptions& shared);

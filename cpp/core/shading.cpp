@@ -16,6 +16,14 @@ double unshadowed_value(const Material& m, const Vec3& ns, const Vec3& wi, const
   return (lobes.diffuse + lobes.specular) * cos_theta_s;
 }
 
+double factor_scaled_value(const Material& m, const Vec3& ns, const Vec3& wi, const Vec3& wo,
+                           Lobes lobes) {
+  const double cos_theta_s = dot(ns, wi);
+  if (!(cos_theta_s > 0.0)) return 0.0;
+  const LobeValues values = evaluate_lobes(m, ns, wi, wo);
+  return (lobes == Lobes::kAll ? values.diffuse + values.specular : values.diffuse) * cos_theta_s;
+}
+
 namespace {
 
 Shaded effective(double value, const Material& m, const ShadingPoint& p) {

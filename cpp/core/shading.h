@@ -67,4 +67,10 @@ Shaded shade(const TerminatorSettings& t, const Material& m, const ShadingPoint&
 // Raw bump: the plain lobes around ns times <ns,wi>, no factor.
 double unshadowed_value(const Material& m, const Vec3& ns, const Vec3& wi, const Vec3& wo);
 
+// The part of raw bump's unshadowed_value that a plain factor scales: the
+// diffuse lobe's, or every lobe's when the factor applies to all lobes
+// (TerminatorSettings::lobes). What the achievable floor's tally splits.
+double factor_scaled_value(const Material& m, const Vec3& ns, const Vec3& wi, const Vec3& wo,
+                           Lobes lobes);
+
 }  // namespace penumbra

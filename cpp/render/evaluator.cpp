@@ -323,6 +323,22 @@ struct PendingShadow {
   std::size_t first = 0, last = 0;
 };
 
+// Where a tallied render (render_tallied) puts one pixel's unblocked light:
+// by the factor grid's cell of each sample, the part a factor scales.
+struct TallySink {
+  const FactorGrid* grid = nullptr;
+  Lobes lobes = Lobes::kDiffuse;
+  std::vector<std::pair<int, double>>* scaled = nullptr;  // (cell, light), unsorted
+  double* rest = nullptr;                                 // light no cell's G scales
+  void add(const Material& m, const ShadingPoint& p, double irradiance, double value) const {
+    const int cell = grid->cell(factor_inputs(p.ng, p.ns, p.wi, p.wo));
+    const double light =
+        cell < 0 ? 0.0 : factor_scaled_value(m, p.ns, p.wi, p.wo, lobes) * irradiance;
+    if (light > 0.0) scaled->emplace_back(cell, light);
+    *rest += value - light;
+  }
+};
+
 // The parts of a sample every method sees alike, in the channels' units.
 struct SampleAngles {
   double theta = 0.0, deviation = 0.0, view = 0.0;  // degrees
@@ -398,8 +414,9 @@ class SampleShader {
   // Whether a hit's shading normal is the bump normal (BumpNormals::at).
   bool bumps() const { return displaced_shading_ && perturbed_; }
 
+  // `tally`: where the one pass's unblocked light goes as well (render_tallied).
   void shade(const Ray& ray, const SurfaceHit& hit, Material* material, Pcg32* rng, PixelSums* sums,
-             std::uint64_t* shadow_rays) const;
+             std::uint64_t* shadow_rays, const TallySink* tally = nullptr) const;
   // shade() but for the radiance of the passes the light reaches, which
   // waits for the shadow ray's verdict: its contributions are appended to
   // *lit, and the ray to trace is returned (nullopt: no pass needs it).
@@ -486,7 +503,8 @@ typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray&
 
 template <typename Tracer>
 void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, Material* material,
-                                 Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays) const {
+                                 Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays,
+                                 const TallySink* tally) const {
   const Prepared p = prepare(ray, hit, material);
   int is_blocked = -1;  // the shadow ray, traced for the first pass that needs it
   shade_passes(*material, p.point, p.light, p.angles, rng, sums, [&](std::size_t k, double value) {
@@ -496,7 +514,9 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, Material
       is_blocked = tracer_.occluded(shadow, p.light.wi, p.light.distance) ||
                    props_.occluded(shadow.origin, p.light.wi, p.light.distance);
     }
-    if (is_blocked == 0) sums[k].radiance += value;
+    if (is_blocked != 0) return;
+    sums[k].radiance += value;
+    if (tally) tally->add(*material, p.point, p.light.irradiance, value);
   });
 }
 
@@ -592,6 +612,7 @@ struct PixelTask {
   Pcg32* rng = nullptr;       // for the methods that draw random numbers while shading
   PixelSums* sums = nullptr;  // one per pass
   std::uint64_t* shadow_rays = nullptr;
+  const TallySink* tally = nullptr;  // render_tallied only (scalar path)
 };
 
 // The rows of a render through packets: rays, hits, bump normals, shadow
@@ -784,16 +805,39 @@ void shade_pixel(const Scene& scene, const Tracer& tracer, const Props& props,
       material.filtered.active = false;
       const bool found = tracer.primary(ray, &hit);
       if (!(props.nearer(ray, found, &hit) || found)) continue;
-      shader.shade(ray, hit, &material, pixel.rng, pixel.sums, pixel.shadow_rays);
+      shader.shade(ray, hit, &material, pixel.rng, pixel.sums, pixel.shadow_rays, pixel.tally);
     }
   }
 }
 
-// Renders with each of `passes` (one per image); see render_methods.
+// render_tallied's tally while it renders: per pixel, (cell, light) sorted
+// by cell with each cell once, and the rest, both divided by the samples.
+struct TallyRequest {
+  const FactorGrid* grid = nullptr;
+  Lobes lobes = Lobes::kDiffuse;
+  std::vector<std::vector<std::pair<int, double>>> scaled;
+  std::vector<double> rest;
+
+  void store(std::uint64_t pixel, std::vector<std::pair<int, double>>& entries, double rest_sum,
+             double inv_spp) {
+    std::sort(entries.begin(), entries.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<std::pair<int, double>>& out = scaled[pixel];
+    for (const auto& [cell, light] : entries) {
+      if (out.empty() || out.back().first != cell) out.emplace_back(cell, 0.0);
+      out.back().second += light;
+    }
+    for (auto& entry : out) entry.second *= inv_spp;
+    rest[pixel] = rest_sum * inv_spp;
+  }
+};
+
+// Renders with each of `passes` (one per image); see render_methods. With
+// `tally` (one pass), on the scalar path, tallying as it goes.
 template <typename Tracer>
 void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions& options,
                   const std::vector<TerminatorSettings>& passes, std::vector<Image>* images,
-                  RenderStats* stats) {
+                  RenderStats* stats, TallyRequest* tally = nullptr) {
   const Camera& camera = scene.camera;
   const int width = camera.width, height = camera.height;
   const std::size_t channel_count = evaluator_channels().size();
@@ -801,7 +845,7 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   const double inv_spp = 1.0 / camera.spp;
   const Props props(scene);
   const SampleShader<Tracer> shader(scene, tracer, props, passes);
-  const bool packets = traces_packets(scene, shader, passes, options);
+  const bool packets = !tally && traces_packets(scene, shader, passes, options);
   const PacketSetup setup = packet_setup(scene, tracer);
 
   std::atomic<int> rows_done{0};
@@ -812,6 +856,10 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
     std::uint64_t local_shadow_rays = 0;
     std::vector<PixelSums> sums(pass_count);
+    std::vector<std::pair<int, double>> entries;  // a tallied pixel's samples
+    double rest = 0.0;
+    const TallySink sink =
+        tally ? TallySink{tally->grid, tally->lobes, &entries, &rest} : TallySink{};
     std::optional<PacketRows> packet_rows;
     if constexpr (std::is_same_v<Tracer, BaseTracer>)
       if (packets) packet_rows.emplace(scene, setup, shader, pass_count, images);
@@ -824,8 +872,12 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
           const std::uint64_t key = pixel_key(camera, i, j);
           Pcg32 rng(key);
           std::fill(sums.begin(), sums.end(), PixelSums{});
+          entries.clear();
+          rest = 0.0;
           shade_pixel(scene, tracer, props, shader,
-                      {i, j, key, &rng, sums.data(), &local_shadow_rays}, options.packets);
+                      {i, j, key, &rng, sums.data(), &local_shadow_rays, tally ? &sink : nullptr},
+                      options.packets && !tally);
+          if (tally) tally->store(pixel, entries, rest, inv_spp);
           for (std::size_t k = 0; k < pass_count; ++k)
             write_pixel(sums[k], inv_spp, &(*images)[k].pixels[pixel * channel_count]);
         }
@@ -896,6 +948,60 @@ std::vector<Image> render_methods(const Scene& scene,
 
 Image render(const Scene& scene, const RenderOptions& options, RenderStats* stats) {
   return std::move(render_methods(scene, {scene.terminator}, options, stats).front());
+}
+
+namespace {
+
+PixelTally flatten(const TallyRequest& request, int width, int height) {
+  PixelTally tally;
+  tally.width = width;
+  tally.height = height;
+  tally.rest = request.rest;
+  tally.offsets.reserve(request.scaled.size() + 1);
+  tally.offsets.push_back(0);
+  for (const auto& pixel : request.scaled) {
+    for (const auto& [cell, light] : pixel) {
+      tally.cells.push_back(cell);
+      tally.light.push_back(light);
+    }
+    tally.offsets.push_back(static_cast<std::uint32_t>(tally.cells.size()));
+  }
+  return tally;
+}
+
+}  // namespace
+
+Image render_tallied(const Scene& scene, const FactorGrid& grid, PixelTally* tally,
+                     const RenderOptions& options, RenderStats* stats) {
+  const TerminatorSettings& t = scene.terminator;
+  if (scene.representation == Representation::kDisplacement ||
+      t.method.method != TerminatorMethod::kNone ||
+      effective_adjustment(t) != NormalAdjustment::kNone)
+    throw std::invalid_argument(
+        "render_tallied: tallies raw bump only (method none, no normal adjustment, not displaced)");
+  const auto start = Clock::now();
+  RenderStats local;
+  std::vector<Image> images(1);
+  Image& image = images.front();
+  image.width = scene.camera.width;
+  image.height = scene.camera.height;
+  image.channels = evaluator_channels();
+  image.pixels.assign(std::size_t(image.width) * image.height * image.channels.size(), 0.0f);
+  const std::size_t pixels = std::size_t(image.width) * image.height;
+  TallyRequest request{&grid, t.lobes, std::vector<std::vector<std::pair<int, double>>>(pixels),
+                       std::vector<double>(pixels, 0.0)};
+  if (scene.tessellation) {
+    const LowPolyMesh mesh(scene.shape, *scene.tessellation);
+    local.triangles = mesh.triangle_count();
+    local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    render_image(scene, LowPolyTracer(scene, mesh), options, {t}, &images, &local, &request);
+  } else {
+    render_image(scene, BaseTracer(scene), options, {t}, &images, &local, &request);
+  }
+  *tally = flatten(request, image.width, image.height);
+  local.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  if (stats) *stats = local;
+  return std::move(image);
 }
 
 }  // namespace penumbra

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/factor_table.h"
 #include "image/image.h"
 #include "scene/scene.h"
 
@@ -68,5 +69,15 @@ bool shares_samples(const TerminatorSettings& terminator);
 std::vector<Image> render_methods(const Scene& scene,
                                   const std::vector<TerminatorSettings>& methods,
                                   const RenderOptions& options = {}, RenderStats* stats = nullptr);
+
+// Raw bump rendered as render() renders it, to the bit, with its light
+// tallied per pixel by the cell of `grid` each sample's angles fall in
+// (core/factor_table.h, PixelTally): what any factor table on that grid
+// would make of each pixel, for the achievable floor (analysis/
+// achievable.h). Traces on the scalar path (no packets), which gives the
+// same bits. std::invalid_argument unless scene.terminator is `none` with
+// no normal adjustment on a bump or smooth render.
+Image render_tallied(const Scene& scene, const FactorGrid& grid, PixelTally* tally,
+                     const RenderOptions& options = {}, RenderStats* stats = nullptr);
 
 }  // namespace penumbra

@@ -1,0 +1,577 @@
+#include "study/fit.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <random>
+#include <set>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "analysis/metrics.h"
+#include "core/terminator.h"
+#include "image/image_io.h"
+#include "render/evaluator.h"
+#include "scene/scene_json.h"
+#include "util/strict_json.h"
+
+namespace penumbra {
+
+using nlohmann::json;
+
+FactorGrid default_fit_grid() {
+  return {{{FactorInput::kLight, 50.0, 120.0, 1.0}, {FactorInput::kDeviation, 0.0, 36.0, 3.0}}};
+}
+
+namespace {
+
+constexpr double kConfidence = 0.95;
+
+// Per variant, per method id: the evaluator's terminator RMSE against the
+// evaluator's displacement truth, as the study's report holds it.
+using MethodErrors = std::map<std::string, std::map<std::string, double>>;  // variant -> method
+
+MethodErrors method_errors(const json& report) {
+  MethodErrors errors;
+  for (const json& c : report.at("comparisons")) {
+    if (c.value("renderer", "") != "evaluator" ||
+        c.value("reference", "") != "evaluator:displacement")
+      continue;
+    const json& rmse = c.at("profile").at("rmse_terminator");
+    if (rmse.is_number()) errors[c.at("variant")][c.at("method")] = rmse.get<double>();
+  }
+  return errors;
+}
+
+// The cache path (relative to the folder) of a variant's evaluator render
+// of `method` in `representation`, or "" where the report has none.
+std::string render_path(const json& variant, const std::string& representation) {
+  for (const json& r : variant.at("renders"))
+    if (r.value("renderer", "") == "evaluator" && r.value("method", "") == "none" &&
+        r.value("representation", "") == representation && r.value("exr", json()).is_string())
+      return r.at("exr").get<std::string>();
+  return "";
+}
+
+// Whether two images hold the same bits in every channel of `a` (an EXR's
+// channels come back in the file's order, not the evaluator's).
+bool same_pixels(const Image& a, const Image& b) {
+  if (a.width != b.width || a.height != b.height) return false;
+  for (std::size_t c = 0; c < a.channels.size(); ++c) {
+    const int k = b.channel_index(a.channels[c]);
+    if (k < 0) return false;
+    for (int y = 0; y < a.height; ++y)
+      for (int x = 0; x < a.width; ++x)
+        if (a.at(x, y, int(c)) != b.at(x, y, k)) return false;
+  }
+  return true;
+}
+
+// One variant's tally: raw bump re-traced with the grid (its bits checked
+// against the cached render) and its truth's profile. nullopt: skipped.
+std::optional<FitVariant> load_variant(const std::filesystem::path& folder, const json& variant,
+                                       const FactorGrid& grid, FitResult* result) {
+  const std::string bump = render_path(variant, "bump"),
+                    truth = render_path(variant, "displacement");
+  // A render deleted from the cache leaves its variant out (the held-out
+  // test deletes a family's).
+  if (bump.empty() || truth.empty() || !std::filesystem::exists(folder / bump) ||
+      !std::filesystem::exists(folder / truth))
+    return std::nullopt;
+  std::map<std::string, std::string> attributes;
+  const Image cached = read_image((folder / bump).string(), &attributes);
+  const std::string origin = (folder / bump).string() + " (penumbra:scene metadata)";
+  const Scene scene =
+      scene_from_json(parse_json_text(attributes["penumbra:scene"], origin), origin);
+  if (scene.representation != Representation::kBump || scene.tessellation) return std::nullopt;
+  PixelTally tally;
+  const Image traced = render_tallied(scene, grid, &tally);
+  ++result->retraced;
+  if (!same_pixels(traced, cached)) {
+    ++result->retraced_different;
+    return std::nullopt;
+  }
+  const double scale = radiance_scale(scene);
+  FitVariant v;
+  v.id = variant.at("id").get<std::string>();
+  v.family = variant.at("scene").get<std::string>();
+  v.data = {v.id, profile_tally(cached, tally, scale),
+            terminator_profile(read_image((folder / truth).string()), scale)};
+  return v;
+}
+
+// sqrt(mean of squares) of values[i] over `index`, NaNs left out.
+double pooled(const std::vector<double>& values, const std::vector<std::size_t>& index) {
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i : index)
+    if (std::isfinite(values[i])) sum += values[i] * values[i], ++n;
+  return n ? std::sqrt(sum / double(n)) : std::numeric_limits<double>::quiet_NaN();
+}
+
+std::vector<std::size_t> all_of(std::size_t n) {
+  std::vector<std::size_t> index(n);
+  for (std::size_t i = 0; i < n; ++i) index[i] = i;
+  return index;
+}
+
+// A statistic of a set of variants and its percentile-bootstrap interval
+// over them: `statistic` is given the indices of one resample.
+template <typename Statistic>
+PooledError bootstrap(const std::vector<std::size_t>& index, int resamples, std::uint64_t seed,
+                      Statistic&& statistic) {
+  PooledError e{statistic(index), {}};
+  std::mt19937_64 rng(seed);
+  std::vector<double> draws;
+  std::vector<std::size_t> sample(index.size());
+  for (int r = 0; r < resamples; ++r) {
+    for (std::size_t& s : sample) s = index[uniform_index(rng, index.size())];
+    const double d = statistic(sample);
+    if (std::isfinite(d)) draws.push_back(d);
+  }
+  if (draws.empty()) return {e.value, {e.value, e.value}};
+  std::sort(draws.begin(), draws.end());
+  e.interval = {quantile(draws, 0.5 * (1.0 - kConfidence)),
+                quantile(draws, 0.5 * (1.0 + kConfidence))};
+  return e;
+}
+
+PooledError pooled_error(const std::vector<double>& values, const std::vector<std::size_t>& index,
+                         const FitOptions& o) {
+  return bootstrap(index, o.resamples, o.seed,
+                   [&](const std::vector<std::size_t>& s) { return pooled(values, s); });
+}
+
+std::vector<TallyVariant> data_of(const std::vector<FitVariant>& variants,
+                                  const std::vector<std::size_t>& index) {
+  std::vector<TallyVariant> data;
+  for (std::size_t i : index) data.push_back(variants[i].data);
+  return data;
+}
+
+// Per variant (all of them), the terminator RMSE of table g.
+std::vector<double> rmse_of(const std::vector<FitVariant>& variants, const std::vector<double>& g) {
+  std::vector<double> rmse;
+  for (const FitVariant& v : variants) rmse.push_back(tally_rmse(v.data, g));
+  return rmse;
+}
+
+std::map<std::string, std::vector<std::size_t>> families(const std::vector<FitVariant>& variants) {
+  std::map<std::string, std::vector<std::size_t>> f;
+  for (std::size_t i = 0; i < variants.size(); ++i) f[variants[i].family].push_back(i);
+  return f;
+}
+
+std::vector<std::size_t> without(const std::vector<FitVariant>& variants,
+                                 const std::set<std::string>& left_out) {
+  std::vector<std::size_t> index;
+  for (std::size_t i = 0; i < variants.size(); ++i)
+    if (!left_out.count(variants[i].family)) index.push_back(i);
+  return index;
+}
+
+}  // namespace
+
+namespace {
+
+bool light_deviation_grid(const FactorGrid& grid) {
+  return grid.axes.size() == 2 && grid.axes[0].input == FactorInput::kLight &&
+         grid.axes[1].input == FactorInput::kDeviation;
+}
+
+// A factor of the light and deviation angles as a table at the cells'
+// centres (the vectors are any with those angles to Ng).
+template <typename Factor>
+std::vector<double> table_of(const FactorGrid& grid, Factor&& factor) {
+  std::vector<double> g(std::size_t(grid.cells()));
+  for (int c = 0; c < grid.cells(); ++c) {
+    const std::vector<double> centre = grid.centre(c);
+    const double l = radians(centre[0]), d = radians(centre[1]);
+    const Vec3 ng{0, 0, 1}, ns{std::sin(d), 0, std::cos(d)}, wi{std::sin(l), 0, std::cos(l)};
+    g[std::size_t(c)] = factor(ng, ns, wi);
+  }
+  return g;
+}
+
+// The shipped factors that are functions of light and deviation alone.
+struct GridMethod {
+  const char* id;
+  double (*factor)(const Vec3& ng, const Vec3& ns, const Vec3& wi);
+};
+constexpr GridMethod kGridMethods[] = {{"estevez2019", estevez2019},
+                                       {"deshmukh2020", deshmukh2020}};
+
+}  // namespace
+
+namespace {
+
+void say(const FitOptions& o, const std::string& line) {
+  if (o.progress) o.progress(line);
+}
+
+// The variants of the study that have an evaluator raw-bump render and
+// truth, tallied.
+void load_variants(const FitOptions& o, const json& report, FitResult* r) {
+  const std::filesystem::path folder(o.folder);
+  const json& variants = report.at("variants");
+  std::size_t done = 0;
+  for (const json& variant : variants) {
+    if (auto v = load_variant(folder, variant, o.grid, r))
+      r->variants.push_back(std::move(*v));
+    else
+      ++r->skipped;
+    if (++done % 12 == 0 || done == variants.size())
+      say(o, fmt::format("tallied raw bump: {} of {} variants", done, variants.size()));
+  }
+  if (r->variants.empty())
+    throw InputError((folder / "report.json").string(), "/variants",
+                     fmt::format("no variant with an evaluator raw-bump render and displacement "
+                                 "truth to fit ({} re-traced differ from the cache)",
+                                 r->retraced_different));
+  double outside = 0.0, total = 0.0;
+  for (const FitVariant& v : r->variants)
+    for (std::size_t b = 0; b < v.data.tally.count.size(); ++b) {
+      const double centre = (double(b) + 0.5) * v.data.tally.bin_degrees;
+      if (centre < 60.0 || centre >= 100.0) continue;
+      outside += v.data.tally.rest[b];
+      total += v.data.tally.rest[b];
+      for (const auto& [cell, light] : v.data.tally.scaled[b]) total += light;
+    }
+  // `rest` also holds the lobes no factor scales; the share is an upper bound.
+  r->outside_share = total > 0.0 ? outside / total : 0.0;
+}
+
+FloorFit floor_over(const FitResult& r, const std::string& scope,
+                    const std::vector<std::size_t>& index, const std::vector<double>& none,
+                    const FitOptions& o) {
+  FloorFit f;
+  f.scope = scope;
+  f.variants = index.size();
+  f.solution = solve_floor(r.grid, data_of(r.variants, index));
+  std::vector<double> rmse(r.variants.size(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t k = 0; k < index.size(); ++k) rmse[index[k]] = f.solution.variant_rmse[k];
+  f.floor = pooled_error(rmse, index, o);
+  f.none = pooled_error(none, index, o);
+  return f;
+}
+
+// Per variant of `test`, the RMSE of the table fitted on `train` with
+// smoothness w.
+void held_out_rmse(const FitResult& r, const std::vector<std::size_t>& train,
+                   const std::vector<std::size_t>& test, double w, std::vector<double>* rmse) {
+  FloorOptions options;
+  options.smoothness = w;
+  const FloorSolution s = solve_floor(r.grid, data_of(r.variants, train), options);
+  for (std::size_t i : test) (*rmse)[i] = tally_rmse(r.variants[i].data, s.g);
+}
+
+// The candidate smoothness with the lowest leave-one-family-out error
+// within `within` (families); the middle candidate when there is one family.
+double choose_smoothness(const FitResult& r, const std::set<std::string>& within,
+                         const FitOptions& o) {
+  if (within.size() < 2) return o.smoothness[o.smoothness.size() / 2];
+  const auto by_family = families(r.variants);
+  double best = o.smoothness.front(), best_error = std::numeric_limits<double>::infinity();
+  for (const double w : o.smoothness) {
+    std::vector<double> rmse(r.variants.size(), std::numeric_limits<double>::quiet_NaN());
+    std::vector<std::size_t> scored;
+    for (const std::string& f : within) {
+      std::set<std::string> left_out;
+      for (const auto& [name, _] : by_family)
+        if (!within.count(name) || name == f) left_out.insert(name);
+      held_out_rmse(r, without(r.variants, left_out), by_family.at(f), w, &rmse);
+      scored.insert(scored.end(), by_family.at(f).begin(), by_family.at(f).end());
+    }
+    const double e = pooled(rmse, scored);
+    if (e < best_error) best = w, best_error = e;
+  }
+  return best;
+}
+
+// Each family held out: the table fitted on the others (smoothness chosen
+// among them) on it, beside the floor and the best shipped method there.
+void fit_held_out(const FitOptions& o, const std::vector<double>& none,
+                  const std::map<std::string, std::vector<double>>& methods, FitResult* r) {
+  const auto by_family = families(r->variants);
+  std::vector<double> held(r->variants.size(), std::numeric_limits<double>::quiet_NaN());
+  for (const auto& [family, index] : by_family) {
+    if (by_family.size() < 2) break;
+    say(o, fmt::format("held out: {}", family));
+    std::set<std::string> others;
+    for (const auto& [name, _] : by_family)
+      if (name != family) others.insert(name);
+    HeldOutFit h;
+    h.family = family;
+    h.variants = index.size();
+    h.smoothness = choose_smoothness(*r, others, o);
+    held_out_rmse(*r, without(r->variants, {family}), index, h.smoothness, &held);
+    h.held_out = pooled_error(held, index, o);
+    h.in_sample = pooled(rmse_of(r->variants, r->study_floor.solution.g), index);
+    h.none = pooled_error(none, index, o);
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& [method, values] : methods)
+      if (const double e = pooled(values, index); e < best) best = e, h.best_method = method;
+    if (!h.best_method.empty()) h.best = pooled_error(methods.at(h.best_method), index, o);
+    r->held_out.push_back(h);
+  }
+  r->held_out_pooled = pooled_error(held, all_of(r->variants.size()), o);
+}
+
+}  // namespace
+
+namespace {
+
+// Each shipped method's pooled error and its share of the improvement the
+// study floor achieves over raw bump, paired over the same resamples.
+void fit_shares(const FitOptions& o, const std::vector<double>& none,
+                const std::map<std::string, std::vector<double>>& methods, FitResult* r) {
+  // The study floor's index is every variant, in order.
+  const std::vector<double>& floor = r->study_floor.solution.variant_rmse;
+  const std::vector<std::size_t> index = all_of(r->variants.size());
+  for (const auto& [method, values] : methods) {
+    MethodShare s;
+    s.method = method;
+    s.error = pooled_error(values, index, o);
+    s.share = bootstrap(index, o.resamples, o.seed, [&](const std::vector<std::size_t>& k) {
+      const double e_none = pooled(none, k);
+      return (e_none - pooled(values, k)) / (e_none - pooled(floor, k));
+    });
+    for (const GridMethod& m : kGridMethods) {
+      if (method != m.id || !light_deviation_grid(r->grid)) continue;
+      s.on_grid_inputs = true;
+      s.grid_error = pooled(rmse_of(r->variants, table_of(r->grid, m.factor)), index);
+      s.resolution_error = std::abs(s.grid_error - s.error.value);
+    }
+    r->shares.push_back(s);
+  }
+  std::sort(r->shares.begin(), r->shares.end(), [](const MethodShare& a, const MethodShare& b) {
+    return a.error.value < b.error.value;
+  });
+}
+
+// estevez2019's 1/8 refitted: on every variant, per bootstrap resample
+// (refitted each time; fewer resamples, each is a search), and per family
+// held out.
+void fit_constants(const FitOptions& o, FitResult* r) {
+  if (!light_deviation_grid(r->grid)) return;
+  say(o, "fitting estevez2019's constant");
+  const std::vector<std::size_t> index = all_of(r->variants.size());
+  FittedConstant c;
+  c.method = "estevez2019";
+  c.constant = "k in alpha^2 = k tan^2(delta)";
+  c.published = 1.0 / 8.0;
+  c.fitted = fit_estevez2019_k(data_of(r->variants, index), r->grid);
+  c.in_sample = pooled(rmse_of(r->variants, estevez2019_table(r->grid, c.fitted)), index);
+  c.at_published = pooled(rmse_of(r->variants, estevez2019_table(r->grid, c.published)), index);
+  const int resamples = std::min(o.resamples, 200);
+  c.interval = bootstrap(index, resamples, o.seed, [&](const std::vector<std::size_t>& k) {
+                 return fit_estevez2019_k(data_of(r->variants, k), r->grid);
+               }).interval;
+  std::vector<double> held(r->variants.size(), std::numeric_limits<double>::quiet_NaN());
+  for (const auto& [family, members] : families(r->variants)) {
+    const double k =
+        fit_estevez2019_k(data_of(r->variants, without(r->variants, {family})), r->grid);
+    const std::vector<double> g = estevez2019_table(r->grid, k);
+    for (std::size_t i : members) held[i] = tally_rmse(r->variants[i].data, g);
+  }
+  c.held_out = pooled(held, index);
+  r->constants.push_back(c);
+}
+
+}  // namespace
+
+std::vector<double> estevez2019_table(const FactorGrid& grid, double k) {
+  return table_of(grid, [k](const Vec3& ng, const Vec3& ns, const Vec3& wi) {
+    return estevez2019_g1(ng, wi, estevez2019_alpha2(ng, ns) * 8.0 * k);
+  });
+}
+
+double fit_estevez2019_k(const std::vector<TallyVariant>& variants, const FactorGrid& grid) {
+  const auto error = [&](double log_k) {
+    const std::vector<double> g = estevez2019_table(grid, std::exp(log_k));
+    double sum = 0.0;
+    std::size_t n = 0;
+    for (const TallyVariant& v : variants)
+      if (const double e = tally_rmse(v, g); std::isfinite(e)) sum += e * e, ++n;
+    return n ? sum / double(n) : 0.0;
+  };
+  // Golden section on log k over [1e-3, 10], to 1e-4 in log k.
+  const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
+  double a = std::log(1e-3), b = std::log(10.0);
+  double c = b - phi * (b - a), d = a + phi * (b - a);
+  double fc = error(c), fd = error(d);
+  while (b - a > 1e-4) {
+    if (fc < fd)
+      b = d, d = c, fd = fc, c = b - phi * (b - a), fc = error(c);
+    else
+      a = c, c = d, fc = fd, d = a + phi * (b - a), fd = error(d);
+  }
+  return std::exp(0.5 * (a + b));
+}
+
+FitResult fit_study(const FitOptions& o) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::filesystem::path report_path = std::filesystem::path(o.folder) / "report.json";
+  if (!std::filesystem::is_regular_file(report_path))
+    throw InputError(report_path.string(), "",
+                     "no such file (give a finished study's output folder)");
+  const json report = read_json_file(report_path.string());
+  FitResult r;
+  r.folder = o.folder;
+  r.grid = o.grid;
+  MethodErrors errors;
+  try {
+    r.study = report.at("study").value("name", "");
+    load_variants(o, report, &r);
+    errors = method_errors(report);
+  } catch (const json::exception& e) {
+    throw InputError(report_path.string(), "", fmt::format("not a study's report: {}", e.what()));
+  }
+  std::vector<double> none;
+  std::map<std::string, std::vector<double>> methods;
+  for (const FitVariant& v : r.variants) {
+    const auto row = errors.find(v.id);
+    const auto at = [&](const std::string& m) {
+      if (row == errors.end() || !row->second.count(m))
+        return std::numeric_limits<double>::quiet_NaN();
+      return row->second.at(m);
+    };
+    none.push_back(at("none"));
+    if (row != errors.end())
+      for (const auto& [m, _] : row->second)
+        if (m != "none") methods[m];
+  }
+  for (auto& [m, values] : methods)
+    for (const FitVariant& v : r.variants) {
+      const auto row = errors.find(v.id);
+      values.push_back(row != errors.end() && row->second.count(m)
+                           ? row->second.at(m)
+                           : std::numeric_limits<double>::quiet_NaN());
+    }
+  say(o, fmt::format("floor over the study's {} variants", r.variants.size()));
+  r.study_floor = floor_over(r, "study", all_of(r.variants.size()), none, o);
+  for (const auto& [family, index] : families(r.variants))
+    r.family_floors.push_back(floor_over(r, family, index, none, o));
+  fit_shares(o, none, methods, &r);
+  fit_held_out(o, none, methods, &r);
+  std::set<std::string> all_families;
+  for (const FitVariant& v : r.variants) all_families.insert(v.family);
+  r.table_smoothness = choose_smoothness(r, all_families, o);
+  FloorOptions options;
+  options.smoothness = r.table_smoothness;
+  r.table = {r.grid,
+             solve_floor(r.grid, data_of(r.variants, all_of(r.variants.size())), options).g};
+  fit_constants(o, &r);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+namespace {
+
+json interval_json(const PooledError& e) {
+  return {e.value, e.interval.low, e.interval.high};
+}
+
+json floor_json(const FloorFit& f) {
+  return {{"scope", f.scope},
+          {"variants", f.variants},
+          {"floor", interval_json(f.floor)},
+          {"none", interval_json(f.none)},
+          {"kkt_residual", f.solution.kkt_residual}};
+}
+
+json grid_json(const FactorGrid& grid) {
+  json axes = json::array();
+  for (const FactorAxis& a : grid.axes)
+    axes.push_back(
+        {{"input",
+          std::string(name_of(std::span<const EnumName<FactorInput>>(kFactorInputNames), a.input))},
+         {"min_deg", a.min_deg},
+         {"max_deg", a.max_deg},
+         {"step_deg", a.step_deg}});
+  return axes;
+}
+
+json result_json(const FitResult& r) {
+  json j{{"study", r.study},
+         {"unit",
+          "terminator-profile RMSE, fraction of albedo*E/pi, pooled over variants as a "
+          "root mean square; intervals: 95 % percentile bootstrap over variants"},
+         {"grid", grid_json(r.grid)},
+         {"variants", r.variants.size()},
+         {"skipped", r.skipped},
+         {"retraced", r.retraced},
+         {"retraced_different", r.retraced_different},
+         {"outside_grid_share", r.outside_share},
+         {"floor", floor_json(r.study_floor)},
+         {"held_out_pooled", interval_json(r.held_out_pooled)},
+         {"table_smoothness", r.table_smoothness},
+         {"seconds", r.seconds}};
+  for (const FloorFit& f : r.family_floors) j["family_floors"].push_back(floor_json(f));
+  for (const HeldOutFit& h : r.held_out)
+    j["held_out"].push_back({{"family", h.family},
+                             {"variants", h.variants},
+                             {"smoothness", h.smoothness},
+                             {"held_out", interval_json(h.held_out)},
+                             {"in_sample_floor", h.in_sample},
+                             {"none", interval_json(h.none)},
+                             {"best_method", h.best_method},
+                             {"best", interval_json(h.best)}});
+  for (const MethodShare& s : r.shares) {
+    json m{
+        {"method", s.method}, {"error", interval_json(s.error)}, {"share", interval_json(s.share)}};
+    if (s.on_grid_inputs)
+      m["on_grid"] = {{"error", s.grid_error}, {"resolution_error", s.resolution_error}};
+    j["methods"].push_back(m);
+  }
+  for (const FittedConstant& c : r.constants)
+    j["constants"].push_back({{"method", c.method},
+                              {"constant", c.constant},
+                              {"published", c.published},
+                              {"fitted", {c.fitted, c.interval.low, c.interval.high}},
+                              {"error_fitted_in_sample", c.in_sample},
+                              {"error_published", c.at_published},
+                              {"error_fitted_held_out", c.held_out}});
+  return j;
+}
+
+// One row per number: what, scope, value, interval, unit.
+std::string result_csv(const FitResult& r) {
+  const std::string unit = "fraction of albedo*E/pi (pooled terminator RMSE)";
+  std::string csv = "quantity,scope,value,low,high,unit\n";
+  const auto row = [&](const std::string& q, const std::string& scope, const PooledError& e,
+                       const std::string& u) {
+    csv += fmt::format("{},{},{:.9g},{:.9g},{:.9g},{}\n", q, scope, e.value, e.interval.low,
+                       e.interval.high, u);
+  };
+  row("floor", "study", r.study_floor.floor, unit);
+  row("none", "study", r.study_floor.none, unit);
+  for (const FloorFit& f : r.family_floors) row("floor", f.scope, f.floor, unit);
+  for (const HeldOutFit& h : r.held_out) row("fitted_table_held_out", h.family, h.held_out, unit);
+  row("fitted_table_held_out", "study", r.held_out_pooled, unit);
+  for (const MethodShare& s : r.shares) {
+    row("error:" + s.method, "study", s.error, unit);
+    row("share:" + s.method, "study", s.share, "fraction of the floor's improvement on raw bump");
+  }
+  for (const FittedConstant& c : r.constants)
+    row("constant:" + c.method, "study", {c.fitted, c.interval}, c.constant);
+  return csv;
+}
+
+}  // namespace
+
+void write_fit(const FitResult& r, const std::filesystem::path& out) {
+  std::filesystem::create_directories(out);
+  write_text_file((out / "fit.json").string(), result_json(r).dump(2) + "\n");
+  write_text_file((out / "fit.csv").string(), result_csv(r));
+  const json table{{"grid", grid_json(r.table.grid)},
+                   {"smoothness", r.table_smoothness},
+                   {"values", r.table.values},
+                   {"note", "G per cell, first axis fastest; outside the grid G = 1"}};
+  write_text_file((out / "table.json").string(), table.dump(1) + "\n");
+}
+
+}  // namespace penumbra

@@ -1,0 +1,130 @@
+// `penumbra fit`: what any terminator factor of given inputs could achieve
+// on a finished study's variants (analysis/achievable.h), how much of it
+// each shipped method captures, and a table fitted without the scene family
+// it is measured on.
+//
+// Reads the study folder's report.json and the cached renders it names:
+// each variant's raw-bump render (evaluator, bump, `none`) and its ground
+// truth (evaluator, displacement). Raw bump is re-traced with the tally
+// (render_tallied), which must give the cached image's bits; a variant
+// whose re-traced image differs is left out and counted.
+//
+// Errors are the terminator-profile RMSE (analysis/metrics.h, fraction of
+// albedo*E/pi), pooled over variants as a root mean square, the quantity
+// the floor minimises: E = sqrt(mean over variants of RMSE^2).
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "analysis/achievable.h"
+#include "analysis/statistics.h"
+#include "core/factor_table.h"
+
+namespace penumbra {
+
+// The grid `fit` uses for the inputs light and deviation: light [50, 120)
+// degrees in 1-degree cells (the profile's terminator region is [60, 100) of
+// the pixel-mean light angle; samples of a pixel spread a few degrees around
+// it), deviation [0, 36) in 3-degree cells; G in [0, 2]. Light outside the
+// grid keeps G = 1; fit.json reports what share of the tallied light that is.
+FactorGrid default_fit_grid();
+
+struct FitOptions {
+  std::string folder;  // a finished study's output folder
+  FactorGrid grid = default_fit_grid();
+  // Candidate weights of the smoothness prior (FloorOptions::smoothness) for
+  // the held-out tables, each chosen by leave-one-family-out within the
+  // families it is fitted on.
+  std::vector<double> smoothness = {0.01, 0.1, 1.0};
+  int resamples = 2000;  // bootstrap over variants
+  std::uint64_t seed = 1;
+  std::function<void(const std::string&)> progress;  // one line per step
+};
+
+// A pooled error E over a set of variants and its 95 % percentile-bootstrap
+// interval over those variants.
+struct PooledError {
+  double value = 0.0;
+  Interval interval;
+};
+
+struct FitVariant {
+  std::string id, family;  // family: the variant's scene
+  TallyVariant data;
+};
+
+struct FloorFit {
+  std::string scope;  // "study" or a family
+  std::size_t variants = 0;
+  PooledError floor, none;
+  FloorSolution solution;
+};
+
+struct HeldOutFit {
+  std::string family;
+  std::size_t variants = 0;
+  double smoothness = 0.0;  // chosen without this family
+  PooledError held_out;     // the table fitted without the family, on it
+  double in_sample = 0.0;   // the study floor (fitted with it) on it
+  PooledError none;
+  std::string best_method;  // the shipped method with the lowest E on the family
+  PooledError best;
+};
+
+struct MethodShare {
+  std::string method;
+  PooledError error;
+  // (E_none - E_method) / (E_none - E_floor) against the study floor.
+  PooledError share;
+  // Methods whose factor is a function of the grid's inputs: E of their
+  // table at the cells' centres through the tally (cannot beat the floor),
+  // and how far that is from their rendered E (the grid's resolution error).
+  bool on_grid_inputs = false;
+  double grid_error = 0.0, resolution_error = 0.0;
+};
+
+struct FittedConstant {
+  std::string method, constant;
+  double published = 0.0, fitted = 0.0;
+  Interval interval;          // bootstrap over variants, refitted per resample
+  double in_sample = 0.0;     // E at the fitted value, all variants
+  double at_published = 0.0;  // E at the published value, all variants
+  double held_out = 0.0;      // E with the value fitted without each family, pooled
+};
+
+struct FitResult {
+  std::string folder, study;
+  FactorGrid grid;
+  std::vector<FitVariant> variants;
+  std::size_t retraced = 0, retraced_different = 0, skipped = 0;
+  double outside_share = 0.0;  // of the terminator bins' tallied light, outside the grid
+  FloorFit study_floor;
+  std::vector<FloorFit> family_floors;
+  std::vector<HeldOutFit> held_out;
+  PooledError held_out_pooled;  // every family's held-out errors pooled
+  std::vector<MethodShare> shares;
+  std::vector<FittedConstant> constants;
+  FactorTable table;  // fitted on every variant, smoothness chosen by leave-one-family-out
+  double table_smoothness = 0.0;
+  double seconds = 0.0;
+};
+
+// InputError naming report.json for a folder that is not a finished study
+// or holds no variant to fit.
+FitResult fit_study(const FitOptions& options);
+
+// estevez2019's factor with alpha^2 = k tan^2(delta) (the published k is
+// 1/8) on a light,deviation grid, at the cells' centres.
+std::vector<double> estevez2019_table(const FactorGrid& grid, double k);
+// The k minimising the mean squared terminator RMSE of estevez2019_table
+// over `variants` (golden section on log k in [1e-3, 10]).
+double fit_estevez2019_k(const std::vector<TallyVariant>& variants, const FactorGrid& grid);
+
+// fit.json (everything), fit.csv (one row per number) and table.json (the
+// fitted table) in `out`.
+void write_fit(const FitResult& result, const std::filesystem::path& out);
+
+}  // namespace penumbra
