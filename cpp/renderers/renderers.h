@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "render/evaluator.h"
+#include "evaluator/evaluator.h"
 #include "scene/renderer_table.h"
 #include "scene/scene.h"
 
@@ -97,7 +97,7 @@ struct RendererRun {
 RendererRun render_with(RendererKind renderer, const Scene& scene, const RenderSettings& settings);
 
 // The evaluator's renders of `scene` with each of `methods` in one pass
-// (render_methods, render/evaluator.h): images[k] has the bits render_with
+// (render_methods, evaluator/evaluator.h): images[k] has the bits render_with
 // gives for methods[k]; errors[k] says why it cannot be used (NaN or Inf
 // values, as render_with would throw), "" when it can.
 struct MethodsRun {

@@ -6,7 +6,7 @@
 
 #include "core/vec.h"
 #include "image/image_io.h"
-#include "render/evaluator.h"
+#include "evaluator/evaluator.h"
 #include "renderers/renderers.h"
 #include "scene/scene_json.h"
 #include "util/resource_usage.h"

@@ -194,7 +194,7 @@ Image render_into_cache(const Job& job, const RenderCache& cache, double timeout
       {"penumbra:representation", to_string(job.representation)},
       {"penumbra:radiance_unit", "W m^-2 sr^-1"}};
   // What a truth's cost is made of: the mesh build, or none when the
-  // process's mesh cache held it (render/displaced_mesh.h).
+  // process's mesh cache held it (evaluator/displaced_mesh.h).
   if (job.renderer == RendererKind::kEvaluator && run.stats.triangles > 0) {
     attributes.emplace_back(
         "penumbra:mesh_build_seconds",

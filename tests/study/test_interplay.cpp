@@ -19,7 +19,7 @@
 #include "analysis/metrics.h"
 #include "image/bump_maps.h"
 #include "image/image_io.h"
-#include "render/evaluator.h"
+#include "evaluator/evaluator.h"
 #include "scene/scene_json.h"
 #include "study/study.h"
 #include "util/files.h"

@@ -24,7 +24,7 @@
 #include "analysis/contour.h"
 #include "analysis/metrics.h"
 #include "image/image_io.h"
-#include "render/evaluator.h"
+#include "evaluator/evaluator.h"
 #include "scene/scene_json.h"
 #include "study/cache.h"
 #include "study/figures.h"

@@ -23,7 +23,7 @@
 #include "core/random.h"
 #include "core/shape.h"
 #include "core/vec.h"
-#include "render/embree_mesh.h"
+#include "evaluator/embree_mesh.h"
 
 namespace penumbra {
 

@@ -1,4 +1,4 @@
-#include "render/evaluator.h"
+#include "evaluator/evaluator.h"
 
 #include <algorithm>
 #include <atomic>
@@ -18,8 +18,8 @@
 #include "core/random.h"
 #include "core/ray_packet.h"
 #include "core/shading.h"
-#include "render/displaced_mesh.h"
-#include "render/lowpoly_mesh.h"
+#include "evaluator/displaced_mesh.h"
+#include "evaluator/lowpoly_mesh.h"
 
 namespace penumbra {
 

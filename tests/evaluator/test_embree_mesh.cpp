@@ -14,8 +14,8 @@
 #include "core/grid_mesh.h"
 #include "core/height.h"
 #include "core/random.h"
-#include "render/embree_mesh.h"
-#include "render/embree_rounding.h"
+#include "evaluator/embree_mesh.h"
+#include "evaluator/embree_rounding.h"
 
 namespace penumbra {
 namespace {

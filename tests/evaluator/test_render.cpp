@@ -13,8 +13,8 @@
 
 #include "core/random.h"
 #include "core/shading.h"
-#include "render/displaced_mesh.h"
-#include "render/evaluator.h"
+#include "evaluator/displaced_mesh.h"
+#include "evaluator/evaluator.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {

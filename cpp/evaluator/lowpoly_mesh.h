@@ -10,7 +10,7 @@
 
 #include "core/shadow_origin.h"
 #include "core/tessellation.h"
-#include "render/embree_mesh.h"
+#include "evaluator/embree_mesh.h"
 
 namespace penumbra {
 

@@ -1,4 +1,4 @@
-#include "render/embree_mesh.h"
+#include "evaluator/embree_mesh.h"
 
 #include <algorithm>
 #include <cmath>

@@ -15,7 +15,7 @@
 #include "export/export.h"
 #include "image/bump_maps.h"
 #include "image/image_io.h"
-#include "render/evaluator.h"
+#include "evaluator/evaluator.h"
 #include "renderers/renderers.h"
 #include "scene/scene_json.h"
 #include "study/cache.h"

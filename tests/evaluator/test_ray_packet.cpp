@@ -18,8 +18,8 @@
 #include "analysis/metrics.h"
 #include "core/random.h"
 #include "core/ray_packet.h"
-#include "render/embree_rounding.h"
-#include "render/evaluator.h"
+#include "evaluator/embree_rounding.h"
+#include "evaluator/evaluator.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {
@@ -244,7 +244,7 @@ TEST(Render, PacketsGiveTheScalarPathsBits) {
       {"sphere-noise.json", {"/terminator/method=\"microshadow-chan2018\""}, true},
       // Displacement: the mesh's camera and shadow rays in Embree packets.
       // The first is the scene and ray on which rtcOccluded16 never returned
-      // (render/embree_mesh.h): 8 x 8 pixels, 1 spp.
+      // (evaluator/embree_mesh.h): 8 x 8 pixels, 1 spp.
       {"sphere-grating.json",
        {"/representation=\"displacement\"", "/displacement/edge_length=0.003", "/camera/width=8",
         "/camera/height=8", "/camera/spp=1"},

@@ -1,4 +1,4 @@
-#include "render/displaced_mesh.h"
+#include "evaluator/displaced_mesh.h"
 
 #include "core/grid_mesh.h"
 
@@ -12,7 +12,7 @@
 
 #include <fmt/format.h>
 
-#include "render/embree_mesh.h"
+#include "evaluator/embree_mesh.h"
 
 namespace penumbra {
 

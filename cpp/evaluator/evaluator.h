@@ -42,7 +42,7 @@ struct RenderOptions {
   // whichever worker thread finished a row; must be thread-safe.
   std::function<void(double)> progress;
   // Displacement: take the mesh from this process's cache of recent meshes
-  // (render/displaced_mesh.h, shared_displaced_mesh) rather than build it.
+  // (evaluator/displaced_mesh.h, shared_displaced_mesh) rather than build it.
   bool share_meshes = true;
   // Trace camera rays in SIMD packets where the packet path applies (an
   // analytic shape without props, image maps or filtering; core/ray_packet.h).

@@ -25,7 +25,7 @@ struct TriangleHit {
 // triangles answer a ray at the same t (through a shared vertex or edge: 5
 // of 10.9 M random rays on a 25,600-triangle sphere) may they keep
 // different ones of the two, which are the same surface point to float
-// rounding (tests/render/test_embree_mesh.cpp).
+// rounding (tests/evaluator/test_embree_mesh.cpp).
 // - kFastBuild: Embree's Morton builder (RTC_BUILD_QUALITY_LOW). On the
 //   default sphere at edge 0.0015 (17.9 M triangles, 2 cores, with the
 //   shared buffers below) it builds in 5.1 to 6.1 CPU-s against 8.8 to 12.9,
@@ -57,7 +57,7 @@ class EmbreeMesh {
   // samples): the same hits as intersect(), found[k] saying whether hits[k]
   // was set; the same bits too where Embree's packet and single-ray kernels
   // round alike (its AVX-512 kernels, not its AVX2 ones with compact
-  // leaves: there t differs by float ulps; tests/render/embree_rounding.h).
+  // leaves: there t differs by float ulps; tests/evaluator/embree_rounding.h).
   // Eight lanes, not sixteen: Embree 3.13.5's rtcOccluded16 (the Debian 12
   // build, AVX-512) never returned for one shadow ray of the default
   // sphere's truth, where rtcOccluded8 and rtcOccluded1 answered alike

@@ -1,4 +1,4 @@
-#include "render/lowpoly_mesh.h"
+#include "evaluator/lowpoly_mesh.h"
 
 namespace penumbra {
 

@@ -14,7 +14,7 @@
 #include "core/random.h"
 #include "core/shadow_origin.h"
 #include "core/tessellation.h"
-#include "render/evaluator.h"
+#include "evaluator/evaluator.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {

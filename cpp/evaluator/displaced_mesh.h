@@ -13,7 +13,7 @@
 #include <string>
 
 #include "core/shape.h"
-#include "render/embree_mesh.h"
+#include "evaluator/embree_mesh.h"
 #include "scene/scene.h"
 
 namespace penumbra {
