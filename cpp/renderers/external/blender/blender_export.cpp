@@ -1,3 +1,5 @@
+// The Blender exporter: the scene as a job for harness/blender_render.py and a
+// mesh. In Blender's part of the cache key (code_digest.h).
 #include <cmath>
 
 #include <fmt/format.h>
@@ -6,8 +8,8 @@
 #include <filesystem>
 
 #include "core/tessellation.h"
-#include "export/export.h"
 #include "image/image_io.h"
+#include "renderers/external/blender/blender.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {
@@ -65,7 +67,8 @@ namespace {
 // What Blender 3.4 Cycles cannot express; ExportError says why.
 void check_blender_scene(const Scene& scene) {
   const TerminatorMethod method = scene.terminator.method.method;
-  if (!offers(RendererKind::kBlender, scene.representation, method))
+  const RendererInfo& info = blender_entry().info;
+  if (!offers(info, scene.representation, method))
     throw ExportError(fmt::format(
         "Blender Cycles 3.4 offers `none`, `chiang2019` and `cycles34` (bump only; both the "
         "Bump node) and `shading-offset`; "
@@ -83,7 +86,7 @@ void check_blender_scene(const Scene& scene) {
     throw ExportError("Blender export supports Lambertian materials only (specular_weight 0)");
   if (!scene.props.empty())
     throw ExportError("Blender export: props are evaluator-only (remove /props)");
-  refuse_unoffered(scene, RendererKind::kBlender, "Blender");
+  refuse_unoffered(scene, info, "Blender");
   // Cycles 3.4 applies its terminator term to any closure normal other than
   // the shading normal: a Normal Map node always gets it, and a normal map
   // cannot reach the Displacement socket that raw bump goes through.
@@ -95,7 +98,7 @@ void check_blender_scene(const Scene& scene) {
         method_info(method).id));
   // Cycles' object "Geometry Offset" is its only shadow-ray offset; 0 turns
   // it off, which is `none`.
-  if (!offers(RendererKind::kBlender, scene.offset.method))
+  if (!offers(info, scene.offset.method))
     throw ExportError(fmt::format(
         "Blender Cycles 3.4 offers the shadow-ray offsets `none` and `cycles-geometry-offset`; "
         "`{}` is not available",

@@ -14,8 +14,9 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
-#include "export/export.h"
-#include "renderers/external.h"
+#include "renderers/external/blender/blender.h"
+#include "renderers/external/blender/blender_sessions.h"
+#include "renderers/external/external.h"
 #include "util/data_files.h"
 #include "util/files.h"
 #include "util/process.h"
@@ -24,8 +25,6 @@
 namespace penumbra {
 namespace fs = std::filesystem;
 using namespace external;
-
-namespace external {
 
 std::string blender_script(const RenderSettings& s) {
   std::string script = s.blender_script;
@@ -36,8 +35,6 @@ std::string blender_script(const RenderSettings& s) {
     throw RendererError(fmt::format("blender: the harness script {} is missing", script));
   return fs::absolute(script).string();
 }
-
-}  // namespace external
 
 namespace {
 
@@ -125,7 +122,7 @@ std::unique_ptr<BlenderSessions::Session> BlenderSessions::acquire(const std::st
     }
   if (work_.empty()) {
     std::string pattern =
-        (fs::path(folder_) / work_folder_pattern(to_string(RendererKind::kBlender))).string();
+        (fs::path(folder_) / work_folder_pattern(blender_entry().info.id)).string();
     if (!::mkdtemp(pattern.data()))
       throw RendererError(fmt::format("cannot create a work folder in {}", folder_));
     work_ = fs::absolute(pattern).string();
@@ -230,13 +227,12 @@ struct SessionLease {
 
 }  // namespace
 
-namespace external {
-
 RendererRun render_blender(const Scene& scene, const RenderSettings& settings) {
+  const RendererInfo& info = blender_entry().info;
   const BlenderExport job = export_blender(scene);
-  const std::string exe = executable_for(RendererKind::kBlender, settings);
+  const std::string exe = executable_for(info, settings);
   const std::string script = blender_script(settings);
-  WorkDir work(settings.log_path, RendererKind::kBlender);
+  WorkDir work(settings.log_path, info);
   try {
     write_blender_files(job, work.path.string());
   } catch (const std::exception& e) {  // the work folder, not the user's output
@@ -251,10 +247,8 @@ RendererRun render_blender(const Scene& scene, const RenderSettings& settings) {
     lease.session->cwd = work.path.string(), lease.session->log_path = settings.log_path;
   }
   const double seconds = serve_blender_job(*lease.session, work, settings);
-  const Image colour =
-      read_renderer_image(RendererKind::kBlender, (work.path / "render.exr").string());
-  return with_geometry(RendererKind::kBlender, colour, seconds, scene, settings, work);
+  const Image colour = read_renderer_image(info, (work.path / "render.exr").string());
+  return with_geometry(info, colour, seconds, scene, settings, work);
 }
 
-}  // namespace external
 }  // namespace penumbra

@@ -1,3 +1,5 @@
+// The POV-Ray exporter: the scene as SDL. In POV-Ray's part of the cache key
+// (code_digest.h).
 #include <algorithm>
 #include <cmath>
 
@@ -7,8 +9,8 @@
 
 #include "core/surface_map.h"
 #include "core/tessellation.h"
-#include "export/export.h"
 #include "image/image_io.h"
+#include "renderers/external/povray/povray.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {
@@ -118,7 +120,8 @@ namespace {
 
 // What POV-Ray 3.7 cannot express; ExportError says why.
 void check_povray_scene(const Scene& scene) {
-  if (!offers(RendererKind::kPovray, scene.representation, scene.terminator.method.method))
+  const RendererInfo& info = povray_entry().info;
+  if (!offers(info, scene.representation, scene.terminator.method.method))
     throw ExportError(
         fmt::format("POV-Ray has no shadow-terminator method; it renders only `none` (got `{}`)",
                     method_info(scene.terminator.method.method).id));
@@ -130,10 +133,10 @@ void check_povray_scene(const Scene& scene) {
     throw ExportError("POV-Ray export supports Lambertian materials only (specular_weight 0)");
   if (!scene.props.empty())
     throw ExportError("POV-Ray export: props are evaluator-only (remove /props)");
-  refuse_unoffered(scene, RendererKind::kPovray, "POV-Ray");
+  refuse_unoffered(scene, info, "POV-Ray");
   // POV-Ray starts shadow rays at the hit itself: the smooth-shading
   // terminator cannot be moved there (reference sheet, section 6).
-  if (!offers(RendererKind::kPovray, scene.offset.method))
+  if (!offers(info, scene.offset.method))
     throw ExportError(
         fmt::format("POV-Ray has no shadow-ray offset; it offers only `none` (got offset `{}`)",
                     offset_method_info(scene.offset.method).id));
@@ -503,7 +506,7 @@ PovrayExport export_povray(const Scene& scene) {
 void write_povray_files(const PovrayExport& job, const std::string& folder) {
   const std::filesystem::path dir(folder);
   if (!job.map.pixels.empty()) write_exr(job.map, (dir / kPovrayMapFile).string());
-  write_text_file((dir / "scene.pov").string(), job.sdl);
+  write_text_file((dir / kPovraySceneFile).string(), job.sdl);
 }
 
 }  // namespace penumbra
