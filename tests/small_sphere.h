@@ -6,7 +6,7 @@
 #include <cstring>
 #include <string>
 
-#include "render/evaluator.h"
+#include "evaluator/evaluator.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {

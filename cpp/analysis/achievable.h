@@ -4,7 +4,7 @@
 //
 // A factor G multiplies raw bump's light at each shading point. Raw bump's
 // render, tallied per terminator-profile bin and grid cell (the evaluator's
-// tally, render/evaluator.h), makes the profile of any G that is constant
+// tally, evaluator/evaluator.h), makes the profile of any G that is constant
 // per cell a linear function of G's cells:
 //   P_b(G) = (r_b + sum_c t_bc G_c) / n_b
 // with n_b the bin's pixels, r_b the light G does not scale (other lobes,

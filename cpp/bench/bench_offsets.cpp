@@ -25,8 +25,8 @@
 
 #include "core/random.h"
 #include "core/shadow_origin.h"
-#include "render/evaluator.h"
-#include "render/lowpoly_mesh.h"
+#include "evaluator/evaluator.h"
+#include "evaluator/lowpoly_mesh.h"
 #include "scene/scene_json.h"
 
 namespace {

@@ -9,7 +9,6 @@
 
 #include "cli/command.h"
 #include "cli/stop_signals.h"
-#include "export/export.h"
 #include "image/image_io.h"
 #include "renderers/renderers.h"
 #include "util/strict_json.h"

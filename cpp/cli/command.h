@@ -14,7 +14,7 @@
 
 #include "cli/exit_codes.h"
 #include "core/bump_pyramid.h"
-#include "scene/renderer_table.h"
+#include "renderers/registry.h"
 #include "scene/scene.h"
 #include "scene/scene_json.h"
 #include "util/parallel.h"

@@ -8,7 +8,6 @@
 
 #include "cli/command.h"
 #include "core/terminator.h"
-#include "export/export.h"
 #include "renderers/renderers.h"
 #include "util/strict_json.h"
 

@@ -77,7 +77,7 @@ void print_summary(const RenderArgs& a, RendererKind renderer, const Scene& scen
                    const RendererRun& run, std::ostream& out) {
   const Image& image = run.image;
   const RenderStats& stats = run.stats;
-  if (renderer != RendererKind::kEvaluator) {
+  if (renderer_info(renderer).external()) {
     out << fmt::format(
         "wrote {} ({}x{}, {} spp, {}, method {}, {}): {} {:.2f} s wall, evaluator geometry pass "
         "{:.2f} s\n",
@@ -103,7 +103,7 @@ int render(const RenderArgs& a, const CommandContext& c) {
   const std::optional<RendererKind> renderer = renderer_from_id(a.renderer);
   if (!renderer)
     throw UsageError(
-        fmt::format("--renderer: expected evaluator, povray or blender, got \"{}\"", a.renderer));
+        fmt::format("--renderer: expected {}, got \"{}\"", renderer_choices(""), a.renderer));
   const LoadedScene loaded = read_scene(a.scene, a.scene_args);
   const Scene& scene = loaded.scene;
   check_outputs(a, *renderer, loaded);
@@ -118,8 +118,8 @@ int render(const RenderArgs& a, const CommandContext& c) {
     if (StopSignals::interrupted().load()) throw RenderCancelled("interrupted");
     progress(f);
   };
-  if (*renderer != RendererKind::kEvaluator) check_offered(*renderer, scene);
-  if (*renderer != RendererKind::kEvaluator && !a.quiet)
+  check_offered(*renderer, scene);  // the evaluator offers everything
+  if (renderer_info(*renderer).external() && !a.quiet)
     c.err << fmt::format("running {} (log {}) ...\n", to_string(*renderer), settings.log_path);
   const RendererRun run = render_with(*renderer, scene, settings);
   progress.finish();

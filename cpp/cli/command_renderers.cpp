@@ -1,4 +1,4 @@
-// `penumbra renderers`: the renderer table (scene/renderer_table.h) with the
+// `penumbra renderers`: the renderer table (renderers/registry.h) with the
 // methods and offsets each offers.
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -32,11 +32,11 @@ json renderer_json(const RendererInfo& info) {
           {"executable", info.executable},
           {"executable_variable", info.executable_variable},
           {"note", info.note},
-          {"bump_methods", method_ids(methods_offered(info.kind, Representation::kBump))},
+          {"bump_methods", method_ids(methods_offered(info, Representation::kBump))},
           {"smooth_and_displacement_methods",
-           method_ids(methods_offered(info.kind, Representation::kDisplacement))},
+           method_ids(methods_offered(info, Representation::kDisplacement))},
           {"methods_why_not", info.methods_why_not},
-          {"offsets", offset_ids(offsets_offered(info.kind))},
+          {"offsets", offset_ids(offsets_offered(info))},
           {"offsets_why_not", info.offsets_why_not},
           {"props", info.props},
           {"height_maps", info.height_maps},
@@ -83,11 +83,12 @@ Command add_renderers_command(CLI::App& app, SharedOptions&) {
   return {cmd, [as_json](const CommandContext& c) {
             if (*as_json) {
               json list = json::array();
-              for (const RendererInfo& info : renderer_table()) list.push_back(renderer_json(info));
+              for (RendererKind r : all_renderers())
+                list.push_back(renderer_json(renderer_info(r)));
               c.out << list.dump(2) << "\n";
               return kExitOk;
             }
-            for (const RendererInfo& info : renderer_table()) print_renderer(info, c.out);
+            for (RendererKind r : all_renderers()) print_renderer(renderer_info(r), c.out);
             return kExitOk;
           }};
 }

@@ -77,7 +77,7 @@ struct GridWriter {
   void resize(std::size_t vertices, std::size_t side_triangles, std::size_t triangles) {
     mesh.side_triangles = side_triangles;
     // One spare float: a BVH that reads the vertices in place may load the
-    // last one 16 bytes wide (render/embree_mesh.cpp).
+    // last one 16 bytes wide (evaluator/embree_mesh.cpp).
     mesh.positions.reserve(3 * vertices + 1);
     mesh.positions.resize(3 * vertices);
     if (normals == GridNormals::kExact) mesh.normals.resize(3 * vertices);

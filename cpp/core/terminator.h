@@ -92,7 +92,7 @@ struct MethodInfo {
   bool needs_visibility = false;
   // Shading draws random numbers from the pixel's stream (a stochastic
   // model): its samples cannot be shared with other methods' renders
-  // (render/evaluator.h, render_methods).
+  // (evaluator/evaluator.h, render_methods).
   bool draws_random = false;
 };
 

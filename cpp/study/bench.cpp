@@ -5,8 +5,8 @@
 #include <fmt/format.h>
 
 #include "core/vec.h"
+#include "evaluator/evaluator.h"
 #include "image/image_io.h"
-#include "render/evaluator.h"
 #include "renderers/renderers.h"
 #include "scene/scene_json.h"
 #include "util/resource_usage.h"

@@ -12,7 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "image/image.h"
-#include "scene/renderer_table.h"
+#include "renderers/registry.h"
 
 namespace penumbra {
 

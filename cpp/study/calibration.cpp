@@ -8,7 +8,6 @@
 
 #include "analysis/measure.h"
 #include "analysis/metrics_json.h"
-#include "export/export.h"
 #include "image/image_io.h"
 #include "scene/scene_json.h"
 #include "study/execute.h"

@@ -4,6 +4,7 @@
 #include <charconv>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <tuple>
 
@@ -24,43 +25,7 @@ double msamples(const Scene& scene) {
   return double(scene.camera.width) * scene.camera.height * scene.camera.spp / 1e6;
 }
 
-// Core-seconds per render kind: fixed + per 10^6 pixel samples + per 10^6
-// mesh triangles (the displaced truths' and Blender's meshes), fitted to the
-// cache headers of cold runs of the smoke, quick and default studies on a
-// 2-core AMD EPYC (2 renders at a time, one thread each; Blender 3.4.1,
-// POV-Ray 3.7). Kinds those studies do not render are marked "as" the kind
-// they are priced like. Only used for kinds of which the study's own cache
-// holds no render yet.
-struct BuiltInCost {
-  RendererKind renderer;
-  Representation representation;
-  bool tessellated;
-  RenderCostModel model;
-};
-constexpr BuiltInCost kBuiltInCosts[] = {
-    {RendererKind::kEvaluator, Representation::kSmooth, false, {0.01, 0.144, 0.0}},  // as bump
-    {RendererKind::kEvaluator, Representation::kSmooth, true, {0.01, 0.248, 0.0}},
-    {RendererKind::kEvaluator, Representation::kBump, false, {0.01, 0.144, 0.0}},
-    {RendererKind::kEvaluator, Representation::kBump, true, {0.01, 0.248, 0.0}},  // as smooth
-    {RendererKind::kEvaluator, Representation::kDisplacement, false, {0.05, 0.8, 0.12}},
-    {RendererKind::kEvaluator, Representation::kDisplacement, true, {0.05, 0.8, 0.12}},
-    {RendererKind::kPovray, Representation::kSmooth, false, {0.5, 4.55, 0.0}},  // as bump
-    {RendererKind::kPovray, Representation::kSmooth, true, {0.5, 3.78, 0.0}},
-    {RendererKind::kPovray, Representation::kBump, false, {0.5, 4.55, 0.0}},
-    {RendererKind::kPovray, Representation::kBump, true, {0.5, 4.55, 0.0}},  // as bump
-    {RendererKind::kPovray, Representation::kDisplacement, false, {0.8, 54.3, 0.0}},
-    {RendererKind::kPovray, Representation::kDisplacement, true, {0.8, 54.3, 0.0}},
-    {RendererKind::kBlender, Representation::kSmooth, false, {0.3, 2.42, 0.0}},  // as bump
-    {RendererKind::kBlender, Representation::kSmooth, true, {0.3, 1.08, 0.0}},
-    {RendererKind::kBlender, Representation::kBump, false, {0.3, 2.42, 0.0}},
-    {RendererKind::kBlender, Representation::kBump, true, {0.3, 2.42, 0.0}},  // as bump
-    {RendererKind::kBlender, Representation::kDisplacement, false, {1.0, 2.0, 1.5}},
-    {RendererKind::kBlender, Representation::kDisplacement, true, {1.0, 2.0, 1.5}},
-};
-
-// Starting a serving Blender (once per worker that renders with it) and
-// probing the renderers' versions, core-seconds.
-constexpr double kBlenderStartSeconds = 5.0;
+// Probing the renderers' versions, core-seconds.
 constexpr double kProbeSeconds = 2.0;
 // The comparisons (metrics, intervals, pictures) and the figures, wall
 // seconds on 2 cores: fixed + per comparison (default study: 2,136
@@ -71,11 +36,12 @@ constexpr double kReportSecondsPerComparison = 0.04;
 RenderCostModel model_for(const Kind& kind) {
   if (const auto m = built_in_cost(std::get<0>(kind), std::get<1>(kind), std::get<2>(kind)))
     return *m;
-  // A kind missing from the table is priced like the dearest, so that an
-  // estimate errs on the safe side (the tests keep the table complete).
+  // A kind missing from its renderer's costs is priced like the dearest, so
+  // that an estimate errs on the safe side (the tests keep the costs complete).
   RenderCostModel dearest;
-  for (const BuiltInCost& c : kBuiltInCosts)
-    dearest.per_msample = std::max(dearest.per_msample, c.model.per_msample);
+  for (RendererKind r : all_renderers())
+    for (const BuiltInCost& c : renderer(r).costs)
+      dearest.per_msample = std::max(dearest.per_msample, c.model.per_msample);
   return dearest;
 }
 
@@ -117,12 +83,18 @@ double median(std::vector<double> values) {
 
 }  // namespace
 
+// The built-in prices (RendererEntry::costs, in each renderer's entry) are
+// core-seconds per render kind: fixed + per 10^6 pixel samples + per 10^6
+// mesh triangles (the displaced truths' and Blender's meshes), fitted to the
+// cache headers of cold runs of the smoke, quick and default studies on a
+// 2-core AMD EPYC (2 renders at a time, one thread each; Blender 3.4.1,
+// POV-Ray 3.7). Kinds those studies do not render are marked "as" the kind
+// they are priced like. Only used for kinds of which the study's own cache
+// holds no render yet.
 std::optional<RenderCostModel> built_in_cost(RendererKind renderer, Representation representation,
                                              bool tessellated) {
-  for (const BuiltInCost& c : kBuiltInCosts)
-    if (c.renderer == renderer && c.representation == representation &&
-        c.tessellated == tessellated)
-      return c.model;
+  for (const BuiltInCost& c : penumbra::renderer(renderer).costs)
+    if (c.representation == representation && c.tessellated == tessellated) return c.model;
   return std::nullopt;
 }
 
@@ -180,18 +152,19 @@ CostEstimate estimate_cost(const Plan& plan, const RenderCache& cache,
   std::map<Kind, CostLine> lines = price_lines(plan, cache, to_render);
   std::map<Kind, double> work;  // 10^6 pixel samples to render, per kind
   CostEstimate estimate;
-  bool blender = false;
+  std::set<RendererKind> renderers;  // that have renders to do
   for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
     if (!to_render[i]) continue;
     const Kind kind = kind_of(plan.jobs[i]);
     lines[kind].core_seconds += job_core_seconds(plan.jobs[i], lines[kind].model);
     work[kind] += msamples(plan.jobs[i].scene);
-    blender |= plan.jobs[i].renderer == RendererKind::kBlender;
+    renderers.insert(plan.jobs[i].renderer);
   }
   for (auto& [kind, line] : lines) {
     if (line.measured > 0) {  // price_lines left the slowest and fastest rates here
       const double median_rate = line.model.per_msample;
-      line.core_seconds_low = line.core_seconds + (line.core_seconds_low - median_rate) * work[kind];
+      line.core_seconds_low =
+          line.core_seconds + (line.core_seconds_low - median_rate) * work[kind];
       line.core_seconds_high =
           line.core_seconds + (line.core_seconds_high - median_rate) * work[kind];
     }
@@ -206,8 +179,8 @@ CostEstimate estimate_cost(const Plan& plan, const RenderCache& cache,
   estimate.report_seconds =
       kReportFixedSeconds + kReportSecondsPerComparison * double(estimate.comparisons);
   estimate.cores = std::max(1, cores);
-  const double starts =
-      kProbeSeconds + (blender ? kBlenderStartSeconds * double(estimate.cores) : 0.0);
+  double starts = kProbeSeconds;
+  for (RendererKind r : renderers) starts += renderer(r).start_seconds * double(estimate.cores);
   estimate.wall_seconds =
       (estimate.core_seconds + estimate.checks_core_seconds + starts) / double(estimate.cores) +
       estimate.report_seconds;

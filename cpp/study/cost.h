@@ -5,19 +5,20 @@
 //
 // A render's cost is a fixed part (starting the renderer, reading the scene,
 // writing the EXR) plus parts proportional to its pixel samples and to the
-// triangles of the mesh it builds. The built-in table holds these per kind of
-// render, measured on a 2-core machine (cost.cpp says how); a kind the study's
-// own cache already holds renders of is priced from those instead (every
-// cache entry records its wall time and thread count). The convergence
-// checks are priced from the first round the dry run can see, times the
-// ratio of all rounds to the first measured on the shipped studies.
+// triangles of the mesh it builds (RenderCostModel, renderers/renderer.h).
+// Each renderer's entry holds these per kind of render, measured on a 2-core
+// machine (cost.cpp says how); a kind the study's own cache already holds
+// renders of is priced from those instead (every cache entry records its
+// wall time and thread count). The convergence checks are priced from the
+// first round the dry run can see, times the ratio of all rounds to the
+// first measured on the shipped studies.
 #pragma once
 
 #include <cstddef>
 #include <optional>
 #include <vector>
 
-#include "scene/renderer_table.h"
+#include "renderers/registry.h"
 #include "scene/scene.h"
 
 namespace penumbra {
@@ -30,18 +31,8 @@ class RenderCache;
 inline constexpr const char* kCostWallAttribute = "penumbra:wall_seconds";
 inline constexpr const char* kCostThreadsAttribute = "penumbra:threads";
 
-// One kind of render's cost: core-seconds = fixed + per_msample x 10^6
-// pixel samples + per_mtriangle x 10^6 mesh triangles.
-struct RenderCostModel {
-  double fixed = 0.0;
-  double per_msample = 0.0;
-  double per_mtriangle = 0.0;
-  double core_seconds(double msamples, double mtriangles) const {
-    return fixed + per_msample * msamples + per_mtriangle * mtriangles;
-  }
-};
-
-// The built-in model of a kind of render, if the table has one.
+// The built-in model of a kind of render (its renderer's entry,
+// RendererEntry::costs), if the entry has one.
 std::optional<RenderCostModel> built_in_cost(RendererKind renderer, Representation representation,
                                              bool tessellated);
 

@@ -14,7 +14,7 @@
 #include "analysis/metrics.h"
 #include "core/terminator.h"
 #include "image/image_io.h"
-#include "render/evaluator.h"
+#include "evaluator/evaluator.h"
 #include "scene/scene_json.h"
 #include "util/strict_json.h"
 

@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "render/displaced_mesh.h"
+#include "evaluator/displaced_mesh.h"
 #include "scene/scene_json.h"
 #include "study/light_angles.h"
 #include "study/names.h"

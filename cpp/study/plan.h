@@ -81,7 +81,7 @@ std::vector<std::string> axis_value_ids(const StudyAxis& axis);
 // The key of the jobs that render one after another on one worker (a local
 // worker, or one Slurm array task): the evaluator's displacement renders of
 // one geometry (they share its mesh while the process holds it:
-// render/displaced_mesh.h; the checks of a truth, the variants that differ
+// evaluator/displaced_mesh.h; the checks of a truth, the variants that differ
 // in light or material), and Blender's renders of one scene but for its
 // light, material and method (a serving Blender keeps the mesh, and the
 // material when that is the same too: harness/blender_render.py). "" for the

@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "scene/renderer_table.h"
+#include "renderers/registry.h"
 
 namespace penumbra {
 

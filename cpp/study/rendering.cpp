@@ -194,15 +194,17 @@ Image render_into_cache(const Job& job, const RenderCache& cache, double timeout
       {"penumbra:representation", to_string(job.representation)},
       {"penumbra:radiance_unit", "W m^-2 sr^-1"}};
   // What a truth's cost is made of: the mesh build, or none when the
-  // process's mesh cache held it (render/displaced_mesh.h).
-  if (job.renderer == RendererKind::kEvaluator && run.stats.triangles > 0) {
+  // process's mesh cache held it (evaluator/displaced_mesh.h). An external
+  // renderer's stats are its geometry pass's, not its cost.
+  const bool external = renderer_info(job.renderer).external();
+  if (!external && run.stats.triangles > 0) {
     attributes.emplace_back(
         "penumbra:mesh_build_seconds",
         fmt::format("{:.3f}", run.stats.mesh_reused ? 0.0 : run.stats.build_seconds));
     attributes.emplace_back("penumbra:mesh_triangles", std::to_string(run.stats.triangles));
   }
   cache.store(job.key, run.image, attributes);
-  if (job.renderer == RendererKind::kEvaluator) fs::remove(settings.log_path, ignored);
+  if (!external) fs::remove(settings.log_path, ignored);  // only a process writes a log
   return std::move(run.image);
 }
 

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "image/image.h"
+#include "renderers/external/blender/blender_sessions.h"
 #include "renderers/renderers.h"
 #include "study/cache.h"
 #include "study/plan.h"

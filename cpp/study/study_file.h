@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/filtering.h"
-#include "scene/renderer_table.h"
+#include "renderers/registry.h"
 
 namespace penumbra {
 

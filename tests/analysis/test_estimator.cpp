@@ -12,7 +12,7 @@
 #include "analysis/intervals.h"
 #include "analysis/metrics.h"
 #include "core/vec.h"
-#include "render/evaluator.h"
+#include "evaluator/evaluator.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "analysis/intervals.h"
-#include "render/evaluator.h"
+#include "evaluator/evaluator.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "analysis/metrics.h"
-#include "render/evaluator.h"
+#include "evaluator/evaluator.h"
 #include "scene/scene_json.h"
 #include "small_sphere.h"
 #include "study/comparison_store.h"

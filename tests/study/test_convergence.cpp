@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "render/evaluator.h"
+#include "evaluator/evaluator.h"
 #include "study/convergence.h"
 #include "study/plan.h"
 #include "study/study_file.h"

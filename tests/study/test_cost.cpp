@@ -54,7 +54,7 @@ class Cost : public TempDirTest {
 };
 
 TEST_F(Cost, EveryKindOfRenderHasAPositiveBuiltInModel) {
-  for (RendererKind r : {RendererKind::kEvaluator, RendererKind::kPovray, RendererKind::kBlender})
+  for (RendererKind r : all_renderers())  // a new renderer needs its prices too
     for (Representation rep :
          {Representation::kSmooth, Representation::kBump, Representation::kDisplacement})
       for (bool tessellated : {false, true}) {
@@ -111,10 +111,10 @@ TEST_F(Cost, TheConvergenceChecksArePricedFromTheirFirstRound) {
   finer.resources.triangles *= 4;
   more.scene.camera.spp *= 4;
   const CostEstimate none = estimate_cost(p, cache, std::vector<char>(p.jobs.size(), 1));
-  const CostEstimate with = estimate_cost(p, cache, std::vector<char>(p.jobs.size(), 1),
-                                          {finer, more});
-  const RenderCostModel m = *built_in_cost(RendererKind::kEvaluator,
-                                           Representation::kDisplacement, false);
+  const CostEstimate with =
+      estimate_cost(p, cache, std::vector<char>(p.jobs.size(), 1), {finer, more});
+  const RenderCostModel m =
+      *built_in_cost(RendererKind::kEvaluator, Representation::kDisplacement, false);
   const double first = m.core_seconds(4096e-6, finer.resources.triangles / 1e6) +
                        m.core_seconds(4 * 4096e-6, truth.resources.triangles / 1e6);
   EXPECT_EQ(with.first_checks, 2u);

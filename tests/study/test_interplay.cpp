@@ -17,9 +17,9 @@
 #include "temp_dir_test.h"
 
 #include "analysis/metrics.h"
+#include "evaluator/evaluator.h"
 #include "image/bump_maps.h"
 #include "image/image_io.h"
-#include "render/evaluator.h"
 #include "scene/scene_json.h"
 #include "study/study.h"
 #include "util/files.h"

@@ -23,8 +23,8 @@
 
 #include "analysis/contour.h"
 #include "analysis/metrics.h"
+#include "evaluator/evaluator.h"
 #include "image/image_io.h"
-#include "render/evaluator.h"
 #include "scene/scene_json.h"
 #include "study/cache.h"
 #include "study/figures.h"

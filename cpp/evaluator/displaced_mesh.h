@@ -1,0 +1,75 @@
+// The displaced surface P' = P + A h(P) N(P) as a fine triangle mesh traced
+// with Embree: the ground truth of the bump representations.
+//
+// The mesh is a regular grid over the shape's (u, v) parameters, so a hit's
+// parameters follow from the primitive id and barycentrics without storing
+// anything per triangle; shading then evaluates the exact displaced normal at
+// those parameters. Only the occlusion test relies on the flat triangles.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "core/shape.h"
+#include "evaluator/embree_mesh.h"
+#include "scene/scene.h"
+
+namespace penumbra {
+
+struct MeshHit {
+  double t = 0.0;
+  SurfaceGeometry geometry;  // base-surface geometry under the hit
+};
+
+class DisplacedMesh {
+ public:
+  // Builds the mesh and its BVH. Edge length from scene.displacement.
+  explicit DisplacedMesh(const Scene& scene);
+  ~DisplacedMesh();
+  DisplacedMesh(const DisplacedMesh&) = delete;
+  DisplacedMesh& operator=(const DisplacedMesh&) = delete;
+
+  std::optional<MeshHit> intersect(const Ray& ray) const;
+  // intersect() of n <= kPacketRays rays at once (one Embree packet); the
+  // same hits, found[k] saying whether hits[k] was set.
+  static constexpr std::size_t kPacketRays = EmbreeMesh::kPacketRays;
+  void intersect_packet(const Ray* rays, std::size_t n, MeshHit* hits, bool* found) const;
+  bool occluded(const Ray& ray, double t_max) const;
+  // occluded() of n <= kPacketRays rays at once.
+  void occluded_packet(const Ray* rays, const double* t_max, std::size_t n, bool* blocked) const;
+
+  std::size_t triangle_count() const { return triangles_; }
+  std::size_t vertex_count() const { return vertices_; }
+  // Distance by which a shadow ray leaves the exact surface point: an upper
+  // bound of how far a triangle's interior deviates from the surface (chord
+  // sagitta e^2 kappa / 8), so the ray clears the local facets.
+  double shadow_offset() const { return shadow_offset_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::size_t triangles_ = 0, vertices_ = 0;
+  double shadow_offset_ = 0.0;
+};
+
+// What a mesh is built from: the shape, the height field, its amplitude and
+// the edge length (hex floats, exact). Renders whose keys are equal can share
+// one mesh; light, material, camera and method do not enter.
+std::string displaced_mesh_key(const Scene& scene);
+
+// The mesh for `scene`, shared with the other renders of this process that
+// asked for the same key. A study renders one geometry many times (the
+// truth's convergence checks at more samples; variants that differ in light,
+// material or method), and the build is most of a truth's cost. The meshes
+// built last are kept while they hold at most kMeshCacheTriangles triangles
+// together (about 67 bytes each with the BVH, measured: half a GiB); a
+// render asking for a key being built waits for that build. Queries on a
+// shared mesh are thread-safe (Embree's rtcIntersect1/rtcOccluded1 on a
+// committed scene). `reused` says whether it came from the cache.
+inline constexpr std::size_t kMeshCacheTriangles = 8'000'000;
+std::shared_ptr<const DisplacedMesh> shared_displaced_mesh(const Scene& scene,
+                                                           bool* reused = nullptr);
+
+}  // namespace penumbra

@@ -1,0 +1,1007 @@
+#include "evaluator/evaluator.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <type_traits>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <fmt/format.h>
+
+#include "core/random.h"
+#include "core/ray_packet.h"
+#include "core/shading.h"
+#include "evaluator/displaced_mesh.h"
+#include "evaluator/lowpoly_mesh.h"
+
+namespace penumbra {
+
+const std::vector<std::string>& evaluator_channels() {
+  static const std::vector<std::string> channels{
+      "R", "G", "B", "A", "analysis.theta", "analysis.deviation", "analysis.G", "analysis.view"};
+  return channels;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct LightSample {
+  Vec3 wi;
+  double irradiance = 0.0;  // W/m^2 on a plane facing the light
+  double distance = 0.0;    // to the light; infinite for a distant light
+};
+
+LightSample sample_light(const Light& light, const Vec3& p) {
+  if (light.type == LightType::kDistant)
+    return {light.direction, light.irradiance, std::numeric_limits<double>::infinity()};
+  const Vec3 to_light = light.position - p;
+  const double d2 = length_squared(to_light);
+  const double d = std::sqrt(d2);
+  return {to_light / d, light.intensity / d2, d};
+}
+
+// What a camera ray sees: the surface point to shade and how to leave it.
+struct SurfaceHit {
+  double t = 0.0;
+  SurfaceGeometry geometry;  // base surface (under the hit, for displacement and meshes)
+  Vec3 shading_point;        // where light is evaluated and shadow rays start
+  // The true normal and the interpolated one, as the surface stores them
+  // (not yet turned towards the viewer). Analytic shapes: both geometry.n.
+  Vec3 ng, ni;
+  LowPolyHit triangle;  // low-poly meshes only
+  bool on_prop = false;
+};
+
+// Where a shadow ray starts, and which mesh triangle it ignores.
+struct ShadowRay {
+  Vec3 origin;
+  std::uint32_t skip = kNoTriangle;
+};
+
+// The normals at a hit after turning them towards the viewer.
+struct FacingNormals {
+  Vec3 ng, ns;
+  bool backfacing = false;
+};
+
+// Smooth and bump: the analytic base shape is both what the camera sees and
+// what casts shadows (that is what makes the bump terminator hard).
+class BaseTracer {
+ public:
+  explicit BaseTracer(const Scene& scene)
+      : shape_(scene.shape), t_min_(1e-7 * scene.shape.radius) {}
+
+  bool primary(const Ray& ray, SurfaceHit* out) const {
+    Hit hit;
+    if (!penumbra::intersect(shape_, ray, 0.0, std::numeric_limits<double>::infinity(), &hit))
+      return false;
+    out->t = hit.t;
+    out->geometry = hit.geometry;
+    out->shading_point = hit.geometry.p;
+    out->ng = out->ni = hit.geometry.n;
+    return true;
+  }
+  ShadowRay shadow_ray(const SurfaceHit& hit, const FacingNormals&, const Vec3&) const {
+    return {hit.shading_point};
+  }
+  // The origin lies on the analytic surface, so the root at t = 0 is skipped
+  // by a relative epsilon rather than by moving the origin.
+  bool occluded(const ShadowRay& ray, const Vec3& wi, double distance) const {
+    return penumbra::occluded(shape_, {ray.origin, wi}, t_min_, distance);
+  }
+  double shadow_t_min() const { return t_min_; }
+
+ private:
+  const Shape& shape_;
+  double t_min_;
+};
+
+// Displacement: the displaced surface, tessellated, is what the camera sees
+// and what casts shadows. Shading happens at the exact displaced point with
+// the exact normal; shadow rays leave it lifted off the facets.
+class MeshTracer {
+ public:
+  MeshTracer(const Scene& scene, const DisplacedMesh& mesh)
+      : mesh_(mesh),
+        amplitude_(scene.height.amplitude),
+        height_(scene.height.function),
+        map_(scene.height.height_map()),
+        shape_(scene.shape) {}
+
+  bool primary(const Ray& ray, SurfaceHit* out) const {
+    const auto hit = mesh_.intersect(ray);
+    if (!hit) return false;
+    set_hit(*hit, out);
+    return true;
+  }
+  // primary() of n <= kPacketRays rays at once: one Embree packet, which
+  // traverses the BVH faster than n single rays when they are coherent.
+  static constexpr std::size_t kPacketRays = DisplacedMesh::kPacketRays;
+  void primary_packet(const Ray* rays, std::size_t n, SurfaceHit* out, bool* found) const {
+    MeshHit hits[kPacketRays];
+    mesh_.intersect_packet(rays, n, hits, found);
+    for (std::size_t k = 0; k < n; ++k)
+      if (found[k]) set_hit(hits[k], &out[k]);
+  }
+  ShadowRay shadow_ray(const SurfaceHit& hit, const FacingNormals& n, const Vec3&) const {
+    return {hit.shading_point + n.ns * mesh_.shadow_offset()};
+  }
+  bool occluded(const ShadowRay& ray, const Vec3& wi, double distance) const {
+    return mesh_.occluded({ray.origin, wi}, distance);
+  }
+  // occluded() of n <= kPacketRays shadow rays at once.
+  void occluded_packet(const Ray* rays, const double* distance, std::size_t n,
+                       bool* blocked) const {
+    mesh_.occluded_packet(rays, distance, n, blocked);
+  }
+
+ private:
+  void set_hit(const MeshHit& hit, SurfaceHit* out) const {
+    out->t = hit.t;
+    out->geometry = hit.geometry;
+    out->ng = out->ni = hit.geometry.n;
+    if (hit.geometry.displaceable)
+      out->shading_point =
+          displaced_point(hit.geometry, amplitude_, height_at(height_, map_, shape_, hit.geometry));
+    else
+      out->shading_point = hit.geometry.p;
+  }
+
+  const DisplacedMesh& mesh_;
+  double amplitude_;
+  const HeightFunction& height_;
+  const SurfaceMap* map_;
+  const Shape& shape_;
+};
+
+// A low-poly tessellation: the camera and the shadow rays see flat
+// triangles, shading uses the interpolated normal, and the scene's offset
+// method decides where shadow rays leave the triangle.
+class LowPolyTracer {
+ public:
+  LowPolyTracer(const Scene& scene, const LowPolyMesh& mesh)
+      : mesh_(mesh), offset_(scene.offset), t_min_(1e-6 * scene.shape.radius) {}
+
+  bool primary(const Ray& ray, SurfaceHit* out) const {
+    const auto hit = mesh_.intersect(ray);
+    if (!hit) return false;
+    out->t = hit->t;
+    out->geometry = hit->base;
+    out->shading_point = hit->p;
+    out->ng = hit->ng;
+    out->ni = hit->ni;
+    out->triangle = *hit;
+    return true;
+  }
+  ShadowRay shadow_ray(const SurfaceHit& hit, const FacingNormals& n, const Vec3& wi) const {
+    ShadowQuery q;
+    q.triangle = mesh_.shading_triangle(hit.triangle, n.backfacing);
+    q.p = hit.shading_point;
+    q.ng = n.ng;
+    q.ns = n.ns;
+    q.wi = wi;
+    q.backfacing = n.backfacing;
+    const ShadowOrigin o = shadow_ray_origin(offset_, q);
+    return {o.origin, o.skip_self ? hit.triangle.triangle : kNoTriangle};
+  }
+  bool occluded(const ShadowRay& ray, const Vec3& wi, double distance) const {
+    return mesh_.occluded({ray.origin, wi}, t_min_, distance, ray.skip);
+  }
+
+ private:
+  const LowPolyMesh& mesh_;
+  const OffsetSettings& offset_;
+  double t_min_;
+};
+
+// The scene's props: analytic spheres that every tracer's rays also meet.
+class Props {
+ public:
+  explicit Props(const Scene& scene) : props_(scene.props) {}
+
+  bool empty() const { return props_.empty(); }
+  // Replaces *out when a prop is nearer than out->t (or when `found` is false).
+  bool nearer(const Ray& ray, bool found, SurfaceHit* out) const {
+    bool replaced = false;
+    for (const Shape& prop : props_) {
+      Hit hit;
+      const double t_max = found || replaced ? out->t : std::numeric_limits<double>::infinity();
+      if (!penumbra::intersect(prop, ray, 0.0, t_max, &hit)) continue;
+      *out = SurfaceHit{};
+      out->t = hit.t;
+      out->geometry = hit.geometry;
+      out->geometry.displaceable = false;
+      out->shading_point = hit.geometry.p;
+      out->ng = out->ni = hit.geometry.n;
+      out->on_prop = true;
+      replaced = true;
+    }
+    return replaced;
+  }
+  bool occluded(const Vec3& origin, const Vec3& wi, double distance) const {
+    for (const Shape& prop : props_)
+      if (penumbra::occluded(prop, {origin, wi}, 1e-7 * prop.radius, distance)) return true;
+    return false;
+  }
+
+ private:
+  const std::vector<Shape>& props_;
+};
+
+// How the surface point under a camera sample moves per pixel step, on the
+// tangent plane at the hit (ray differentials, Igehy 1999), scaled by
+// max(1/8, 1/sqrt(spp)) as pbrt-v4 scales camera differentials
+// (CameraBase::Approximate_dp_dxy): the samples of a pixel share its
+// footprint, so each filters only its share.
+struct PixelDifferentials {
+  Vec3 dpdx, dpdy;
+};
+
+PixelDifferentials pixel_differentials(const Camera& c, const Ray& ray, double t, const Vec3& n) {
+  const double scale = std::max(0.125, 1.0 / std::sqrt(double(c.spp)));
+  const Vec3 step_x = c.right / double(c.width), step_y = c.up / double(c.height);
+  double cos_n = dot(ray.direction, n);
+  if (std::abs(cos_n) < 1e-9) cos_n = std::copysign(1e-9, cos_n);
+  const auto on_plane = [&](const Vec3& step) {
+    Vec3 moved = step;  // orthographic: the origin moves, the direction does not
+    if (c.projection == Projection::kPerspective) {
+      // The unnormalised direction D = direction + x0 right + y0 up has
+      // |D| = |direction|^2 / <d, direction> when right and up are
+      // orthogonal to direction; the unit direction turns by
+      // (step - d <d, step>) / |D|, and the point at distance t with it.
+      const double length_d = length_squared(c.direction) / dot(ray.direction, c.direction);
+      moved = (step - ray.direction * dot(ray.direction, step)) * (t / length_d);
+    }
+    return (moved - ray.direction * (dot(moved, n) / cos_n)) * scale;
+  };
+  return {on_plane(step_x), on_plane(step_y)};
+}
+
+// The bump normal of a sample: the analytic or image height's exact
+// normal, a normal map's, or a filtered map's mean normal, which also sets
+// the sample's filtered specular lobe in *material.
+struct BumpNormals {
+  const Scene& scene;
+  const SurfaceMap* height_map;
+  const SurfaceMap* normal_map;
+  const FilteredMap* filtered;
+
+  Vec3 at(const SurfaceGeometry& g, const Ray& ray, double t, Material* material) const {
+    if (filtered) {
+      const PixelDifferentials d = pixel_differentials(scene.camera, ray, t, g.n);
+      const FilteredSample f =
+          filtered_sample(*filtered, scene.shape, g, d.dpdx, d.dpdy, material->specular_roughness);
+      material->filtered = {true, f.lobe.distribution, f.lobe.alpha2, f.tangent};
+      return f.ns;
+    }
+    if (normal_map) return normal_map_normal(*normal_map, scene.shape, g);
+    return displaced_normal(g, scene.height.amplitude,
+                            height_at(scene.height.function, height_map, scene.shape, g));
+  }
+};
+
+// A worker's packet: rays and what they hit (about 60 KiB, so on the heap).
+struct PacketBuffers {
+  SamplePacket samples;
+  RayPacket rays;
+  HitPacket hits;
+};
+
+// What every packet of a render shares: the camera and the light.
+struct PacketSetup {
+  PacketCamera camera;
+  int nx = 1;  // strata across a pixel
+  PacketLighting lighting;
+};
+
+struct PixelSums {
+  double radiance = 0.0, hits = 0.0, theta = 0.0, deviation = 0.0, g = 0.0, g_count = 0.0,
+         view = 0.0;
+};
+
+// A pass the light reaches at a sample, and the radiance it adds unless the
+// shadow ray is blocked.
+struct LitPass {
+  std::size_t pass = 0;
+  double radiance = 0.0;
+};
+
+// A sample's shadow ray waiting to be traced with others (shade_deferred):
+// its passes' contributions are lit[first, last).
+struct PendingShadow {
+  ShadowRay ray;
+  Vec3 wi;
+  double distance = 0.0;
+  std::size_t first = 0, last = 0;
+};
+
+// Where a tallied render (render_tallied) puts one pixel's unblocked light:
+// by the factor grid's cell of each sample, the part a factor scales.
+struct TallySink {
+  const FactorGrid* grid = nullptr;
+  Lobes lobes = Lobes::kDiffuse;
+  std::vector<std::pair<int, double>>* scaled = nullptr;  // (cell, light), unsorted
+  double* rest = nullptr;                                 // light no cell's G scales
+  void add(const Material& m, const ShadingPoint& p, double irradiance, double value) const {
+    const int cell = grid->cell(factor_inputs(p.ng, p.ns, p.wi, p.wo));
+    const double light =
+        cell < 0 ? 0.0 : factor_scaled_value(m, p.ns, p.wi, p.wo, lobes) * irradiance;
+    if (light > 0.0) scaled->emplace_back(cell, light);
+    *rest += value - light;
+  }
+};
+
+// The parts of a sample every method sees alike, in the channels' units.
+struct SampleAngles {
+  double theta = 0.0, deviation = 0.0, view = 0.0;  // degrees
+};
+
+void write_pixel(const PixelSums& sums, double inv_spp, float* out) {
+  const float radiance = static_cast<float>(sums.radiance * inv_spp);
+  out[0] = out[1] = out[2] = radiance;
+  out[3] = static_cast<float>(sums.hits * inv_spp);
+  if (sums.hits > 0.0) {
+    out[4] = static_cast<float>(sums.theta / sums.hits);
+    out[5] = static_cast<float>(sums.deviation / sums.hits);
+    // 0 where no sample had a factor: a method that is not a plain
+    // factor, wherever raw bump receives no light (README, channels).
+    out[6] = sums.g_count > 0.0 ? static_cast<float>(sums.g / sums.g_count) : 0.0f;
+    out[7] = static_cast<float>(sums.view / sums.hits);
+  }
+}
+
+// The jitter of sample k of a pixel within its stratum, x then y, from
+// the pixel's key: counter-based, so that where a sample lies depends on
+// nothing drawn before it (a method's random numbers while shading draw
+// from the pixel's Pcg32 stream instead), and a packet can draw its
+// samples' jitter without a chain through a generator's state.
+struct Jitter {
+  double x = 0.5, y = 0.5;  // stratum centres without jitter
+};
+Jitter sample_jitter(const Camera& camera, std::uint64_t pixel_key, int k) {
+  if (!camera.jitter) return {};
+  return {splitmix_double(pixel_key, 2 * std::uint64_t(k)),
+          splitmix_double(pixel_key, 2 * std::uint64_t(k) + 1)};
+}
+
+// The camera ray of sample (sx, sy) of pixel (i, j), at `jitter` within
+// its stratum; `orthographic_direction` is the camera's direction,
+// normalised.
+Ray camera_ray(const Camera& camera, const Vec3& orthographic_direction, int i, int j, int sx,
+               int sy, int nx, int ny, const Jitter& jitter) {
+  const double a = (sx + jitter.x) / nx;
+  const double b = (sy + jitter.y) / ny;
+  const double x0 = (i + a) / camera.width - 0.5;
+  const double y0 = 0.5 - (j + b) / camera.height;
+  if (camera.projection == Projection::kPerspective)
+    return {camera.position, normalize(camera.direction + camera.right * x0 + camera.up * y0)};
+  return {camera.position + camera.right * x0 + camera.up * y0, orthographic_direction};
+}
+
+// Shades one camera sample's hit with every pass, into one PixelSums each:
+// what every tracer and both the scalar and the packet path share.
+template <typename Tracer>
+class SampleShader {
+ public:
+  SampleShader(const Scene& scene, const Tracer& tracer, const Props& props,
+               const std::vector<TerminatorSettings>& passes)
+      : scene_(scene),
+        tracer_(tracer),
+        props_(props),
+        passes_(passes),
+        displaced_shading_(scene.representation != Representation::kSmooth),
+        is_ground_truth_(scene.representation == Representation::kDisplacement),
+        // A filter shades bump samples only: the truth is the unfiltered surface.
+        bump_{
+            scene, scene.height.height_map(), scene.height.normal_map(),
+            scene.representation == Representation::kBump ? scene.height.filtered.get() : nullptr},
+        perturbed_(scene.height.amplitude != 0.0 || bump_.normal_map) {
+    // The same visibility serves every method that reads it.
+    for (const TerminatorSettings& t : passes)
+      needs_visibility_ =
+          needs_visibility_ || (!is_ground_truth_ && method_info(t.method.method).needs_visibility);
+  }
+
+  const BumpNormals& bump() const { return bump_; }
+  // Whether a hit's shading normal is the bump normal (BumpNormals::at).
+  bool bumps() const { return displaced_shading_ && perturbed_; }
+
+  // `tally`: where the one pass's unblocked light goes as well (render_tallied).
+  void shade(const Ray& ray, const SurfaceHit& hit, Material* material, Pcg32* rng, PixelSums* sums,
+             std::uint64_t* shadow_rays, const TallySink* tally = nullptr) const;
+  // shade() but for the radiance of the passes the light reaches, which
+  // waits for the shadow ray's verdict: its contributions are appended to
+  // *lit, and the ray to trace is returned (nullopt: no pass needs it).
+  // Adding them later, in the order of the samples, gives shade()'s sums.
+  std::optional<PendingShadow> shade_deferred(const Ray& ray, const SurfaceHit& hit,
+                                              Material* material, Pcg32* rng, PixelSums* sums,
+                                              std::vector<LitPass>* lit) const;
+  // Lane k of a packet on the analytic base (BaseTracer, no props): what
+  // shade() does with the packet's values, read straight from its arrays.
+  // Copying them through a SurfaceHit first cost a tenth of the render:
+  // wider loads of a Vec3 just stored narrower wait for the store.
+  void shade_packed(const HitPacket& hits, const RayPacket& rays, std::size_t k,
+                    const Material& material, PixelSums* sums, std::uint64_t* shadow_rays) const;
+  // Every pass on one shading point, into sums, but for the radiance of
+  // the passes the light reaches: lit(pass, radiance) decides on those.
+  template <typename Lit>
+  void shade_passes(const Material& material, const ShadingPoint& point, const LightSample& light,
+                    const SampleAngles& angles, Pcg32* rng, PixelSums* sums, Lit&& lit) const;
+
+ private:
+  // What shade() computes before the passes.
+  struct Prepared {
+    FacingNormals facing;
+    LightSample light;
+    ShadingPoint point;
+    SampleAngles angles;
+  };
+  Prepared prepare(const Ray& ray, const SurfaceHit& hit, Material* material) const;
+  ShadowRay shadow_ray(const SurfaceHit& hit, const Prepared& p) const {
+    return hit.on_prop ? ShadowRay{hit.shading_point}
+                       : tracer_.shadow_ray(hit, p.facing, p.light.wi);
+  }
+
+  const Scene& scene_;
+  const Tracer& tracer_;
+  const Props& props_;
+  const std::vector<TerminatorSettings>& passes_;
+  bool displaced_shading_, is_ground_truth_;
+  BumpNormals bump_;
+  bool perturbed_;
+  bool needs_visibility_ = false;
+};
+
+template <typename Tracer>
+typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray& ray,
+                                                                      const SurfaceHit& hit,
+                                                                      Material* material) const {
+  const SurfaceGeometry& g = hit.geometry;
+  const Vec3 wo = -ray.direction;
+  Vec3 n = g.n;
+  FacingNormals facing{hit.ng, hit.ni, false};
+  Vec3 ni = hit.ni;
+  if (bumps() && g.displaceable) {
+    // The bump perturbs the analytic normal; on a mesh it is carried
+    // over to Ni, so that Ns relates to Ni as it would to N.
+    const Vec3 b = bump_.at(g, ray, hit.t, material);
+    facing.ns = hit.ni == g.n ? b : normalize(rotate_between(g.n, hit.ni, b));
+  }
+  // Two-sided: the inside of an open cylinder is seen from inside.
+  if (dot(facing.ng, wo) < 0.0) {
+    n = -n;
+    ni = -ni;
+    facing.ng = -facing.ng;
+    facing.ns = -facing.ns;
+    facing.backfacing = true;
+  }
+  const Vec3& ns = facing.ns;
+  const LightSample light = sample_light(scene_.light, hit.shading_point);
+  // On the displaced surface the true normal is Ns itself; on the
+  // analytic base Ng and Ni coincide with the base normal.
+  ShadingPoint point = is_ground_truth_ && !hit.on_prop
+                           ? ShadingPoint{ns, ns, ns, light.wi, wo}
+                           : ShadingPoint{facing.ng, ni, ns, light.wi, wo};
+  // Seen from inside (an open cylinder), the height field is inverted.
+  const double amplitude = scene_.height.amplitude;
+  if (needs_visibility_ && displaced_shading_ && g.displaceable && amplitude != 0.0)
+    point.visibility = height_field_visibility(scene_.height.function,
+                                               facing.backfacing ? -amplitude : amplitude, g.p, n);
+  // Within 1.2e-6 degrees: below what the float channels resolve.
+  const SampleAngles angles{degrees(acos_approx(dot(n, light.wi))),
+                            degrees(acos_approx(dot(ns, n))), degrees(acos_approx(dot(n, wo)))};
+  return {facing, light, point, angles};
+}
+
+template <typename Tracer>
+void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, Material* material,
+                                 Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays,
+                                 const TallySink* tally) const {
+  const Prepared p = prepare(ray, hit, material);
+  int is_blocked = -1;  // the shadow ray, traced for the first pass that needs it
+  shade_passes(*material, p.point, p.light, p.angles, rng, sums, [&](std::size_t k, double value) {
+    if (is_blocked < 0) {
+      ++*shadow_rays;
+      const ShadowRay shadow = shadow_ray(hit, p);
+      is_blocked = tracer_.occluded(shadow, p.light.wi, p.light.distance) ||
+                   props_.occluded(shadow.origin, p.light.wi, p.light.distance);
+    }
+    if (is_blocked != 0) return;
+    sums[k].radiance += value;
+    if (tally) tally->add(*material, p.point, p.light.irradiance, value);
+  });
+}
+
+template <typename Tracer>
+std::optional<PendingShadow> SampleShader<Tracer>::shade_deferred(const Ray& ray,
+                                                                  const SurfaceHit& hit,
+                                                                  Material* material, Pcg32* rng,
+                                                                  PixelSums* sums,
+                                                                  std::vector<LitPass>* lit) const {
+  const Prepared p = prepare(ray, hit, material);
+  const std::size_t first = lit->size();
+  shade_passes(*material, p.point, p.light, p.angles, rng, sums, [&](std::size_t k, double value) {
+    lit->push_back({k, value});
+  });
+  if (lit->size() == first) return std::nullopt;
+  return PendingShadow{shadow_ray(hit, p), p.light.wi, p.light.distance, first, lit->size()};
+}
+
+template <typename Tracer>
+template <typename Lit>
+void SampleShader<Tracer>::shade_passes(const Material& material, const ShadingPoint& point,
+                                        const LightSample& light, const SampleAngles& angles,
+                                        Pcg32* rng, PixelSums* sums, Lit&& lit) const {
+  for (std::size_t k = 0; k < passes_.size(); ++k) {
+    const Shaded shaded = penumbra::shade(passes_[k], material, point, rng);
+    PixelSums& s = sums[k];
+    s.hits += 1.0;
+    s.theta += angles.theta;
+    s.deviation += angles.deviation;
+    if (shaded.factor_defined) {
+      s.g += shaded.factor;
+      s.g_count += 1.0;
+    }
+    s.view += angles.view;
+    if (!(shaded.value > 0.0) || light.irradiance == 0.0) continue;
+    lit(k, shaded.value * light.irradiance);
+  }
+}
+
+template <typename Tracer>
+void SampleShader<Tracer>::shade_packed(const HitPacket& hits, const RayPacket& rays, std::size_t k,
+                                        const Material& material, PixelSums* sums,
+                                        std::uint64_t* shadow_rays) const {
+  // As shade() for a BaseTracer hit: Ng = Ni = the base normal, Ns the
+  // packet's (the base normal where nothing bumps it), both turned towards
+  // the viewer.
+  const Vec3 wo{-rays.dx[k], -rays.dy[k], -rays.dz[k]};
+  Vec3 n{hits.nx[k], hits.ny[k], hits.nz[k]};
+  Vec3 ns{hits.nsx[k], hits.nsy[k], hits.nsz[k]};
+  const bool backfacing = dot(n, wo) < 0.0;
+  if (backfacing) n = -n, ns = -ns;
+  const Vec3 p{hits.px[k], hits.py[k], hits.pz[k]};
+  const LightSample light = sample_light(scene_.light, p);
+  ShadingPoint point{n, n, ns, light.wi, wo};
+  const double amplitude = scene_.height.amplitude;
+  if (needs_visibility_ && displaced_shading_ && amplitude != 0.0)
+    point.visibility =
+        height_field_visibility(scene_.height.function, backfacing ? -amplitude : amplitude, p, n);
+  const SampleAngles angles{hits.theta[k], hits.deviation[k], hits.view[k]};
+  bool counted = false;  // the packet traced the shadow ray; count it once, as shade() does
+  shade_passes(material, point, light, angles, nullptr, sums, [&](std::size_t pass, double value) {
+    if (!counted) ++*shadow_rays, counted = true;
+    if (hits.blocked[k] == 0.0) sums[pass].radiance += value;
+  });
+}
+
+// Whether render_image traces its camera rays in packets (core/ray_packet.h):
+// on the analytic base shape (BaseTracer) with no props, no image map and no
+// filter, the packet computes what the tracer and the analytic bump do, to
+// the bit; a packet's samples are shaded without the pixel's random stream,
+// so no method may draw random numbers.
+template <typename Tracer>
+bool traces_packets(const Scene& scene, const SampleShader<Tracer>& shader,
+                    const std::vector<TerminatorSettings>& passes, const RenderOptions& options) {
+  if (!std::is_same_v<Tracer, BaseTracer> || !options.packets || !scene.props.empty() ||
+      !packet_supports(scene.shape))
+    return false;
+  const BumpNormals& bump = shader.bump();
+  if (bump.filtered || bump.normal_map || bump.height_map) return false;
+  return std::all_of(passes.begin(), passes.end(), shares_samples);
+}
+
+// The key of pixel (i, j): its jitter and its random stream derive from it.
+std::uint64_t pixel_key(const Camera& camera, int i, int j) {
+  return mix64(camera.seed ^ mix64(std::uint64_t(j) * camera.width + i));
+}
+
+// One pixel to render: where it is, its key (its jitter and its random
+// stream derive from it) and where its samples go.
+struct PixelTask {
+  int i = 0, j = 0;
+  std::uint64_t key = 0;
+  Pcg32* rng = nullptr;       // for the methods that draw random numbers while shading
+  PixelSums* sums = nullptr;  // one per pass
+  std::uint64_t* shadow_rays = nullptr;
+  const TallySink* tally = nullptr;  // render_tallied only (scalar path)
+};
+
+// The rows of a render through packets: rays, hits, bump normals, shadow
+// rays and angles a packet at a time, then each hit shaded. A packet runs
+// on across pixels (at 16 spp it holds 16 of them), and a pixel is written
+// once its last sample is shaded; each pixel's samples are shaded in the
+// order of the scalar path, so its sums are the same.
+class PacketRows {
+ public:
+  PacketRows(const Scene& scene, const PacketSetup& setup, const SampleShader<BaseTracer>& shader,
+             std::size_t pass_count, std::vector<Image>* images)
+      : scene_(scene),
+        setup_(setup),
+        shader_(shader),
+        pass_count_(pass_count),
+        images_(images),
+        buffers_(std::make_unique<PacketBuffers>()),
+        sums_(kSlots * pass_count) {}
+
+  void render_row(int j, std::uint64_t* shadow_rays);
+
+ private:
+  // Pixels with samples in flight: at most a packet's worth of pixels whose
+  // samples are all in, and the one whose samples are still coming.
+  static constexpr std::size_t kSlots = kPacketSize + 1;
+
+  void flush(std::uint64_t* shadow_rays);
+
+  const Scene& scene_;
+  const PacketSetup& setup_;
+  const SampleShader<BaseTracer>& shader_;
+  std::size_t pass_count_;
+  std::vector<Image>* images_;
+  std::unique_ptr<PacketBuffers> buffers_;
+  std::vector<PixelSums> sums_;  // pass_count_ per slot; pixel i in slot i % kSlots
+  std::size_t lane_slot_[kPacketSize]{};
+  std::vector<int> complete_;  // pixels of row j_ whose samples are all in the packets
+  int j_ = 0;
+};
+
+void PacketRows::render_row(int j, std::uint64_t* shadow_rays) {
+  const Camera& camera = scene_.camera;
+  SamplePacket& samples = buffers_->samples;
+  RayPacket& rays = buffers_->rays;
+  j_ = j;
+  rays.count = 0;
+  for (int i = 0; i < camera.width; ++i) {
+    const std::uint64_t key = pixel_key(camera, i, j);
+    const std::size_t slot = std::size_t(i) % kSlots;
+    std::fill_n(sums_.begin() + std::ptrdiff_t(slot * pass_count_), pass_count_, PixelSums{});
+    // Strata in the order of the scalar path's loops, y outer.
+    for (int sample = 0, sx = 0, sy = 0; sample < camera.spp; ++sample) {
+      const std::size_t k = rays.count++;
+      samples.i[k] = i, samples.j[k] = j;
+      samples.sx[k] = sx, samples.sy[k] = sy;
+      const Jitter jitter = sample_jitter(camera, key, sample);
+      samples.jx[k] = jitter.x, samples.jy[k] = jitter.y;
+      lane_slot_[k] = slot;
+      if (++sx == setup_.nx) sx = 0, ++sy;
+      if (rays.count == kPacketSize) flush(shadow_rays);
+    }
+    complete_.push_back(i);
+  }
+  flush(shadow_rays);
+}
+
+void PacketRows::flush(std::uint64_t* shadow_rays) {
+  RayPacket& rays = buffers_->rays;
+  HitPacket& hits = buffers_->hits;
+  if (rays.count > 0) {
+    camera_rays(setup_.camera, buffers_->samples, &rays);
+    trace_packet(scene_.shape, scene_.height.function, scene_.height.amplitude, shader_.bumps(),
+                 setup_.lighting, rays, &hits);
+  }
+  // No pass draws random numbers here (traces_packets): no stream.
+  for (std::size_t k = 0; k < rays.count; ++k)
+    if (hits.found[k] != 0.0)
+      shader_.shade_packed(hits, rays, k, scene_.material, &sums_[lane_slot_[k] * pass_count_],
+                           shadow_rays);
+  rays.count = 0;
+  const Camera& camera = scene_.camera;
+  const std::size_t channel_count = evaluator_channels().size();
+  for (const int i : complete_) {
+    const std::size_t pixel = std::size_t(j_) * camera.width + i;
+    const PixelSums* sums = &sums_[(std::size_t(i) % kSlots) * pass_count_];
+    for (std::size_t k = 0; k < pass_count_; ++k)
+      write_pixel(sums[k], 1.0 / camera.spp, &(*images_)[k].pixels[pixel * channel_count]);
+  }
+  complete_.clear();
+}
+
+// The scene's camera and light for packets, and where the tracer's shadow
+// rays start counting hits.
+template <typename Tracer>
+PacketSetup packet_setup(const Scene& scene, const Tracer& tracer) {
+  PacketSetup setup;
+  const Camera& c = scene.camera;
+  int ny;
+  strata(c.spp, &setup.nx, &ny);
+  setup.camera = {c.projection == Projection::kPerspective,
+                  c.position,
+                  c.projection == Projection::kPerspective ? c.direction : normalize(c.direction),
+                  c.right,
+                  c.up,
+                  double(c.width),
+                  double(c.height),
+                  double(setup.nx),
+                  double(ny)};
+  PacketLighting& lighting = setup.lighting;
+  lighting.distant = scene.light.type == LightType::kDistant;
+  lighting.light = lighting.distant ? scene.light.direction : scene.light.position;
+  if constexpr (std::is_same_v<Tracer, BaseTracer>) lighting.shadow_t_min = tracer.shadow_t_min();
+  return setup;
+}
+
+// One pixel's samples kPacketRays at a time, camera rays and then shadow
+// rays in packets of the tracer's: the samples are shaded in the order of
+// the strata, and the radiance the shadow rays let through is added in that
+// order too, so the sums are shade_pixel's one sample at a time.
+template <typename Tracer>
+void shade_pixel_packets(const Scene& scene, const Tracer& tracer, const Props& props,
+                         const SampleShader<Tracer>& shader, const PixelTask& pixel, int nx,
+                         int ny) {
+  constexpr std::size_t kRays = Tracer::kPacketRays;
+  const Camera& camera = scene.camera;
+  const Vec3 orthographic_direction = normalize(camera.direction);
+  Material material = scene.material;
+  Ray rays[kRays], shadow_rays[kRays];
+  SurfaceHit hits[kRays];
+  PendingShadow pending[kRays];
+  double distances[kRays];
+  bool found[kRays], blocked[kRays];
+  // Kept per thread: one allocation per pixel was 2 % of a 16-spp truth.
+  thread_local std::vector<LitPass> lit;
+  const int count = nx * ny;
+  for (int first = 0; first < count; first += int(kRays)) {
+    const std::size_t n = std::min<std::size_t>(kRays, count - first);
+    for (std::size_t k = 0; k < n; ++k) {
+      const int s = first + int(k);
+      rays[k] = camera_ray(camera, orthographic_direction, pixel.i, pixel.j, s % nx, s / nx, nx, ny,
+                           sample_jitter(camera, pixel.key, s));
+    }
+    tracer.primary_packet(rays, n, hits, found);
+    lit.clear();
+    std::size_t waiting = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      hits[k].on_prop = false;
+      material.filtered.active = false;
+      if (!(props.nearer(rays[k], found[k], &hits[k]) || found[k])) continue;
+      if (const auto p =
+              shader.shade_deferred(rays[k], hits[k], &material, pixel.rng, pixel.sums, &lit)) {
+        shadow_rays[waiting] = {p->ray.origin, p->wi};
+        distances[waiting] = p->distance;
+        pending[waiting++] = *p;
+      }
+    }
+    if (waiting > 0) tracer.occluded_packet(shadow_rays, distances, waiting, blocked);
+    for (std::size_t k = 0; k < waiting; ++k) {
+      const PendingShadow& p = pending[k];
+      ++*pixel.shadow_rays;
+      if (blocked[k] || props.occluded(p.ray.origin, p.wi, p.distance)) continue;
+      for (std::size_t c = p.first; c < p.last; ++c)
+        pixel.sums[lit[c].pass].radiance += lit[c].radiance;
+    }
+  }
+}
+
+// One pixel's samples one at a time, in the order of the strata; through
+// the tracer's packets (shade_pixel_packets) where it has them and `packets`.
+template <typename Tracer>
+void shade_pixel(const Scene& scene, const Tracer& tracer, const Props& props,
+                 const SampleShader<Tracer>& shader, const PixelTask& pixel, bool packets) {
+  const Camera& camera = scene.camera;
+  int nx, ny;
+  strata(camera.spp, &nx, &ny);
+  if constexpr (requires { Tracer::kPacketRays; }) {
+    if (packets) return shade_pixel_packets(scene, tracer, props, shader, pixel, nx, ny);
+  }
+  const Vec3 orthographic_direction = normalize(camera.direction);
+  // One per pixel, not per sample: value-initialising it (a mesh hit
+  // included) took 9% of a bump render. Every tracer sets all the
+  // fields it uses; `on_prop` is the one field only props set.
+  SurfaceHit hit;
+  Material material = scene.material;  // a filtered map sets its lobe per sample
+  for (int sy = 0; sy < ny; ++sy) {
+    for (int sx = 0; sx < nx; ++sx) {
+      const Ray ray = camera_ray(camera, orthographic_direction, pixel.i, pixel.j, sx, sy, nx, ny,
+                                 sample_jitter(camera, pixel.key, sy * nx + sx));
+      hit.on_prop = false;
+      material.filtered.active = false;
+      const bool found = tracer.primary(ray, &hit);
+      if (!(props.nearer(ray, found, &hit) || found)) continue;
+      shader.shade(ray, hit, &material, pixel.rng, pixel.sums, pixel.shadow_rays, pixel.tally);
+    }
+  }
+}
+
+// render_tallied's tally while it renders: per pixel, (cell, light) sorted
+// by cell with each cell once, and the rest, both divided by the samples.
+struct TallyRequest {
+  const FactorGrid* grid = nullptr;
+  Lobes lobes = Lobes::kDiffuse;
+  std::vector<std::vector<std::pair<int, double>>> scaled;
+  std::vector<double> rest;
+
+  void store(std::uint64_t pixel, std::vector<std::pair<int, double>>& entries, double rest_sum,
+             double inv_spp) {
+    std::sort(entries.begin(), entries.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<std::pair<int, double>>& out = scaled[pixel];
+    for (const auto& [cell, light] : entries) {
+      if (out.empty() || out.back().first != cell) out.emplace_back(cell, 0.0);
+      out.back().second += light;
+    }
+    for (auto& entry : out) entry.second *= inv_spp;
+    rest[pixel] = rest_sum * inv_spp;
+  }
+};
+
+// Renders with each of `passes` (one per image); see render_methods. With
+// `tally` (one pass), on the scalar path, tallying as it goes.
+template <typename Tracer>
+void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions& options,
+                  const std::vector<TerminatorSettings>& passes, std::vector<Image>* images,
+                  RenderStats* stats, TallyRequest* tally = nullptr) {
+  const Camera& camera = scene.camera;
+  const int width = camera.width, height = camera.height;
+  const std::size_t channel_count = evaluator_channels().size();
+  const std::size_t pass_count = passes.size();
+  const double inv_spp = 1.0 / camera.spp;
+  const Props props(scene);
+  const SampleShader<Tracer> shader(scene, tracer, props, passes);
+  const bool packets = !tally && traces_packets(scene, shader, passes, options);
+  const PacketSetup setup = packet_setup(scene, tracer);
+
+  std::atomic<int> rows_done{0};
+  std::atomic<std::uint64_t> shadow_rays{0};
+  std::mutex progress_mutex;
+  auto last_report = Clock::now();
+
+  tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+    std::uint64_t local_shadow_rays = 0;
+    std::vector<PixelSums> sums(pass_count);
+    std::vector<std::pair<int, double>> entries;  // a tallied pixel's samples
+    double rest = 0.0;
+    const TallySink sink =
+        tally ? TallySink{tally->grid, tally->lobes, &entries, &rest} : TallySink{};
+    std::optional<PacketRows> packet_rows;
+    if constexpr (std::is_same_v<Tracer, BaseTracer>)
+      if (packets) packet_rows.emplace(scene, setup, shader, pass_count, images);
+    for (int j = rows.begin(); j != rows.end(); ++j) {
+      if (packet_rows) {
+        packet_rows->render_row(j, &local_shadow_rays);
+      } else {
+        for (int i = 0; i < width; ++i) {
+          const std::uint64_t pixel = std::uint64_t(j) * width + i;
+          const std::uint64_t key = pixel_key(camera, i, j);
+          Pcg32 rng(key);
+          std::fill(sums.begin(), sums.end(), PixelSums{});
+          entries.clear();
+          rest = 0.0;
+          shade_pixel(scene, tracer, props, shader,
+                      {i, j, key, &rng, sums.data(), &local_shadow_rays, tally ? &sink : nullptr},
+                      options.packets && !tally);
+          if (tally) tally->store(pixel, entries, rest, inv_spp);
+          for (std::size_t k = 0; k < pass_count; ++k)
+            write_pixel(sums[k], inv_spp, &(*images)[k].pixels[pixel * channel_count]);
+        }
+      }
+      const int done = ++rows_done;
+      if (options.progress) {
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        const auto now = Clock::now();
+        if (done == height || now - last_report > std::chrono::milliseconds(250)) {
+          last_report = now;
+          options.progress(static_cast<double>(done) / height);
+        }
+      }
+    }
+    shadow_rays += local_shadow_rays;
+  });
+  if (stats) {
+    stats->camera_samples = std::uint64_t(width) * height * camera.spp;
+    stats->shadow_rays = shadow_rays;
+    stats->packets = packets || (requires { Tracer::kPacketRays; } && options.packets);
+  }
+}
+
+}  // namespace
+
+bool shares_samples(const TerminatorSettings& terminator) {
+  return !method_info(terminator.method.method).draws_random;
+}
+
+std::vector<Image> render_methods(const Scene& scene,
+                                  const std::vector<TerminatorSettings>& methods,
+                                  const RenderOptions& options, RenderStats* stats) {
+  if (methods.empty()) throw std::invalid_argument("render_methods: no method");
+  if (methods.size() > 1)
+    for (const TerminatorSettings& t : methods)
+      if (!shares_samples(t))
+        throw std::invalid_argument(
+            fmt::format("render_methods: {} draws random numbers while shading; render it alone",
+                        method_info(t.method.method).id));
+  const auto start = Clock::now();
+  RenderStats local;
+  std::vector<Image> images(methods.size());
+  for (Image& image : images) {
+    image.width = scene.camera.width;
+    image.height = scene.camera.height;
+    image.channels = evaluator_channels();
+    image.pixels.assign(std::size_t(image.width) * image.height * image.channels.size(), 0.0f);
+  }
+  if (scene.representation == Representation::kDisplacement) {
+    const std::shared_ptr<const DisplacedMesh> mesh =
+        options.share_meshes ? shared_displaced_mesh(scene, &local.mesh_reused)
+                             : std::make_shared<const DisplacedMesh>(scene);
+    local.triangles = mesh->triangle_count();
+    local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    render_image(scene, MeshTracer(scene, *mesh), options, methods, &images, &local);
+  } else if (scene.tessellation) {
+    const LowPolyMesh mesh(scene.shape, *scene.tessellation);
+    local.triangles = mesh.triangle_count();
+    local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    render_image(scene, LowPolyTracer(scene, mesh), options, methods, &images, &local);
+  } else {
+    render_image(scene, BaseTracer(scene), options, methods, &images, &local);
+  }
+  local.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  if (stats) *stats = local;
+  return images;
+}
+
+Image render(const Scene& scene, const RenderOptions& options, RenderStats* stats) {
+  return std::move(render_methods(scene, {scene.terminator}, options, stats).front());
+}
+
+namespace {
+
+PixelTally flatten(const TallyRequest& request, int width, int height) {
+  PixelTally tally;
+  tally.width = width;
+  tally.height = height;
+  tally.rest = request.rest;
+  tally.offsets.reserve(request.scaled.size() + 1);
+  tally.offsets.push_back(0);
+  for (const auto& pixel : request.scaled) {
+    for (const auto& [cell, light] : pixel) {
+      tally.cells.push_back(cell);
+      tally.light.push_back(light);
+    }
+    tally.offsets.push_back(static_cast<std::uint32_t>(tally.cells.size()));
+  }
+  return tally;
+}
+
+}  // namespace
+
+Image render_tallied(const Scene& scene, const FactorGrid& grid, PixelTally* tally,
+                     const RenderOptions& options, RenderStats* stats) {
+  const TerminatorSettings& t = scene.terminator;
+  if (scene.representation == Representation::kDisplacement ||
+      t.method.method != TerminatorMethod::kNone ||
+      effective_adjustment(t) != NormalAdjustment::kNone)
+    throw std::invalid_argument(
+        "render_tallied: tallies raw bump only (method none, no normal adjustment, not displaced)");
+  const auto start = Clock::now();
+  RenderStats local;
+  std::vector<Image> images(1);
+  Image& image = images.front();
+  image.width = scene.camera.width;
+  image.height = scene.camera.height;
+  image.channels = evaluator_channels();
+  image.pixels.assign(std::size_t(image.width) * image.height * image.channels.size(), 0.0f);
+  const std::size_t pixels = std::size_t(image.width) * image.height;
+  TallyRequest request{&grid, t.lobes, std::vector<std::vector<std::pair<int, double>>>(pixels),
+                       std::vector<double>(pixels, 0.0)};
+  if (scene.tessellation) {
+    const LowPolyMesh mesh(scene.shape, *scene.tessellation);
+    local.triangles = mesh.triangle_count();
+    local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    render_image(scene, LowPolyTracer(scene, mesh), options, {t}, &images, &local, &request);
+  } else {
+    render_image(scene, BaseTracer(scene), options, {t}, &images, &local, &request);
+  }
+  *tally = flatten(request, image.width, image.height);
+  local.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  if (stats) *stats = local;
+  return std::move(image);
+}
+
+}  // namespace penumbra

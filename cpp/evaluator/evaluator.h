@@ -1,0 +1,83 @@
+// The reference evaluator: direct light only, black background, real shadow
+// rays. Deterministic for a given scene (seed included) whatever the thread
+// count: every pixel draws from its own random stream and sums in a fixed order.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/factor_table.h"
+#include "image/image.h"
+#include "scene/scene.h"
+
+namespace penumbra {
+
+// Channels of every evaluator render, in this order:
+//   R, G, B      radiance (W m^-2 sr^-1), box-filtered over the pixel
+//   A            coverage: fraction of the pixel's samples that hit the object
+//   analysis.theta      degrees between wi and the base-surface normal at the
+//                       base point (for displacement: the base point under the hit)
+//   analysis.deviation  degrees between Ns and that base normal
+//   analysis.G          the terminator factor at the sample (1 for `none`)
+//   analysis.view       degrees between wo and the base-surface normal (the
+//                       view angle: 90 at the silhouette)
+// The analysis channels are means over the samples that hit (0 where none did).
+// They live in the EXR layer "analysis" because "G" alone is the green channel.
+const std::vector<std::string>& evaluator_channels();
+
+struct RenderStats {
+  std::uint64_t camera_samples = 0;
+  std::uint64_t shadow_rays = 0;
+  double seconds = 0.0;        // wall time, preparation included
+  double build_seconds = 0.0;  // displacement and low-poly meshes: mesh + BVH build
+  std::size_t triangles = 0;   // displacement and low-poly meshes: mesh size
+  bool mesh_reused = false;    // displacement: the mesh came from this process's cache
+  bool packets = false;        // camera rays were traced in SIMD packets (RenderOptions)
+};
+
+struct RenderOptions {
+  // Called with the fraction done, at most a few times per second, from
+  // whichever worker thread finished a row; must be thread-safe.
+  std::function<void(double)> progress;
+  // Displacement: take the mesh from this process's cache of recent meshes
+  // (evaluator/displaced_mesh.h, shared_displaced_mesh) rather than build it.
+  bool share_meshes = true;
+  // Trace camera rays in SIMD packets where the packet path applies (an
+  // analytic shape without props, image maps or filtering; core/ray_packet.h).
+  // It gives the same bits as the scalar path, which false forces.
+  bool packets = true;
+};
+
+Image render(const Scene& scene, const RenderOptions& options = {}, RenderStats* stats = nullptr);
+
+// Whether a method's render can share its samples with other methods' in
+// render_methods: it draws no random numbers while shading (MethodInfo::
+// draws_random; the draws come from the pixel's stream, in an order another
+// such method's draws would change).
+bool shares_samples(const TerminatorSettings& terminator);
+
+// `scene` rendered with each of `methods` in place of scene.terminator, in
+// one pass: image k has the bits that render() gives for methods[k]. Camera
+// rays, hits, bump normals, the height field's visibility and shadow rays
+// are traced once per sample for all of them, so a study's 20 methods of one
+// variant cost a few renders rather than 20. std::invalid_argument when a
+// method does not share its samples (shares_samples) or `methods` is empty.
+// stats->shadow_rays counts each shared shadow ray once.
+std::vector<Image> render_methods(const Scene& scene,
+                                  const std::vector<TerminatorSettings>& methods,
+                                  const RenderOptions& options = {}, RenderStats* stats = nullptr);
+
+// Raw bump rendered as render() renders it, to the bit, with its light
+// tallied per pixel by the cell of `grid` each sample's angles fall in
+// (core/factor_table.h, PixelTally): what any factor table on that grid
+// would make of each pixel, for the achievable floor (analysis/
+// achievable.h). Traces on the scalar path (no packets), which gives the
+// same bits. std::invalid_argument unless scene.terminator is `none` with
+// no normal adjustment on a bump or smooth render.
+Image render_tallied(const Scene& scene, const FactorGrid& grid, PixelTally* tally,
+                     const RenderOptions& options = {}, RenderStats* stats = nullptr);
+
+}  // namespace penumbra
