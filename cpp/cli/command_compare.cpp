@@ -1,6 +1,7 @@
 // `penumbra compare`: reads two images (and a mask), checks that they can be
 // compared, and prints what measure() (analysis/measure.h) measures, as text
-// or JSON, with units and intervals.
+// or JSON, with units and intervals; with --flip also mean FLIP
+// (analysis/flip.h) and its map.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -10,6 +11,8 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
+#include "analysis/flip.h"
+#include "analysis/magma.h"
 #include "analysis/measure.h"
 #include "analysis/metrics_json.h"
 #include "cli/command.h"
@@ -37,6 +40,10 @@ struct CompareArgs {
   std::optional<double> threshold;
   bool no_mask = false;     // image metrics over every pixel, the usual SSIM
   bool same_scene = false;  // different penumbra:scene geometry: exit 2, not a warning
+  // FLIP: ldr, hdr, auto or off; not given: off, or auto with --flip-map.
+  std::optional<std::string> flip;
+  std::optional<double> ppd;  // FLIP's pixels per degree
+  std::string flip_map;       // .png (magma) or .exr (float)
 };
 
 // The images and how measure() is to treat them.
@@ -148,6 +155,80 @@ void check_difference_output(const CompareArgs& a) {
   check_writable(a.difference);
 }
 
+bool is_exr(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return ext == ".exr";
+}
+
+// The FLIP that --flip asks for, none when off. auto: HDR-FLIP when both
+// images are OpenEXR (linear radiance), LDR-FLIP otherwise.
+std::optional<FlipRange> flip_range(const CompareArgs& a) {
+  const std::string mode = a.flip.value_or(a.flip_map.empty() ? "off" : "auto");
+  if (mode == "off") return std::nullopt;
+  if (mode == "ldr") return FlipRange::kLdr;
+  if (mode == "hdr") return FlipRange::kHdr;
+  return is_exr(a.reference) && is_exr(a.test) ? FlipRange::kHdr : FlipRange::kLdr;
+}
+
+// --flip-map and --ppd need FLIP; the map is .png or .exr, writable and not
+// an input. Checked before anything is read.
+void check_flip_args(const CompareArgs& a) {
+  if (!flip_range(a)) {
+    if (!a.flip_map.empty()) throw UsageError("--flip-map needs FLIP, and --flip is off");
+    if (a.ppd) throw UsageError("--ppd is FLIP's viewing distance: add --flip");
+    return;
+  }
+  if (a.flip_map.empty()) return;
+  if (!is_exr(a.flip_map))
+    check_extension(a.flip_map, ".png", "--flip-map", " (magma colours) or .exr (float values)");
+  for (const std::string& input : {a.reference, a.test, a.mask, a.difference}) {
+    std::error_code ec;
+    if (!input.empty() && fs::equivalent(a.flip_map, input, ec))
+      throw UsageError(
+          fmt::format("--flip-map {}: is {}, already a file of the comparison", a.flip_map, input));
+  }
+  check_writable(a.flip_map);
+}
+
+// FLIP of the comparison: its map, mean and interval, and how each image
+// was made linear (EXR holds linear values, other formats sRGB-encoded ones).
+struct FlipResult {
+  FlipImage map;
+  double mean = 0.0;
+  Interval interval;
+  std::string encoding[2];  // reference, test
+};
+
+FlipResult compare_flip(const CompareArgs& a, const Inputs& in, FlipRange range) {
+  auto linear = [](const Image& image, const std::string& path) {
+    return is_exr(path) ? image : srgb_decoded(image);
+  };
+  FlipOptions options;
+  options.range = range;
+  options.pixels_per_degree = a.ppd.value_or(kFlipDefaultPixelsPerDegree);
+  FlipResult r{flip_map(linear(in.test, a.test), linear(in.reference, a.reference), options),
+               0.0,
+               {},
+               {is_exr(a.reference) ? "linear" : "srgb", is_exr(a.test) ? "linear" : "srgb"}};
+  r.mean = mean_flip(r.map);
+  r.interval = mean_flip_interval(r.map);
+  return r;
+}
+
+void write_flip_map(const CompareArgs& a, const FlipResult& f) {
+  if (a.flip_map.empty()) return;
+  if (!is_exr(a.flip_map)) {
+    write_png_rgb8(a.flip_map, f.map.width, f.map.height, magma_rgb8(f.map.error));
+    return;
+  }
+  write_exr(Image{f.map.width, f.map.height, {"Y"}, f.map.error}, a.flip_map,
+            {{"penumbra:flip", fmt::format("{} of {} against {}, {:.6g} pixels per degree",
+                                           f.map.range == FlipRange::kHdr ? "HDR-FLIP" : "LDR-FLIP",
+                                           a.test, a.reference, f.map.pixels_per_degree)}});
+}
+
 std::string coverage_text(CoverageSource source, const CompareArgs& a, const MeasureOptions& o) {
   switch (source) {
     case CoverageSource::kMask:
@@ -185,6 +266,7 @@ struct Report {
   std::string coverage[2];  // reference, test
   std::string skipped;
   bool over, pass;
+  const FlipResult* flip;  // null without --flip
 };
 
 json with_interval(json metrics, const char* key, const Interval& i) {
@@ -208,6 +290,46 @@ std::string interval_note(const ComparisonIntervals& ci) {
       "intervals: 95 %, paired block bootstrap over {} bands of rows, {} resamples (seed 1), "
       "centred on the estimate: the spread over image regions, not a bias both images share",
       ci.bands, ci.resamples);
+}
+
+const char* flip_name(const FlipImage& map) {
+  return map.range == FlipRange::kHdr ? "HDR-FLIP" : "LDR-FLIP";
+}
+
+json flip_json(const FlipResult& f, const CompareArgs& a) {
+  const ExposureRange& e = f.map.exposures;
+  json doc = {{"range", f.map.range == FlipRange::kHdr ? "hdr" : "ldr"},
+              {"pixels_per_degree", f.map.pixels_per_degree},
+              {"pixels", f.map.error.size()},
+              {"mean", f.mean},
+              {"exposures", f.map.range == FlipRange::kHdr
+                                ? json{{"start", e.start}, {"stop", e.stop}, {"count", e.count}}
+                                : json()},
+              {"encoding", {{"reference", f.encoding[0]}, {"test", f.encoding[1]}}},
+              {"map", a.flip_map.empty() ? json() : json(a.flip_map)}};
+  return with_interval(std::move(doc), "mean_ci", f.interval);
+}
+
+void print_flip(const FlipResult& f, const CompareArgs& a, std::ostream& out) {
+  out << fmt::format("FLIP ({}, {:.2f} pixels per degree; mean over every pixel: {}):\n",
+                     flip_name(f.map), f.map.pixels_per_degree, f.map.error.size());
+  out << fmt::format(
+      "  mean FLIP                     {:.6f} [{:.6f}, {:.6f}] (95 % CI; {} bands of rows, {} "
+      "resamples)\n",
+      f.mean, f.interval.low, f.interval.high, kIntervalBands, kIntervalResamples);
+  const ExposureRange& e = f.map.exposures;
+  if (f.map.range == FlipRange::kHdr)
+    out << fmt::format(
+        "  exposures                     {:+.4f} to {:+.4f} stops, {} (from the "
+        "reference)\n",
+        e.start, e.stop, e.count);
+  else
+    out << "  exposures                     none (LDR-FLIP: values clamped to [0, 1])\n";
+  out << fmt::format("  inputs                        reference {}, test {} (made linear)\n",
+                     f.encoding[0], f.encoding[1]);
+  if (!a.flip_map.empty())
+    out << fmt::format("  map                           {}{}\n", a.flip_map,
+                       is_exr(a.flip_map) ? " (float, channel Y)" : " (magma)");
 }
 
 const char* ssim_kind(bool no_mask) {
@@ -237,6 +359,7 @@ json comparison_json(const Report& r) {
       {"intervals", profiled ? json(interval_note(ci)) : json()},
       {"pass", r.pass}};
   if (!profiled) doc["profile_skipped"] = r.skipped;
+  if (r.flip) doc["flip"] = flip_json(*r.flip, r.a);
   return doc;
 }
 
@@ -302,10 +425,9 @@ void print_comparison(const Report& r, std::ostream& out) {
   else
     out << fmt::format("profile and viewer metrics: not computed: {}\n", r.skipped);
   print_image(r.m.image, r.m.intervals, r.a.no_mask, out);
-  if (r.skipped.empty()) {
-    print_view(r.m.view, r.m.intervals, out);
-    out << interval_note(r.m.intervals) << "\n";
-  }
+  if (r.skipped.empty()) print_view(r.m.view, r.m.intervals, out);
+  if (r.flip) print_flip(*r.flip, r.a, out);
+  if (r.skipped.empty()) out << interval_note(r.m.intervals) << "\n";
   if (r.over)
     out << fmt::format("FAIL: profile RMSE {:.6f} above --max-profile-rmse {}\n",
                        r.m.profile.rmse_overall, r.a.max_rmse);
@@ -314,6 +436,7 @@ void print_comparison(const Report& r, std::ostream& out) {
 
 int compare(const CompareArgs& a, const CommandContext& c) {
   check_difference_output(a);
+  check_flip_args(a);
   const Inputs in = read_inputs(a);
   check_same_scene(a, c.err);
   const Measurement m = measure(in.test, in.reference, in.options);
@@ -326,6 +449,11 @@ int compare(const CompareArgs& a, const CommandContext& c) {
     write_exr(difference_image(in.test, in.reference, in.options), a.difference,
               {{"penumbra:difference", a.test + " - " + a.reference},
                {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
+  std::optional<FlipResult> flip;
+  if (const auto range = flip_range(a)) {
+    flip = compare_flip(a, in, *range);
+    write_flip_map(a, *flip);
+  }
   const Report report{a,
                       m,
                       in.options.scale,
@@ -333,7 +461,8 @@ int compare(const CompareArgs& a, const CommandContext& c) {
                        coverage_text(m.test_coverage, a, in.options)},
                       skipped,
                       over,
-                      pass};
+                      pass,
+                      flip ? &*flip : nullptr};
   if (a.json)
     c.out << comparison_json(report).dump(2) << "\n";
   else
@@ -355,6 +484,25 @@ void add_coverage_options(CLI::App* cmd, CompareArgs& a) {
       ->check(CLI::Range(0.0, 1e6));
   cmd->add_flag("--no-mask", a.no_mask,
                 "image metrics over every pixel, with the usual (unmasked) SSIM");
+}
+
+void add_flip_options(CLI::App* cmd, CompareArgs& a) {
+  cmd->add_option("--flip", a.flip,
+                  "mean FLIP (Andersson et al. 2020, 2021) with its interval: ldr, hdr, off, or "
+                  "auto (HDR-FLIP when both images are EXR, else LDR-FLIP); alone: auto; not "
+                  "given: off (write --flip=MODE before the images)")
+      ->expected(0, 1)
+      ->default_str("auto")
+      ->type_name("MODE")
+      ->check(CLI::IsMember({"ldr", "hdr", "auto", "off"}));
+  cmd->add_option("--ppd", a.ppd,
+                  "FLIP's viewer: pixels per degree of visual angle (default 67.02: a 0.7 m wide "
+                  "3840-pixel monitor seen from 0.7 m)")
+      ->type_name("PIXELS")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--flip-map", a.flip_map,
+                  "write the FLIP error map: .png in the magma colours, .exr as float (channel "
+                  "Y); implies --flip");
 }
 
 }  // namespace
@@ -379,6 +527,7 @@ Command add_compare_command(CLI::App& app, SharedOptions&) {
                   "exit 3 when the overall profile RMSE exceeds this")
       ->check(CLI::NonNegativeNumber);
   add_coverage_options(cmd, *a);
+  add_flip_options(cmd, *a);
   cmd->add_flag("--same-scene", a->same_scene,
                 "exit 2 when the images' penumbra:scene show different geometry, camera "
                 "or light (default: a warning)");

@@ -22,8 +22,10 @@ constexpr std::array<NormalAdjustmentInfo, 8> kAdjustments{{
      false},
     {NormalAdjustment::kCycles50, "cycles50",
      "blender/cycles 3b1e329ac808 (2025-06, Blender 5.0) src/kernel/closure/bsdf.h "
-     "bump_shadowing_term",
-     "every lobe dropped where <Ni,wi><Ni,Ns><Ns,wi> < 0; the glossy lobe also as cycles-glossy",
+     "bump_shadowing_term (cosNsI, cosNsN, cosNI: the closure's own N); the glossy closure's N "
+     "from maybe_ensure_valid_specular_reflection, src/kernel/svm/closure.h and bsdf_util.h",
+     "the glossy lobe's normal Nc as cycles-glossy; each lobe dropped where "
+     "<Ni,wi><Ni,Nc><Nc,wi> < 0 with its own normal Nc (Ns for the diffuse lobe)",
      true, false},
     {NormalAdjustment::kMitsuba3Flip, "mitsuba3-flip",
      "mitsuba-renderer/mitsuba3 e32d71807c2c src/bsdfs/normalmap_helpers.h "
@@ -203,8 +205,14 @@ AdjustedNormals adjust_normal(NormalAdjustment adjustment, const AdjustVectors& 
       out.ns_specular = cycles_valid_specular_normal(v.ng, v.wo, v.ns);
       break;
     case NormalAdjustment::kCycles50:
+      // Each closure is tested with its own normal sc->N (bsdf.h
+      // bump_shadowing_term: cosNsN = dot(sd->N, sc->N), cosNI = dot(sc->N, I)),
+      // and a glossy closure's N is already
+      // maybe_ensure_valid_specular_reflection(sd, N) (svm/closure.h): so the
+      // glossy lobe is tested with the adjusted normal, the diffuse with Ns.
       out.ns_specular = cycles_valid_specular_normal(v.ng, v.wo, v.ns);
-      out.reject_diffuse = out.reject_specular = cycles_hemisphere_rejects(v.ni, v.ns, v.wi);
+      out.reject_diffuse = cycles_hemisphere_rejects(v.ni, v.ns, v.wi);
+      out.reject_specular = cycles_hemisphere_rejects(v.ni, out.ns_specular, v.wi);
       break;
     case NormalAdjustment::kMitsuba3Flip:
       out.ns_diffuse = out.ns_specular = mitsuba3_flipped_normal(v.ni, v.ns, v.wo);

@@ -117,8 +117,10 @@ constexpr std::array<MethodInfo, 20> kMethods{{
     {TerminatorMethod::kCycles50,
      "cycles50",
      "Blender Cycles 5.0+: blender/cycles 3b1e329ac808 (2025-06) src/kernel/closure/bsdf.h "
-     "bump_shadowing_term",
-     "cycles45's diffuse term, and the hemisphere test on every lobe (the cycles50 adjustment)",
+     "bump_shadowing_term; glossy closures' N from svm/closure.h "
+     "maybe_ensure_valid_specular_reflection",
+     "cycles45's diffuse term, and the hemisphere test on every lobe, each with its own normal: "
+     "the glossy lobe's after cycles-glossy (the cycles50 adjustment)",
      {},
      MethodKind::kFactorAndAdjustment,
      NormalAdjustment::kCycles50,

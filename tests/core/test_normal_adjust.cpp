@@ -175,6 +175,66 @@ TEST(NormalAdjust, CyclesHemisphereTestMatchesItsSignCondition) {
   EXPECT_FALSE(cycles_hemisphere_rejects(kZ, ns, in_plane(-2.5)));
 }
 
+// Cycles 5.0's hemisphere test, transcribed from blender/cycles 3b1e329ac808
+// src/kernel/closure/bsdf.h bump_shadowing_term (is_eval): sd->N is the smooth
+// normal Ni, sc->N the closure's own normal, I the direction to the light.
+//   if (isequal(sc->N, sd->N)) return 1;
+//   cosNsI = dot(sd->N, I); cosNsN = dot(sd->N, sc->N); cosNI = dot(sc->N, I);
+//   if (cosNsI * cosNsN * cosNI < 0) return 0;
+bool cycles50_source_drops(const Vec3& sd_n, const Vec3& sc_n, const Vec3& light) {
+  if (sc_n == sd_n) return false;
+  return dot(sd_n, light) * dot(sd_n, sc_n) * dot(sc_n, light) < 0.0;
+}
+
+// The closures' normals as src/kernel/svm/closure.h (same commit) sets them:
+// the diffuse closure keeps N (bsdf->N = N), the glossy closure gets
+// maybe_ensure_valid_specular_reflection(sd, N), Cycles' 3.6+ root choice.
+struct CyclesClosureNormals {
+  Vec3 diffuse, glossy;
+};
+CyclesClosureNormals cycles50_closure_normals(const AdjustVectors& v) {
+  return {v.ns, cycles_valid_specular_normal(v.ng, v.wo, v.ns)};
+}
+
+// The bumped plane of the issue: view 88 degrees off the normal, light 60
+// degrees the other way, Ns tilted 40 degrees towards the viewer's opposite
+// side, so that the mirror direction of wo about Ns lies below the surface
+// and Cycles turns the glossy normal back towards Ng. The light is below Ns
+// (<Ns,wi> = cos 100 deg < 0) but above the glossy normal: Cycles drops the
+// diffuse closure and keeps the glossy one.
+TEST(NormalAdjust, Cycles50TestsEachClosureWithItsOwnNormal) {
+  const AdjustVectors v{kZ, kZ, in_plane(40.0 * kPi / 180.0), in_plane(-60.0 * kPi / 180.0),
+                        in_plane(-88.0 * kPi / 180.0)};
+  const CyclesClosureNormals n = cycles50_closure_normals(v);
+  ASSERT_LT(dot(v.ns, v.wi), 0.0);
+  ASSERT_GE(dot(n.glossy, v.wi), 0.0);
+  ASSERT_TRUE(cycles50_source_drops(v.ni, n.diffuse, v.wi));
+  ASSERT_FALSE(cycles50_source_drops(v.ni, n.glossy, v.wi));
+  const AdjustedNormals a = adjust_normal(NormalAdjustment::kCycles50, v);
+  EXPECT_EQ(a.ns_diffuse, n.diffuse);
+  EXPECT_EQ(a.ns_specular, n.glossy);
+  EXPECT_TRUE(a.reject_diffuse);
+  EXPECT_FALSE(a.reject_specular);
+}
+
+// The same rule on random bumped frames: each lobe is dropped exactly where
+// the source drops its closure, and the sweep does reach the case where the
+// glossy normal decides otherwise than Ns.
+TEST(NormalAdjust, Cycles50RejectsEachLobeAsTheSourceDoes) {
+  Pcg32 rng(50);
+  int glossy_kept_below_ns = 0;
+  for (int i = 0; i < 200'000; ++i) {
+    const Vec3 ni = random_unit(rng);
+    const AdjustVectors v{ni, ni, upper(rng, ni), random_unit(rng), upper(rng, ni)};
+    const CyclesClosureNormals n = cycles50_closure_normals(v);
+    const AdjustedNormals a = adjust_normal(NormalAdjustment::kCycles50, v);
+    ASSERT_EQ(a.reject_diffuse, cycles50_source_drops(v.ni, n.diffuse, v.wi)) << i;
+    ASSERT_EQ(a.reject_specular, cycles50_source_drops(v.ni, n.glossy, v.wi)) << i;
+    if (cycles50_source_drops(v.ni, n.diffuse, v.wi) && !a.reject_specular) ++glossy_kept_below_ns;
+  }
+  EXPECT_GT(glossy_kept_below_ns, 100);
+}
+
 TEST(NormalAdjust, UnitAndFiniteOnRandomAndDegenerateInputs) {
   Pcg32 rng(16);
   std::vector<AdjustVectors> cases;

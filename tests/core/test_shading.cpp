@@ -55,6 +55,28 @@ TEST(Shade, PlainFactorScalesItsLobes) {
               1e-14);
 }
 
+// cycles50 on a Lambert + GGX material where the light is below Ns but above
+// the glossy closure's normal (blender/cycles 3b1e329ac808: bump_shadowing_term
+// tests sc->N, which svm/closure.h made
+// maybe_ensure_valid_specular_reflection(sd, N) for the glossy closure): the
+// diffuse lobe is dropped and the glossy lobe kept, around its own normal.
+TEST(Shade, Cycles50KeepsTheGlossyLobeAboveItsOwnNormal) {
+  const Material m = glossy();
+  const ShadingPoint p{kZ, kZ, in_plane(40.0 * kPi / 180.0), in_plane(-60.0 * kPi / 180.0),
+                       in_plane(-88.0 * kPi / 180.0)};
+  const Vec3 n_glossy = cycles_valid_specular_normal(kZ, p.wo, p.ns);
+  ASSERT_LT(dot(p.ns, p.wi), 0.0);
+  ASSERT_GT(dot(n_glossy, p.wi), 0.0);
+  const double glossy_only =
+      evaluate_lobes(m, n_glossy, p.wi, p.wo).specular * dot(n_glossy, p.wi);
+  ASSERT_GT(glossy_only, 0.0);
+  const Shaded cycles50 = shade(settings_for(TerminatorMethod::kCycles50), m, p, nullptr);
+  EXPECT_NEAR(cycles50.value, glossy_only, 1e-14);
+  // cycles45 has no hemisphere test on the glossy closure: the same here.
+  EXPECT_NEAR(shade(settings_for(TerminatorMethod::kCycles45), m, p, nullptr).value, glossy_only,
+              1e-14);
+}
+
 // With Ns == Ng every method is the plain BSDF, except the two documented
 // exceptions (deshmukh2020, shading-offset with s > 0).
 TEST(Shade, EveryMethodIsThePlainBsdfWithoutDeviation) {
