@@ -4,8 +4,8 @@
 //
 // A factor G multiplies raw bump's light at each shading point. Raw bump's
 // render, tallied per terminator-profile bin and grid cell (the evaluator's
-// tally, evaluator/evaluator.h), makes the profile of any G that is constant
-// per cell a linear function of G's cells:
+// tally, evaluator/evaluator.h), makes the profile of any G given at the
+// cells' centres (multilinear between them) a linear function of those values:
 //   P_b(G) = (r_b + sum_c t_bc G_c) / n_b
 // with n_b the bin's pixels, r_b the light G does not scale (other lobes,
 // points outside the grid), t_bc the light in cell c. The terminator RMSE

@@ -17,6 +17,7 @@
 #include <array>
 #include <cstdint>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "core/enum_names.h"
@@ -25,10 +26,11 @@
 namespace penumbra {
 
 enum class FactorInput { kLight, kDeviation, kShading, kView };
-inline constexpr EnumName<FactorInput> kFactorInputNames[] = {{"light", FactorInput::kLight},
-                                                              {"deviation", FactorInput::kDeviation},
-                                                              {"shading", FactorInput::kShading},
-                                                              {"view", FactorInput::kView}};
+inline constexpr EnumName<FactorInput> kFactorInputNames[] = {
+    {"light", FactorInput::kLight},
+    {"deviation", FactorInput::kDeviation},
+    {"shading", FactorInput::kShading},
+    {"view", FactorInput::kView}};
 
 // One axis of the grid: [min_deg, max_deg) in cells of step_deg degrees.
 struct FactorAxis {
@@ -43,12 +45,24 @@ struct FactorInputs {
 };
 FactorInputs factor_inputs(const Vec3& ng, const Vec3& ns, const Vec3& wi, const Vec3& wo);
 
-// The grid: the product of its axes, the first axis fastest.
+inline constexpr std::size_t kMaxFactorAxes = 4;
+// A point's nodes and their weights: at most 2^axes of them.
+using NodeWeights = std::array<std::pair<int, double>, std::size_t(1) << kMaxFactorAxes>;
+
+// The grid: the product of its axes, the first axis fastest. A table holds
+// G at the cells' centres (its nodes) and is multilinear between them, so
+// that a smooth factor tabulated on it is off by the square of the cell
+// size rather than by its first power; G is constant from the last centre
+// to the grid's edge, and 1 outside the grid.
 struct FactorGrid {
   std::vector<FactorAxis> axes;
   int cells() const;
   // The cell of a point, or -1 outside the grid.
   int cell(const FactorInputs& in) const;
+  // The nodes whose multilinear interpolation is G at a point, with their
+  // weights (positive, summing to 1), into *out; their count, 0 outside
+  // the grid.
+  int nodes(const FactorInputs& in, NodeWeights* out) const;
   // The centre of a cell, degrees, per axis.
   std::vector<double> centre(int cell) const;
 };
@@ -57,15 +71,14 @@ struct FactorGrid {
 // exceed 1 where raw bump is too dark).
 struct FactorTable {
   FactorGrid grid;
-  std::vector<double> values;  // grid.cells() of them
-  double at(const FactorInputs& in) const {
-    const int c = grid.cell(in);
-    return c < 0 ? 1.0 : values[static_cast<std::size_t>(c)];
-  }
+  std::vector<double> values;  // grid.cells() of them, at the cells' centres
+  // Multilinear between the centres; 1 outside the grid.
+  double at(const FactorInputs& in) const;
 };
 
-// Raw bump's light in each pixel of a render, split by the grid's cells:
-// what a factor table G would make of the pixel is rest + sum light * G
+// Raw bump's light in each pixel of a render, split by the grid's nodes
+// with each sample's interpolation weights: what a factor table G would
+// make of the pixel is rest + sum light * G
 // (W m^-2 sr^-1, already divided by the samples per pixel). Pixel p's
 // entries are [offsets[p], offsets[p + 1]) of cells and light.
 struct PixelTally {

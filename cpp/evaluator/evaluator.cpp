@@ -324,17 +324,20 @@ struct PendingShadow {
 };
 
 // Where a tallied render (render_tallied) puts one pixel's unblocked light:
-// by the factor grid's cell of each sample, the part a factor scales.
+// the part a factor scales, split over the factor grid's nodes by each
+// sample's interpolation weights.
 struct TallySink {
   const FactorGrid* grid = nullptr;
   Lobes lobes = Lobes::kDiffuse;
   std::vector<std::pair<int, double>>* scaled = nullptr;  // (cell, light), unsorted
   double* rest = nullptr;                                 // light no cell's G scales
   void add(const Material& m, const ShadingPoint& p, double irradiance, double value) const {
-    const int cell = grid->cell(factor_inputs(p.ng, p.ns, p.wi, p.wo));
-    const double light =
-        cell < 0 ? 0.0 : factor_scaled_value(m, p.ns, p.wi, p.wo, lobes) * irradiance;
-    if (light > 0.0) scaled->emplace_back(cell, light);
+    NodeWeights nodes;
+    const int n = grid->nodes(factor_inputs(p.ng, p.ns, p.wi, p.wo), &nodes);
+    const double light = n ? factor_scaled_value(m, p.ns, p.wi, p.wo, lobes) * irradiance : 0.0;
+    if (light > 0.0)
+      for (int k = 0; k < n; ++k)
+        scaled->emplace_back(nodes[std::size_t(k)].first, light * nodes[std::size_t(k)].second);
     *rest += value - light;
   }
 };

@@ -23,7 +23,7 @@ namespace penumbra {
 using nlohmann::json;
 
 FactorGrid default_fit_grid() {
-  return {{{FactorInput::kLight, 50.0, 120.0, 1.0}, {FactorInput::kDeviation, 0.0, 36.0, 3.0}}};
+  return {{{FactorInput::kLight, 20.0, 120.0, 2.0}, {FactorInput::kDeviation, 0.0, 60.0, 4.0}}};
 }
 
 namespace {

@@ -83,7 +83,8 @@ TEST(Floor, BoundsHoldAndNoOtherTableBeatsTheFloor) {
   std::uniform_real_distribution<double> u(0.0, 2.0);
   for (int k = 0; k < 200; ++k) {
     std::vector<double> g(12);
-    for (double& x : g) x = k < 100 ? u(rng) : std::clamp(f.g[&x - g.data()] + 1e-3 * (u(rng) - 1.0), 0.0, 2.0);
+    for (double& x : g)
+      x = k < 100 ? u(rng) : std::clamp(f.g[&x - g.data()] + 1e-3 * (u(rng) - 1.0), 0.0, 2.0);
     double mse = 0.0;
     for (const TallyVariant& v : variants) mse += std::pow(tally_rmse(v, g), 2) / 4.0;
     EXPECT_GE(mse, f.objective * (1.0 - 1e-12)) << k;
@@ -118,6 +119,27 @@ TEST(FactorGrid, CellsCentresAndTheOutside) {
   EXPECT_EQ(grid.cell(in), -1);
   FactorTable t{grid, std::vector<double>(12, 0.5)};
   EXPECT_EQ(t.at(in), 1.0);  // raw bump outside the grid
+  // Multilinear between the centres: a table linear in the angles is
+  // reproduced exactly inside them, and held constant towards the edges.
+  std::vector<double> linear(12);
+  for (int c = 0; c < 12; ++c) linear[std::size_t(c)] = grid.centre(c)[0] + 2.0 * grid.centre(c)[1];
+  const FactorTable lt{grid, linear};
+  const auto at = [&](double light, double deviation) {
+    FactorInputs p;
+    p.deg[int(FactorInput::kLight)] = light;
+    p.deg[int(FactorInput::kDeviation)] = deviation;
+    return lt.at(p);
+  };
+  EXPECT_NEAR(at(80.0, 20.0), 80.0 + 40.0, 1e-12);
+  EXPECT_NEAR(at(71.0, 14.0), 71.0 + 28.0, 1e-12);
+  EXPECT_NEAR(at(61.0, 2.0), 65.0 + 10.0, 1e-12);  // below the first centres: the corner node
+  NodeWeights w;
+  FactorInputs mid;
+  mid.deg[int(FactorInput::kLight)] = 80.0;
+  mid.deg[int(FactorInput::kDeviation)] = 15.0;
+  ASSERT_EQ(grid.nodes(mid, &w), 2);
+  EXPECT_EQ(w[0], (std::pair<int, double>{5, 0.5}));
+  EXPECT_EQ(w[1], (std::pair<int, double>{6, 0.5}));
   // The four angles from vectors.
   const FactorInputs a = factor_inputs({0, 0, 1}, normalize({0, std::sin(0.2), std::cos(0.2)}),
                                        normalize({1, 0, 1}), {0, 0, 1});
