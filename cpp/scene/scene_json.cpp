@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include "image/bump_maps.h"
+#include "util/json_reader.h"
 
 namespace penumbra {
 
@@ -26,131 +27,45 @@ std::string describe(const json& j) {
   return describe_json(j, 60);
 }
 
-// A JSON object being read: remembers which keys were used, so that finish()
-// can reject the rest (a misspelt key is an error, not a silent default).
-class Reader {
- public:
-  Reader(const json& j, std::string pointer, const std::string& origin)
-      : j_(j), pointer_(std::move(pointer)), origin_(origin) {
-    if (!j_.is_object()) fail("", "expected an object, got " + describe(j_));
-  }
-
-  [[noreturn]] void fail(const std::string& key, const std::string& message) const {
-    throw InputError(origin_, key.empty() ? pointer_ : child_pointer(key), message);
-  }
-  std::string child_pointer(const std::string& key) const {
-    return pointer_ + "/" + pointer_token(key);
-  }
-  bool has(const std::string& key) {
-    known_.insert(key);
-    return j_.contains(key);
-  }
-  const json& at(const std::string& key) {
-    known_.insert(key);
-    if (!j_.contains(key)) fail(key, "missing required key");
-    return j_.at(key);
-  }
-  Reader object(const std::string& key) { return Reader(at(key), child_pointer(key), origin_); }
-
-  double number(const std::string& key, const std::function<bool(double)>& valid,
-                const char* domain) {
-    const json& v = at(key);
-    if (!v.is_number() || !std::isfinite(v.get<double>()))
-      fail(key, fmt::format("expected a number {}, got {}", domain, describe(v)));
-    const double x = v.get<double>();
-    if (!valid(x)) fail(key, fmt::format("expected a number {}, got {}", domain, describe(v)));
-    return x;
-  }
-  double number_or(const std::string& key, double fallback,
-                   const std::function<bool(double)>& valid, const char* domain) {
-    return has(key) ? number(key, valid, domain) : fallback;
-  }
-  long long integer(const std::string& key, long long lo, long long hi) {
-    const json& v = at(key);
-    if (!v.is_number_integer() || v.get<long long>() < lo || v.get<long long>() > hi)
-      fail(key, fmt::format("expected an integer in [{}, {}], got {}", lo, hi, describe(v)));
-    return v.get<long long>();
-  }
-  long long integer_or(const std::string& key, long long fallback, long long lo, long long hi) {
-    return has(key) ? integer(key, lo, hi) : fallback;
-  }
-  bool boolean_or(const std::string& key, bool fallback) {
-    if (!has(key)) return fallback;
-    const json& v = at(key);
-    if (!v.is_boolean()) fail(key, "expected true or false, got " + describe(v));
-    return v.get<bool>();
-  }
-  std::string string(const std::string& key) {
-    const json& v = at(key);
-    if (!v.is_string()) fail(key, "expected a string, got " + describe(v));
-    return v.get<std::string>();
-  }
-  // One of a fixed set of names; the error lists them.
-  template <typename Enum>
-  Enum choice(const std::string& key, std::span<const EnumName<Enum>> options,
-              std::optional<Enum> fallback = std::nullopt) {
-    if (fallback && !has(key)) return *fallback;
-    const json& v = at(key);
-    std::string names;
-    for (const auto& [name, value] : options) {
-      if (v.is_string() && v.get<std::string>() == name) return value;
-      if (!names.empty()) names.append(", ");
-      names.append("\"").append(name).append("\"");
-    }
-    fail(key, fmt::format("expected one of {}, got {}", names, describe(v)));
-  }
-  // Three finite numbers, each of magnitude at most `bound`.
-  Vec3 vec3(const std::string& key, double bound = kMaxCoordinate) {
-    const json& v = at(key);
-    if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() ||
-        !v[2].is_number())
-      fail(key, "expected an array of 3 numbers, got " + describe(v));
-    const Vec3 out{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
-    if (!is_finite(out) || std::abs(out.x) > bound || std::abs(out.y) > bound ||
-        std::abs(out.z) > bound)
-      fail(key, fmt::format("expected 3 numbers in [-{0:g}, {0:g}] (scene units), got {1}", bound,
+// Three finite numbers, each of magnitude at most `bound`.
+Vec3 vec3(Reader& r, const std::string& key, double bound = kMaxCoordinate) {
+  const json& v = r.at(key);
+  if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
+    r.fail(key, "expected an array of 3 numbers, got " + describe(v));
+  const Vec3 out{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+  if (!is_finite(out) || std::abs(out.x) > bound || std::abs(out.y) > bound ||
+      std::abs(out.z) > bound)
+    r.fail(key, fmt::format("expected 3 numbers in [-{0:g}, {0:g}] (scene units), got {1}", bound,
                             describe(v)));
-    return out;
-  }
-  Vec3 vec3_or(const std::string& key, const Vec3& fallback) {
-    return has(key) ? vec3(key) : fallback;
-  }
-  // A direction: any non-zero finite vector, returned normalised (scaled by
-  // its largest component first, so that neither 1e200 nor 1e-200 over- or
-  // underflows the length).
-  Vec3 direction(const std::string& key) { return normalize(scaled_direction(key)); }
-  // The same direction divided by its largest component only (exact for the
-  // usual unit components; make_weave normalises it).
-  Vec3 scaled_direction(const std::string& key) {
-    const Vec3 v = vec3(key, std::numeric_limits<double>::max());
-    check_direction(key, v);
-    return v / std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
-  }
-  Vec3 check_direction(const std::string& key, const Vec3& v) const {
-    const double largest = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
-    if (!(largest > 0.0))
-      fail(key, fmt::format("expected a non-zero vector (a direction), got [{}, {}, {}]", v.x, v.y,
+  return out;
+}
+
+Vec3 vec3_or(Reader& r, const std::string& key, const Vec3& fallback) {
+  return r.has(key) ? vec3(r, key) : fallback;
+}
+
+Vec3 check_direction(const Reader& r, const std::string& key, const Vec3& v) {
+  const double largest = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+  if (!(largest > 0.0))
+    r.fail(key, fmt::format("expected a non-zero vector (a direction), got [{}, {}, {}]", v.x, v.y,
                             v.z));
-    return normalize(v / largest);
-  }
+  return normalize(v / largest);
+}
 
-  void finish() const {
-    for (const auto& [key, value] : j_.items()) {
-      if (known_.count(key)) continue;
-      std::string names;
-      for (const std::string& k : known_) names += (names.empty() ? "" : ", ") + k;
-      fail(key, fmt::format("unknown key (expected one of: {})", names));
-    }
-  }
-  const std::string& pointer() const { return pointer_; }
-  const std::string& origin() const { return origin_; }
+// A direction divided by its largest component only (exact for the usual
+// unit components; make_weave normalises it).
+Vec3 scaled_direction(Reader& r, const std::string& key) {
+  const Vec3 v = vec3(r, key, std::numeric_limits<double>::max());
+  check_direction(r, key, v);
+  return v / std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+}
 
- private:
-  const json& j_;
-  std::string pointer_;
-  const std::string& origin_;
-  std::set<std::string> known_;
-};
+// A direction: any non-zero finite vector, returned normalised (scaled by
+// its largest component first, so that neither 1e200 nor 1e-200 over- or
+// underflows the length).
+Vec3 direction(Reader& r, const std::string& key) {
+  return normalize(scaled_direction(r, key));
+}
 
 // "a, b, c": the ids of a registry table, for "unknown id" errors.
 template <typename Table>
@@ -182,13 +97,13 @@ bool phase_range(double x) {
 Camera read_camera(Reader r) {
   Camera c;
   c.projection = r.choice<Projection>("projection", kProjectionNames, Projection::kOrthographic);
-  c.position = r.vec3("position");
-  c.direction = r.vec3("direction");  // keep the length: it is the focal length in perspective
-  r.check_direction("direction", c.direction);
-  c.right = r.vec3("right");
-  r.check_direction("right", c.right);
-  c.up = r.vec3("up");
-  r.check_direction("up", c.up);
+  c.position = vec3(r, "position");
+  c.direction = vec3(r, "direction");  // keep the length: it is the focal length in perspective
+  check_direction(r, "direction", c.direction);
+  c.right = vec3(r, "right");
+  check_direction(r, "right", c.right);
+  c.up = vec3(r, "up");
+  check_direction(r, "up", c.up);
   c.width = static_cast<int>(r.integer("width", 1, kMaxImageSize));
   c.height = static_cast<int>(r.integer("height", 1, kMaxImageSize));
   c.spp = static_cast<int>(r.integer_or("spp", 16, 1, 65536));
@@ -202,10 +117,10 @@ Light read_light(Reader r) {
   Light l;
   l.type = r.choice<LightType>("type", kLightTypeNames);
   if (l.type == LightType::kDistant) {
-    l.direction = r.direction("direction");
+    l.direction = direction(r, "direction");
     l.irradiance = r.number("irradiance", radiant_range, "in [0, 1e9] (W/m^2)");
   } else {
-    l.position = r.vec3("position");
+    l.position = vec3(r, "position");
     l.intensity = r.number("intensity", radiant_range, "in [0, 1e9] (W/sr)");
   }
   r.finish();
@@ -260,8 +175,8 @@ OffsetSettings read_offset(Reader r) {
 Shape read_shape(Reader r, std::optional<Tessellation>* tessellation = nullptr) {
   Shape s;
   s.type = r.choice<ShapeType>("type", kShapeTypeNames);
-  s.center = r.vec3_or("center", {0, 0, 0});
-  s.axis = r.has("axis") ? r.direction("axis") : Vec3{0, 1, 0};
+  s.center = vec3_or(r, "center", {0, 0, 0});
+  s.axis = r.has("axis") ? direction(r, "axis") : Vec3{0, 1, 0};
   if (s.type == ShapeType::kPlane) {
     s.width = r.number("width", length_scale, "in [1e-6, 1e6] (scene units)");
     s.height = r.number("height", length_scale, "in [1e-6, 1e6] (scene units)");
@@ -397,9 +312,9 @@ HeightSpec read_height(Reader r, const Shape& shape) {
     case HeightFamily::kGrating: {
       const double frequency =
           r.number("frequency", frequency_range, "in (0, 1e6] (cycles per scene unit)");
-      const Vec3 direction = r.direction("direction");
+      const Vec3 dir = direction(r, "direction");
       const double phase = r.number_or("phase", 0.0, phase_range, "in [-1e6, 1e6] (radians)");
-      h.function = make_grating(direction, frequency, phase);
+      h.function = make_grating(dir, frequency, phase);
       break;
     }
     case HeightFamily::kWeave: {
@@ -413,7 +328,7 @@ HeightSpec read_height(Reader r, const Shape& shape) {
       for (std::size_t i = 0; i < list.size(); ++i) {
         const json wrapper{{"d", list[i]}};
         Reader item(wrapper, r.child_pointer("directions") + "/" + std::to_string(i), r.origin());
-        directions.push_back(item.scaled_direction("d"));
+        directions.push_back(scaled_direction(item, "d"));
       }
       const HeightCombine combine =
           r.choice<HeightCombine>("combine", kHeightCombineNames, HeightCombine::kProduct);
@@ -641,7 +556,7 @@ Scene scene_from_json(const json& document, const std::string& origin) {
     if (!list.is_array() || list.size() > 64)
       r.fail("props", "expected an array of at most 64 spheres, got " + describe(list));
     for (std::size_t i = 0; i < list.size(); ++i) {
-      Reader item(list[i], r.child_pointer("props") + "/" + std::to_string(i), r.origin());
+      Reader item = r.item("props", i);
       Shape prop = read_shape(item);
       if (prop.type != ShapeType::kSphere)
         item.fail("type", "expected \"sphere\" (props are spheres)");

@@ -4,20 +4,15 @@
 // in report.json's "filtering" array.
 #pragma once
 
-#include <functional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "study/sections.h"
 #include "study/study_file.h"
 
 namespace penumbra {
-
-// Reads /filtering of the study file `file` (InputError naming the pointer);
-// scene and map paths resolve against `base`, the study file's folder.
-FilteringSection read_filtering_section(const nlohmann::json& section, const std::string& file,
-                                        const std::string& base);
 
 // One (map, run) of the section, measured or reused.
 struct FilteringEntry {
@@ -31,12 +26,15 @@ struct FilteringEntry {
   std::vector<std::string> findings;
 };
 
-// Measures every map x run into OUT/filtering/MAP/RUN/, reusing a folder
-// whose key (the heights, the options, Penumbra's version and the digest of
-// the experiment's code) is unchanged. `log` gets a line per entry.
-std::vector<FilteringEntry> run_filtering_section(
-    const FilteringSection& section, const std::string& out_dir, int jobs,
-    const std::function<void(const std::string&)>& log);
+// The section's step of the run (study/sections.h): measures every map x
+// run into OUT/filtering/MAP/RUN/, reusing a folder whose key (the heights,
+// the options, Penumbra's version and the digest of the experiment's code)
+// is unchanged, with the run's parallelism; the log gets a line per entry.
+// It renders nothing, so it adds no jobs to the render phase, and its
+// results are JSON and CSV files kept by their own key file rather than
+// images in the render cache.
+std::vector<FilteringEntry> run_filtering_section(const FilteringSection& section,
+                                                  const StepContext& context);
 
 // report.json's "filtering": one object per entry (map, run, source, json,
 // csv), or null without a section.

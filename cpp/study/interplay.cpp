@@ -15,7 +15,6 @@
 #include "image/image_io.h"
 #include "renderers/renderers.h"
 #include "scene/scene_json.h"
-#include "study/json_fields.h"
 #include "study/plan.h"
 #include "study/rendering.h"
 #include "util/strict_json.h"
@@ -23,86 +22,6 @@
 namespace penumbra {
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-namespace {
-
-std::vector<std::optional<int>> read_levels(const json& list, const std::string& f,
-                                            const std::string& p) {
-  if (!list.is_array() || list.empty())
-    throw InputError(f, p, "expected a non-empty array of pyramid levels (null: unfiltered)");
-  std::vector<std::optional<int>> levels;
-  for (std::size_t i = 0; i < list.size(); ++i) {
-    if (list[i].is_null()) {
-      levels.push_back(std::nullopt);
-      continue;
-    }
-    const long long level = strict_integer(list[i], 0, 16);
-    if (level < 0)
-      throw InputError(
-          f, fmt::format("{}/{}", p, i),
-          "expected null (unfiltered) or a level in [0, 16], got " + describe_json(list[i]));
-    levels.push_back(static_cast<int>(level));
-  }
-  return levels;
-}
-
-std::vector<std::string> read_methods(const json& list, const std::string& f,
-                                      const std::string& p) {
-  if (!list.is_array() || list.empty())
-    throw InputError(f, p, "expected a non-empty array of terminator method ids");
-  std::vector<std::string> methods;
-  for (std::size_t i = 0; i < list.size(); ++i) {
-    if (!list[i].is_string() || !method_from_id(list[i].get<std::string>()))
-      throw InputError(
-          f, fmt::format("{}/{}", p, i),
-          "expected a terminator method id (penumbra methods), got " + describe_json(list[i]));
-    methods.push_back(list[i].get<std::string>());
-  }
-  return methods;
-}
-
-}  // namespace
-
-InterplaySection read_interplay_section(const json& s, const std::string& f,
-                                        const std::string& base) {
-  const std::string p = "/interplay";
-  if (!s.is_object()) throw InputError(f, p, "expected an object with \"scene\"");
-  reject_unknown(s, {"scene", "size", "filter", "levels", "methods", "set"}, f, p);
-  InterplaySection out;
-  const json& scene = require(s, "scene", f, p);
-  const fs::path path = fs::path(base) / (scene.is_string() ? scene.get<std::string>() : "");
-  if (!scene.is_string() || !fs::is_regular_file(path))
-    throw InputError(f, p + "/scene", "expected a scene file, got " + describe_json(scene));
-  out.scene = path.lexically_normal().string();
-  if (s.contains("size")) {
-    const long long size = strict_integer(s["size"], 16, 16384);
-    if (size < 0)
-      throw InputError(f, p + "/size",
-                       "expected an integer in [16, 16384] (texels around the shape), got " +
-                           describe_json(s["size"]));
-    out.size = static_cast<int>(size);
-  }
-  if (s.contains("filter")) {
-    const json& id = s["filter"];
-    const auto filter =
-        id.is_string() ? roughness_filter_from_id(id.get<std::string>()) : std::nullopt;
-    if (!filter || !is_measurable(*filter))
-      throw InputError(f, p + "/filter",
-                       "expected a roughness filter id with a BRDF (penumbra methods), got " +
-                           describe_json(id));
-    out.filter = id.get<std::string>();
-  }
-  out.levels = s.contains("levels") ? read_levels(s["levels"], f, p + "/levels")
-                                    : std::vector<std::optional<int>>{std::nullopt, 2, 4, 6};
-  out.methods = s.contains("methods") ? read_methods(s["methods"], f, p + "/methods")
-                                      : std::vector<std::string>{"none", "estevez2019"};
-  if (s.contains("set")) {
-    if (!s["set"].is_object())
-      throw InputError(f, p + "/set", "expected an object of JSON pointer -> value");
-    out.set = s["set"];
-  }
-  return out;
-}
 
 namespace {
 
@@ -148,21 +67,6 @@ Job make_job(const json& base, const InterplaySection& s, const std::string& map
   job.scene = scene_from_json(doc, job.origin);
   job.scene_json = std::move(doc);
   return job;
-}
-
-// What the cache holds for `job`, else its render, stored as every study
-// render is (render_into_cache: the same metadata, cost and host included).
-Image render_or_reuse(const Job& job, const RenderCache& cache, const Renderers& renderers,
-                      int threads, InterplayResult& result) {
-  std::string reason;
-  if (cache.contains(job.key))
-    if (std::optional<Image> image = cache.lookup(job.key, &reason)) {
-      ++result.reused;
-      return std::move(*image);
-    }
-  Image image = render_into_cache(job, cache, RenderSettings{}.timeout_s, threads, renderers);
-  ++result.rendered;
-  return image;
 }
 
 std::string percent(double value, const Interval& ci) {
@@ -231,51 +135,59 @@ std::string bake_map(const json& base, const InterplaySection& s, const fs::path
 
 }  // namespace
 
-InterplayResult run_interplay_section(const InterplaySection& s, const std::string& out_dir,
-                                      const RenderCache& cache, const Renderers& renderers,
-                                      int threads,
-                                      const std::function<void(const std::string&)>& log) {
-  InterplayResult result;
+InterplayJobs plan_interplay_section(const InterplaySection& s, const StepContext& context) {
+  InterplayJobs planned;
+  InterplayResult& result = planned.result;
   const json base = base_document(s);
-  const std::string map_path = bake_map(base, s, fs::path(out_dir) / "interplay", result);
+  const std::string map_path = bake_map(base, s, fs::path(context.out_dir) / "interplay", result);
   result.map_file = "interplay/map.exr";
-  std::vector<Job> work{
-      make_job(base, s, map_path, {Representation::kDisplacement, "none", std::nullopt, 0.0}),
+  std::vector<Job>& work = planned.jobs;
+  work.push_back(
+      make_job(base, s, map_path, {Representation::kDisplacement, "none", std::nullopt, 0.0}));
+  work.push_back(
       make_job(base, s, map_path,
-               {Representation::kDisplacement, "none", std::nullopt, 0.5 * result.edge_length})};
+               {Representation::kDisplacement, "none", std::nullopt, 0.5 * result.edge_length}));
   for (const std::optional<int>& level : s.levels)
     for (const std::string& method : s.methods)
       work.push_back(make_job(base, s, map_path, {Representation::kBump, method, level, 0.0}));
-  assign_keys(work, renderers.identities);
+  assign_keys(work, context.renderers.identities);
   result.map_digest = work[0].scene.height.map->digest;
   result.truth_key = work[0].key;
-  const Image truth = render_or_reuse(work[0], cache, renderers, threads, result);
+  return planned;
+}
+
+InterplayResult measure_interplay_section(const InterplaySection& s, const InterplayJobs& planned,
+                                          const SectionRenders& renders,
+                                          const StepContext& context) {
+  const std::vector<Job>& work = planned.jobs;
+  for (std::size_t i = 0; i < work.size(); ++i)
+    if (!renders.done[i]) throw RendererError(renders.errors[i]);
+  InterplayResult result = planned.result;
+  for (std::size_t i = 0; i < work.size(); ++i)
+    ++(renders.cached[i] ? result.reused : result.rendered);
+  const Image& truth = renders.images[0];
   // The terminator profile and its interval only.
   MeasureOptions profile;
   profile.scale = radiance_scale(work[0].scene);
   profile.image = profile.view = false;
-  {
-    // The truth (as the test) against the truth at half its edge length.
-    const Image fine = render_or_reuse(work[1], cache, renderers, threads, result);
-    const Measurement m = measure(truth, fine, profile);
-    result.truth_change = m.profile.rmse_terminator;
-    result.truth_change_interval = m.intervals.rmse_terminator;
-  }
+  // The truth (as the test) against the truth at half its edge length.
+  const Measurement check = measure(truth, renders.images[1], profile);
+  result.truth_change = check.profile.rmse_terminator;
+  result.truth_change_interval = check.intervals.rmse_terminator;
   for (std::size_t i = 2; i < work.size(); ++i) {
-    const Image image = render_or_reuse(work[i], cache, renderers, threads, result);
     const std::size_t k = i - 2;
-    const Measurement m = measure(image, truth, profile);
+    const Measurement m = measure(renders.images[i], truth, profile);
     InterplayRow row{s.levels[k / s.methods.size()], s.methods[k % s.methods.size()], work[i].key,
                      m.profile, m.intervals};
     result.rows.push_back(std::move(row));
-    if (log)
-      log(fmt::format("interplay: {} {}: {}/{} done", result.rows.back().method,
-                      level_text(result.rows.back().level), k + 1, work.size() - 2));
+    if (context.log)
+      context.log(fmt::format("interplay: {} {}: {}/{} done", result.rows.back().method,
+                              level_text(result.rows.back().level), k + 1, work.size() - 2));
   }
   result.findings = interplay_findings(s, result);
-  if (log)
-    log(fmt::format("interplay: {} renders, {} rendered now, {} from the cache", work.size(),
-                    result.rendered, result.reused));
+  if (context.log)
+    context.log(fmt::format("interplay: {} renders, {} rendered now, {} from the cache",
+                            work.size(), result.rendered, result.reused));
   return result;
 }
 

@@ -10,7 +10,6 @@
 // "levels": [null, 2, 4, 6], "methods": ["none", "estevez2019"], "set": {...}}
 #pragma once
 
-#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -20,16 +19,11 @@
 
 #include "analysis/intervals.h"
 #include "analysis/metrics.h"
-#include "study/cache.h"
+#include "study/plan.h"
+#include "study/sections.h"
 #include "study/study_file.h"
 
 namespace penumbra {
-
-struct Renderers;  // study/rendering.h
-
-// Reads /interplay of the study file `file` (InputError naming the pointer).
-InterplaySection read_interplay_section(const nlohmann::json& section, const std::string& file,
-                                        const std::string& base);
 
 struct InterplayRow {
   std::optional<int> level;
@@ -54,14 +48,23 @@ struct InterplayResult {
   std::vector<std::string> findings;
 };
 
-// Bakes the map into OUT/interplay/map.exr, renders what the cache lacks
-// (the evaluator, one render at a time with `threads` threads, through
-// render_into_cache like the study's other renders), compares. `log` gets
-// progress lines.
-InterplayResult run_interplay_section(const InterplaySection& section, const std::string& out_dir,
-                                      const RenderCache& cache, const Renderers& renderers,
-                                      int threads,
-                                      const std::function<void(const std::string&)>& log);
+// The section's part of the run's render phase: its map baked into
+// OUT/interplay/map.exr, and the evaluator jobs that render with the
+// study's own (study/sections.h): the truth (the map's displacement), the
+// truth at half its edge length, then one bump render per level and method,
+// level-major. Keyed; `result` holds what is known before they render.
+struct InterplayJobs {
+  std::vector<Job> jobs;
+  InterplayResult result;
+};
+InterplayJobs plan_interplay_section(const InterplaySection& section, const StepContext& context);
+
+// Measures the section's renders, in the order of `planned.jobs`, against
+// the truth. Throws RendererError with the error of a render that failed.
+InterplayResult measure_interplay_section(const InterplaySection& section,
+                                          const InterplayJobs& planned,
+                                          const SectionRenders& renders,
+                                          const StepContext& context);
 
 // report.json's "interplay", or null without a section.
 nlohmann::json interplay_report_json(const InterplaySection* section,

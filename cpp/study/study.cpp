@@ -5,6 +5,9 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <memory>
+#include <optional>
+#include <type_traits>
 #include <utility>
 
 #include <fmt/format.h>
@@ -14,14 +17,14 @@
 #include "study/cache.h"
 #include "study/compare.h"
 #include "study/convergence.h"
-#include "study/execute.h"
+#include "study/executor.h"
 #include "study/figures.h"
 #include "study/filtering_study.h"
 #include "study/interplay.h"
 #include "study/plan.h"
 #include "study/rendering.h"
 #include "study/report_files.h"
-#include "study/slurm.h"
+#include "study/sections.h"
 #include "util/files.h"
 #include "util/parallel.h"
 
@@ -34,18 +37,6 @@ void warn(const StudyOptions& options, StudyRunStats& stats, const std::string& 
   stats.warnings.push_back(text);
   if (options.log) options.log("WARNING: " + text);
 }
-
-// The state of every job after the render phase.
-struct Renders {
-  RenderedImages images;
-  std::vector<std::string> errors;
-  std::vector<char> attempted;
-  std::vector<long> same_as;  // a job with an earlier job's key takes its result
-  explicit Renders(std::size_t n) : errors(n), attempted(n, 0), same_as(n, -1) {
-    images.done.assign(n, 0);
-    images.images.resize(n);
-  }
-};
 
 // Takes what the cache holds (verified entries only; damaged ones are removed
 // with a warning) and returns the jobs still to render. Jobs with the same key
@@ -70,6 +61,7 @@ std::vector<std::size_t> use_cache(const std::vector<Job>& jobs, const RenderCac
   std::map<std::string, std::size_t> first_with_key;
   for (std::size_t i = 0; i < jobs.size(); ++i) {
     if (r.images.done[i]) {
+      r.cached[i] = 1;
       ++stats.cached;
       continue;
     }
@@ -139,93 +131,22 @@ void settle_duplicates(const std::vector<Job>& jobs, Renders& r, StudyRunStats& 
     if (!r.images.done[i] && !r.attempted[i]) ++stats.not_started;
 }
 
-// The Slurm executor's render phase: failures its array tasks recorded count
-// as failed renders, the rest is submitted (or still queued) and not started
-// here.
-void slurm_phase(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo,
-                 const RenderCache& cache, const StudyOptions& options, const Renderers& renderers,
-                 const SlurmChains* chains, Renders& r, StudyRunStats& stats) {
-  // One submission per run, whose report job is the one continuation: later
-  // rounds of this run wait for it.
-  if (todo.empty() || (stats.slurm && stats.slurm->submitted > 0))
-    return settle_duplicates(jobs, r, stats);
-  const SlurmSubmission sub =
-      submit_renders(jobs, todo, options.output_dir, cache, renderers.identities, options.timeout_s,
-                     *options.slurm, r.errors, chains);
-  for (std::size_t i : todo)
-    if (!r.errors[i].empty()) {
-      r.attempted[i] = 1;
-      ++stats.failed;
-      stats.failures.push_back(jobs[i].label + ": " +
-                               r.errors[i].substr(0, r.errors[i].find('\n')));
-    }
-  if (options.log && sub.submitted > 0)
-    options.log(fmt::format(
-        "slurm: submitted {} renders as array job {} ({} tasks{}); the report follows as job {}",
-        sub.submitted - sub.chains, sub.array_job, sub.tasks,
-        sub.chains > 0 ? fmt::format(", with {} ground-truth convergence chains", sub.chains) : "",
-        sub.report_job));
-  if (options.log && sub.still_queued > 0)
-    options.log(fmt::format("slurm: {} renders are still queued or running", sub.still_queued));
-  stats.slurm = sub;
-  settle_duplicates(jobs, r, stats);
-}
-
-// The render phase: the cache, then what it lacks; counts what never started.
+// The render phase of one round: the cache, then what it lacks through the
+// executor; counts what never started.
 Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
-                    const RenderCache& cache, const StudyOptions& options,
-                    const Renderers& renderers, StudyRunStats& stats,
-                    const SlurmChains* chains = nullptr) {
+                    const RenderCache& cache, const Renderers& renderers, Executor& executor,
+                    const StudyOptions& options, StudyRunStats& stats,
+                    const ConvergenceRound* convergence = nullptr) {
   Renders r(jobs.size());
   const std::size_t cached_before = stats.cached;
   const Order order = group_by_mesh(jobs, use_cache(jobs, cache, options, r, stats));
-  const std::vector<std::size_t>& todo = order.todo;
-  const std::size_t cached = stats.cached - cached_before;
   // The cache must hold what is to be rendered (uncompressed EXR sizes).
   ResourceEstimate needed;
-  for (std::size_t i : todo) needed.output_bytes += jobs[i].resources.output_bytes;
+  for (std::size_t i : order.todo) needed.output_bytes += jobs[i].resources.output_bytes;
   check_resources(needed, std::numeric_limits<double>::infinity(), study_file, cache.folder());
-  if (options.slurm) {
-    slurm_phase(jobs, todo, cache, options, renderers, chains, r, stats);
-    return r;
-  }
-  if (options.log)
-    options.log(fmt::format("{} renders: {} cached, {} to do, {} in parallel", jobs.size(), cached,
-                            todo.size(), options.parallelism.renders));
-  ExecuteOptions eo;
-  eo.jobs = options.parallelism.renders;
-  eo.max_started = options.max_new_renders;
-  eo.interrupted = options.interrupted;
-  eo.log = options.log;
-  eo.progress = options.progress;
-  eo.already_done = cached;
-  eo.total = jobs.size();
-  eo.group_starts = order.group_starts;
-  MethodBatches batches(jobs, todo);
-  stats.method_batches += batches.batches();
-  stats.batched_renders += batches.members();
-  if (options.log && batches.batches() > 0)
-    options.log(fmt::format("{} of them in {} passes that render several methods of one variant",
-                            batches.members(), batches.batches()));
-  const ExecuteResult result = execute_tasks(
-      todo.size(), eo,
-      [&](std::size_t t) {
-        r.images.images[todo[t]] =
-            render_into_cache(jobs[todo[t]], cache, options.timeout_s,
-                              options.parallelism.threads_per_render, renderers, &batches);
-      },
-      [&](std::size_t t) { return jobs[todo[t]].label; });
-  for (std::size_t t = 0; t < todo.size(); ++t) {
-    const std::size_t i = todo[t];
-    r.images.done[i] = result.done[t], r.attempted[i] = result.attempted[t];
-    r.errors[i] = result.errors[t];
-    if (result.done[t]) ++stats.rendered;
-    if (result.attempted[t] && !result.done[t]) {
-      ++stats.failed;
-      stats.failures.push_back(jobs[i].label + ": " +
-                               r.errors[i].substr(0, r.errors[i].find('\n')));
-    }
-  }
+  executor.render({jobs, order.todo, order.group_starts, stats.cached - cached_before, cache,
+                   renderers, convergence},
+                  r, stats);
   settle_duplicates(jobs, r, stats);
   return r;
 }
@@ -250,41 +171,16 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// On Slurm, every variant whose checks this round lacks goes to an array task
-// as the rest of its chain, with its evaluator jobs (plan settings) to render
-// at the settings reached: one submission instead of one per round.
-// Variants with the same truth (the same check keys) decide alike: one chain
-// renders the evaluator jobs of all of them.
-SlurmChains chains_to_submit(const Plan& plan, const Study& study, double max_memory_bytes,
-                             const std::vector<Job>& keyed, const std::vector<ChainState>& chains,
-                             const RenderCache& cache) {
-  SlurmChains out;
-  for (const ChainState& c : chains) {
-    std::vector<std::size_t> missing;
-    for (std::size_t i = c.first; i < c.first + c.count; ++i)
-      if (!cache.contains(keyed[i].key)) missing.push_back(i);
-    if (missing.empty()) continue;
-    std::vector<Job> then;
-    for (std::size_t j : plan.variants[c.truth->variant].jobs)
-      if (plan.jobs[j].renderer == RendererKind::kEvaluator) then.push_back(plan.jobs[j]);
-    for (std::size_t k = 1; k < missing.size(); ++k)
-      out.covered.emplace(keyed[missing[k]].key, keyed[missing[0]].key);
-    const auto [it, inserted] = out.by_key.try_emplace(keyed[missing[0]].key);
-    if (inserted)
-      it->second = {*c.truth, c.edge_steps, c.spp_steps, study.ground_truth, max_memory_bytes, {}};
-    it->second.then.insert(it->second.then.end(), then.begin(), then.end());
-  }
-  return out;
-}
-
 // The convergence phase: check renders go through the cache like any other.
-std::vector<VariantConvergence> converge(const Study& study, Plan& plan, const RenderCache& cache,
-                                         const StudyOptions& options, const Renderers& renderers,
+// `independent`: the jobs that do not wait for the truths' settings (the
+// external renderers', the sections'), which a submitting executor's first
+// round carries, so that they render while the truths converge.
+std::vector<VariantConvergence> converge(const Study& study, Plan& plan,
+                                         const std::vector<Job>& independent,
+                                         const RenderCache& cache, const StudyOptions& options,
+                                         const Renderers& renderers, Executor& executor,
                                          StudyRunStats& stats) {
-  // On Slurm each round is a submission; the external renderers' jobs do
-  // not depend on the truths' settings, so the first one carries them too
-  // and they render while the truths converge.
-  bool carry_external = options.slurm.has_value();
+  bool carry = executor.submits();
   const RenderBatch batch = [&](const std::vector<Job>& jobs, const std::vector<ChainState>& chains,
                                 std::vector<std::string>* errors) {
     std::vector<Job> keyed = jobs;
@@ -292,19 +188,17 @@ std::vector<VariantConvergence> converge(const Study& study, Plan& plan, const R
     const std::size_t checks = keyed.size();
     if (options.log)
       options.log(fmt::format("ground truth: checking convergence ({} renders)", checks));
+    std::vector<char> lacking(checks);
+    for (std::size_t i = 0; i < checks; ++i) lacking[i] = !cache.contains(keyed[i].key);
     // Only with a round that must be submitted anyway: a run submits once.
-    const bool submits = std::any_of(keyed.begin(), keyed.end(),
-                                     [&](const Job& j) { return !cache.contains(j.key); });
-    const SlurmChains slurm_chains =
-        submits && options.slurm
-            ? chains_to_submit(plan, study, options.max_memory_bytes, keyed, chains, cache)
-            : SlurmChains{};
-    if (submits && std::exchange(carry_external, false))
-      for (const Job& j : plan.jobs)
-        if (j.renderer != RendererKind::kEvaluator) keyed.push_back(j);
-    StudyRunStats carried;  // the external jobs are counted in the main phase
-    const Renders r = render_jobs(study.file, keyed, cache, options, renderers,
-                                  keyed.size() == checks ? stats : carried, &slurm_chains);
+    const bool submits = std::find(lacking.begin(), lacking.end(), 1) != lacking.end();
+    if (submits && std::exchange(carry, false))
+      keyed.insert(keyed.end(), independent.begin(), independent.end());
+    StudyRunStats carried;  // the carried jobs are counted in the main phase
+    const ConvergenceRound round{plan, study.ground_truth, options.max_memory_bytes, chains,
+                                 lacking};
+    const Renders r = render_jobs(study.file, keyed, cache, renderers, executor, options,
+                                  keyed.size() == checks ? stats : carried, &round);
     if (keyed.size() != checks) {
       stats.slurm = carried.slurm;
       stats.not_started += carried.not_started;
@@ -399,18 +293,89 @@ Comparisons compare_renders(const Plan& plan, const RenderedImages& images, cons
   return c;
 }
 
+// The jobs that do not wait for the truths' settings: the external
+// renderers' (the evaluator's take the settings reached) and the sections'.
+std::vector<Job> independent_jobs(const Plan& plan, const std::vector<Job>& section_jobs) {
+  std::vector<Job> out;
+  for (const Job& j : plan.jobs)
+    if (j.renderer != RendererKind::kEvaluator) out.push_back(j);
+  out.insert(out.end(), section_jobs.begin(), section_jobs.end());
+  return out;
+}
+
+// The sections' part of the render phase, the jobs from `first` on, moved
+// out of `r`, which keeps the plan's.
+SectionRenders take_section_renders(Renders& r, std::size_t first) {
+  const auto from = [&](auto& v) {
+    using Vector = std::decay_t<decltype(v)>;
+    Vector tail(std::make_move_iterator(v.begin() + static_cast<long>(first)),
+                std::make_move_iterator(v.end()));
+    v.resize(first);
+    return tail;
+  };
+  SectionRenders out;
+  out.images = from(r.images.images);
+  out.done = from(r.images.done);
+  out.cached = from(r.cached);
+  out.errors = from(r.errors);
+  r.attempted.resize(first);
+  r.same_as.resize(first);
+  return out;
+}
+
+void draw_figures(const fs::path& out, const StudyOptions& options, StudyRunStats& stats) {
+  if (options.log)
+    options.log(
+        fmt::format("figures: drawing the figures and report.html (harness/report.py, log {}) ...",
+                    (out / "report.log").string()));
+  // The figures grow with variants x methods (72 x 20 in the default
+  // study: about 5 min on 2 idle cores), so they get at least an hour,
+  // not one render's time-out.
+  const double figures_timeout_s = std::max(options.timeout_s, kFiguresTimeoutS);
+  stats.report_html = draw_report(
+      out.string(), options.self_contained_html, options.python, figures_timeout_s,
+      [&](const std::string& line) {
+        if (options.log) options.log("figures: " + line);
+      },
+      /*reuse_unchanged=*/true);
+}
+
+// What a run has once every render is accounted for.
+struct Rendered {
+  const Plan& plan;
+  const std::vector<VariantConvergence>& convergence;
+  Renders& renders;  // the plan's jobs, then the sections'
+  const std::optional<InterplayJobs>& interplay;
+};
+
+// The steps after the render phase: the comparisons, the sections' steps,
+// the report files and the figures.
+void report_study(const Study& study, const Rendered& in, const StepContext& context,
+                  const StudyOptions& options, StudyRunStats& stats) {
+  const fs::path out(context.out_dir);
+  const SectionRenders sections = take_section_renders(in.renders, in.plan.jobs.size());
+  const Comparisons comparisons = compare_renders(in.plan, in.renders.images, out, options, stats);
+  const std::vector<FilteringEntry> filtering =
+      study.filtering ? run_filtering_section(*study.filtering, context)
+                      : std::vector<FilteringEntry>{};
+  std::optional<InterplayResult> interplay;
+  if (in.interplay)
+    interplay = measure_interplay_section(*study.interplay, *in.interplay, sections, context);
+  write_report_files(
+      {study, in.plan, comparisons, context.renderers.versions, in.renders.errors,
+       in.renders.images.done, in.convergence, filtering, interplay ? &*interplay : nullptr},
+      out.string());
+  if (options.figures) draw_figures(out, options, stats);
+}
+
 }  // namespace
 
 StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const fs::path out(options.output_dir);
-  // A Slurm study probes from many short processes (report jobs): once per
-  // host and renderer executable is enough.
-  const std::string probes =
-      options.slurm && !options.dry_run
-          ? (out / "slurm" / fmt::format("versions.{}.json", host_tag())).string()
-          : "";
-  Renderers renderers = probe_renderers(study_renderers(study), options.timeout_s, probes);
+  const std::unique_ptr<Executor> executor = make_executor(options);
+  Renderers renderers = probe_renderers(study_renderers(study), options.timeout_s,
+                                        options.dry_run ? "" : executor->probe_cache(out.string()));
   Plan plan = plan_study(study, options.max_memory_bytes);
   assign_keys(plan, renderers.identities);
   const RenderCache cache((out / "cache").string());
@@ -422,54 +387,35 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   if (options.dry_run) {
     const std::vector<Job> checks =
         dry_run_convergence(study, plan, cache, options, renderers, stats);
-    count_planned(plan, cache, checks, options.parallelism.renders * options.parallelism.threads_per_render, stats);
+    count_planned(plan, cache, checks, options.parallelism.threads(), stats);
     return stats;
   }
   prepare_folders(out, options, stats);
   auto blender_sessions = std::make_unique<BlenderSessions>((out / "cache").string());
   renderers.blender_sessions = blender_sessions.get();
+  const StepContext context{out.string(), cache, renderers, options.parallelism, options.log};
+  // The sections' renders join the plan's (study/sections.h).
+  std::optional<InterplayJobs> interplay;
+  if (study.interplay) interplay = plan_interplay_section(*study.interplay, context);
+  const std::vector<Job> section_jobs = interplay ? interplay->jobs : std::vector<Job>{};
+  stats.renders += section_jobs.size();
   const std::vector<VariantConvergence> convergence =
-      converge(study, plan, cache, options, renderers, stats);
+      converge(study, plan, independent_jobs(plan, section_jobs), cache, options, renderers,
+               *executor, stats);
   if (stats.not_started > 0) {  // interrupted while checking the truths
     stats.seconds = seconds_since(start);
     return stats;
   }
-  const Renders r = render_jobs(study.file, plan.jobs, cache, options, renderers, stats);
+  std::vector<Job> jobs = plan.jobs;
+  jobs.insert(jobs.end(), section_jobs.begin(), section_jobs.end());
+  Renders r = render_jobs(study.file, jobs, cache, renderers, *executor, options, stats);
   stats.blender_processes = blender_sessions->started();
   blender_sessions.reset();  // the processes end here, not after the figures
   renderers.blender_sessions = nullptr;
   stats.seconds = seconds_since(start);
   if (stats.not_started > 0) return stats;  // interrupted: no report from a partial study
 
-  const Comparisons comparisons = compare_renders(plan, r.images, out, options, stats);
-  const std::vector<FilteringEntry> filtering =
-      study.filtering ? run_filtering_section(*study.filtering, out.string(),
-                                              options.parallelism.renders, options.log)
-                      : std::vector<FilteringEntry>{};
-  std::optional<InterplayResult> interplay;
-  if (study.interplay)
-    interplay = run_interplay_section(*study.interplay, out.string(), cache, renderers,
-                                      options.parallelism.threads(), options.log);
-  write_report_files({study, plan, comparisons, renderers.versions, r.errors, r.images.done,
-                      convergence, filtering, interplay ? &*interplay : nullptr},
-                     out.string());
-  if (options.figures) {
-    if (options.log)
-      options.log(
-          fmt::format("figures: drawing the figures and report.html (harness/report.py, "
-                      "log {}) ...",
-                      (out / "report.log").string()));
-    // The figures grow with variants x methods (72 x 20 in the default
-    // study: about 5 min on 2 idle cores), so they get at least an hour,
-    // not one render's time-out.
-    const double figures_timeout_s = std::max(options.timeout_s, kFiguresTimeoutS);
-    stats.report_html = draw_report(
-        out.string(), options.self_contained_html, options.python, figures_timeout_s,
-        [&](const std::string& line) {
-          if (options.log) options.log("figures: " + line);
-        },
-        /*reuse_unchanged=*/true);
-  }
+  report_study(study, {plan, convergence, r, interplay}, context, options, stats);
   stats.seconds = seconds_since(start);
   return stats;
 }

@@ -8,10 +8,9 @@
 #include <fmt/format.h>
 
 #include "scene/scene_json.h"
-#include "study/filtering_study.h"
-#include "study/interplay.h"
-#include "study/json_fields.h"
 #include "study/names.h"
+#include "study/study_file_sections.h"
+#include "util/json_reader.h"
 #include "util/strict_json.h"
 
 namespace penumbra {
@@ -36,176 +35,159 @@ std::string method_label(const std::string& id, const json& parameters) {
 namespace {
 
 // The parts the bump and low-poly sections share: scene files, fixed
-// overrides, sweep axes and renderers, under the JSON pointer `at`.
-void read_scenes(const json& doc, const std::string& f, const std::string& at, const fs::path& base,
-                 std::vector<std::string>* scenes) {
-  const json& list = require(doc, "scenes", f, at);
-  if (!list.is_array() || list.empty())
-    throw InputError(f, at + "/scenes", "expected a non-empty array of scene file paths");
+// overrides, sweep axes and renderers, of the object `r` reads.
+void read_scenes(Reader& r, const fs::path& base, std::vector<std::string>* scenes) {
+  const json& list = r.nonempty_array("scenes", "scene file paths");
   for (std::size_t i = 0; i < list.size(); ++i) {
-    if (!list[i].is_string())
-      throw InputError(f, fmt::format("{}/scenes/{}", at, i), "expected a path (string)");
+    if (!list[i].is_string()) r.fail_item("scenes", i, "expected a path (string)");
     const fs::path p = base / list[i].get<std::string>();
     if (!fs::is_regular_file(p))
-      throw InputError(f, fmt::format("{}/scenes/{}", at, i),
-                       fmt::format("no such scene file: {}", p.string()));
+      r.fail_item("scenes", i, fmt::format("no such scene file: {}", p.string()));
     scenes->push_back(p.lexically_normal().string());
   }
 }
 
-json read_set(const json& doc, const std::string& f, const std::string& at) {
-  if (!doc.contains("set")) return json::object();
-  if (!doc["set"].is_object())
-    throw InputError(f, at + "/set", "expected an object of JSON pointer -> value");
-  return doc["set"];
+json read_set(Reader& r) {
+  if (!r.has("set")) return json::object();
+  const json& set = r.at("set");
+  if (!set.is_object()) r.fail("set", "expected an object of JSON pointer -> value");
+  return set;
 }
 
-// A compound axis: {"name", "label", "values": [{"label", "set": {pointer: value}}]}.
-StudyAxis read_compound_axis(const json& a, const std::string& f, const std::string& p) {
-  reject_unknown(a, {"name", "label", "values"}, f, p);
+// An axis's "label" for plots and tables; absent: `fallback`.
+std::string read_label(Reader& a, const std::string& fallback) {
+  if (!a.has("label")) return fallback;
+  if (!a.at("label").is_string()) a.fail("label", "expected a string");
+  return a.at("label").get<std::string>();
+}
+
+// A compound axis: {"name", "label", "values": [{"id", "label", "set": {pointer: value}}]}.
+StudyAxis read_compound_axis(Reader a) {
+  a.expect({"name", "label", "values"});
   StudyAxis axis;
-  const json& name = require(a, "name", f, p);
+  const json& name = a.at("name");
   if (!name.is_string() || name.get<std::string>().empty() ||
       name.get<std::string>().find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_") !=
           std::string::npos)
-    throw InputError(f, p + "/name", "expected a snake_case name such as \"shading\"");
-  axis.pointer = axis.label = name.get<std::string>();
-  if (a.contains("label")) {
-    if (!a["label"].is_string()) throw InputError(f, p + "/label", "expected a string");
-    axis.label = a["label"].get<std::string>();
-  }
-  const json& values = require(a, "values", f, p);
-  if (!values.is_array() || values.empty())
-    throw InputError(f, p + "/values",
-                     "expected a non-empty array of {\"label\", \"set\"} objects");
+    a.fail("name", "expected a snake_case name such as \"shading\"");
+  axis.pointer = name.get<std::string>();
+  axis.label = read_label(a, axis.pointer);
+  const json& values = a.nonempty_array("values", "{\"label\", \"set\"} objects");
   for (std::size_t k = 0; k < values.size(); ++k) {
-    const std::string q = fmt::format("{}/values/{}", p, k);
-    if (!values[k].is_object()) throw InputError(f, q, "expected {\"label\": ..., \"set\": {...}}");
-    reject_unknown(values[k], {"id", "label", "set"}, f, q);
-    const json& label = require(values[k], "label", f, q);
+    Reader v = a.item("values", k, "expected {\"label\": ..., \"set\": {...}}");
+    v.expect({"id", "label", "set"});
+    const json& label = v.at("label");
     std::string id;
-    if (values[k].contains("id")) {
-      const json& i = values[k]["id"];
+    if (v.has("id")) {
+      const json& i = v.at("id");
       if (!i.is_string() || i.get<std::string>().empty() || i.get<std::string>().size() > 32 ||
           i.get<std::string>().find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-_.") !=
               std::string::npos)
-        throw InputError(f, q + "/id",
-                         "expected a short id of 1 to 32 lower-case letters, digits, '-', '_' or "
-                         "'.', such as \"ggx-diffuse\", got " + describe_json(i));
+        v.fail("id",
+               "expected a short id of 1 to 32 lower-case letters, digits, '-', '_' or '.', such "
+               "as \"ggx-diffuse\", got " +
+                   Reader::describe(i));
       id = i.get<std::string>();
-      for (const std::string& other : axis.ids)
-        if (other == id)
-          throw InputError(f, q + "/id", fmt::format("the id \"{}\" is already used", id));
+      if (std::find(axis.ids.begin(), axis.ids.end(), id) != axis.ids.end())
+        v.fail("id", fmt::format("the id \"{}\" is already used", id));
     }
-    const json& set = require(values[k], "set", f, q);
-    if (!label.is_string()) throw InputError(f, q + "/label", "expected a string");
+    const json& set = v.at("set");
+    if (!label.is_string()) v.fail("label", "expected a string");
     if (!set.is_object() || set.empty())
-      throw InputError(f, q + "/set", "expected an object of JSON pointers and values");
+      v.fail("set", "expected an object of JSON pointers and values");
     std::vector<std::pair<std::string, json>> pairs;
     for (const auto& [pointer, value] : set.items()) {
       if (pointer.rfind("/", 0) != 0)
-        throw InputError(f, q + "/set",
-                         fmt::format("expected JSON pointers as keys, got \"{}\"", pointer));
+        v.fail("set", fmt::format("expected JSON pointers as keys, got \"{}\"", pointer));
       pairs.emplace_back(pointer, value);
     }
+    v.finish();
     axis.values.push_back(label);
     axis.sets.push_back(std::move(pairs));
     axis.ids.push_back(std::move(id));
   }
+  a.finish();
   return axis;
 }
 
-std::vector<StudyAxis> read_axes(const json& doc, const std::string& f, const std::string& at) {
+StudyAxis read_axis(Reader a) {
+  if (a.has("name")) return read_compound_axis(a);
+  a.expect({"pointer", "label", "values"});
+  StudyAxis axis;
+  const json& pointer = a.at("pointer");
+  if (!pointer.is_string() || pointer.get<std::string>().rfind("/", 0) != 0)
+    a.fail("pointer", "expected a JSON pointer such as \"/height/amplitude\"");
+  axis.pointer = pointer.get<std::string>();
+  axis.label = read_label(a, axis.pointer);
+  axis.values = a.nonempty_array("values", "values").get<std::vector<json>>();
+  a.finish();
+  return axis;
+}
+
+std::vector<StudyAxis> read_axes(Reader& r) {
   std::vector<StudyAxis> out;
-  if (!doc.contains("axes")) return out;
-  const json& axes = doc["axes"];
-  if (!axes.is_array()) throw InputError(f, at + "/axes", "expected an array");
-  for (std::size_t i = 0; i < axes.size(); ++i) {
-    const std::string p = fmt::format("{}/axes/{}", at, i);
-    if (!axes[i].is_object()) throw InputError(f, p, "expected an object");
-    if (axes[i].contains("name")) {
-      out.push_back(read_compound_axis(axes[i], f, p));
-      continue;
-    }
-    reject_unknown(axes[i], {"pointer", "label", "values"}, f, p);
-    StudyAxis axis;
-    const json& pointer = require(axes[i], "pointer", f, p);
-    if (!pointer.is_string() || pointer.get<std::string>().rfind("/", 0) != 0)
-      throw InputError(f, p + "/pointer", "expected a JSON pointer such as \"/height/amplitude\"");
-    axis.pointer = pointer.get<std::string>();
-    axis.label = axis.pointer;
-    if (axes[i].contains("label")) {
-      if (!axes[i]["label"].is_string()) throw InputError(f, p + "/label", "expected a string");
-      axis.label = axes[i]["label"].get<std::string>();
-    }
-    const json& values = require(axes[i], "values", f, p);
-    if (!values.is_array() || values.empty())
-      throw InputError(f, p + "/values", "expected a non-empty array of values");
-    axis.values = values.get<std::vector<json>>();
-    out.push_back(std::move(axis));
-  }
+  if (!r.has("axes")) return out;
+  if (!r.at("axes").is_array()) r.fail("axes", "expected an array");
+  for (std::size_t i = 0; i < r.at("axes").size(); ++i)
+    out.push_back(read_axis(r.item("axes", i, "expected an object")));
   return out;
 }
 
-std::vector<RendererKind> read_renderers(const json& doc, const std::string& f,
-                                         const std::string& at) {
-  if (!doc.contains("renderers")) return all_renderers();
+std::vector<RendererKind> read_renderers(Reader& r) {
+  if (!r.has("renderers")) return all_renderers();
   std::vector<RendererKind> out;
-  const json& renderers = doc["renderers"];
-  if (!renderers.is_array() || renderers.empty())
-    throw InputError(f, at + "/renderers", "expected a non-empty array of renderer ids");
+  const json& renderers = r.nonempty_array("renderers", "renderer ids");
   for (std::size_t i = 0; i < renderers.size(); ++i) {
-    const auto r =
+    const auto kind =
         renderers[i].is_string() ? renderer_from_id(renderers[i].get<std::string>()) : std::nullopt;
-    if (!r)
-      throw InputError(f, fmt::format("{}/renderers/{}", at, i), "expected " + renderer_choices());
-    out.push_back(*r);
+    if (!kind) r.fail_item("renderers", i, "expected " + renderer_choices());
+    out.push_back(*kind);
   }
   if (std::find(out.begin(), out.end(), RendererKind::kEvaluator) == out.end())
-    throw InputError(f, at + "/renderers",
-                     "must include \"evaluator\": it provides the geometry and the reference");
+    r.fail("renderers", "must include \"evaluator\": it provides the geometry and the reference");
   return out;
+}
+
+// {"id": ..., "parameters": {...}}, element `i` of the list under `key`.
+StudyMethod read_method_object(Reader m, const char* what) {
+  m.expect({"id", "parameters"});
+  StudyMethod method;
+  const json& id = m.at("id");
+  if (!id.is_string()) m.fail("id", fmt::format("expected a {} id", what));
+  method.id = id.get<std::string>();
+  if (m.has("parameters")) {
+    if (!m.at("parameters").is_object())
+      m.fail("parameters", "expected an object of parameter values");
+    method.parameters = m.at("parameters");
+  }
+  m.finish();
+  return method;
 }
 
 // Method ids, or {"id": ..., "parameters": {...}} objects, under `key`;
 // parameter values are checked by the scene reader when variants expand.
 // Absent: every id. `what` names the kind in errors ("method", "offset method").
-std::vector<StudyMethod> read_method_list(const json& doc, const char* key, const std::string& f,
-                                          const std::string& at,
+std::vector<StudyMethod> read_method_list(Reader& r, const char* key,
                                           const std::vector<std::string>& ids, const char* what) {
   std::vector<StudyMethod> out;
-  if (!doc.contains(key)) {
+  if (!r.has(key)) {
     for (const std::string& id : ids) out.push_back({id, json(), id});
     return out;
   }
-  const std::string pointer = at + "/" + key;
-  const json& list = doc[key];
-  if (!list.is_array() || list.empty())
-    throw InputError(f, pointer, fmt::format("expected a non-empty array of {} ids", what));
+  const json& list = r.nonempty_array(key, fmt::format("{} ids", what));
   for (std::size_t i = 0; i < list.size(); ++i) {
-    const std::string p = fmt::format("{}/{}", pointer, i);
     StudyMethod m;
-    if (list[i].is_string()) {
+    if (list[i].is_string())
       m.id = list[i].get<std::string>();
-    } else if (list[i].is_object()) {
-      reject_unknown(list[i], {"id", "parameters"}, f, p);
-      const json& id = require(list[i], "id", f, p);
-      if (!id.is_string()) throw InputError(f, p + "/id", fmt::format("expected a {} id", what));
-      m.id = id.get<std::string>();
-      if (list[i].contains("parameters")) {
-        if (!list[i]["parameters"].is_object())
-          throw InputError(f, p + "/parameters", "expected an object of parameter values");
-        m.parameters = list[i]["parameters"];
-      }
-    } else {
-      throw InputError(
-          f, p, fmt::format("expected a {} id or {{\"id\": ..., \"parameters\": {{...}}}}", what));
-    }
-    if (std::find(ids.begin(), ids.end(), m.id) == ids.end()) {
-      std::string valid;
-      for (const std::string& id : ids) valid += (valid.empty() ? "" : ", ") + id;
-      throw InputError(f, p, fmt::format("unknown {} \"{}\" (valid: {})", what, m.id, valid));
-    }
+    else if (list[i].is_object())
+      m = read_method_object(r.item(key, i), what);
+    else
+      r.fail_item(
+          key, i,
+          fmt::format("expected a {} id or {{\"id\": ..., \"parameters\": {{...}}}}", what));
+    if (std::find(ids.begin(), ids.end(), m.id) == ids.end())
+      r.fail_item(key, i,
+                  fmt::format("unknown {} \"{}\" (valid: {})", what, m.id, fmt::join(ids, ", ")));
     m.label = method_label(m.id, m.parameters);
     out.push_back(std::move(m));
   }
@@ -224,137 +206,123 @@ std::vector<std::string> terminator_ids() {
   return ids;
 }
 
-Section read_lowpoly(const json& doc, const std::string& f, const fs::path& base) {
-  const std::string at = "/lowpoly";
-  if (!doc.is_object()) throw InputError(f, at, "expected an object");
-  reject_unknown(doc, {"scenes", "set", "axes", "offsets", "renderers", "convergence"}, f, at);
+Section read_lowpoly(Reader r, const fs::path& base) {
+  r.expect({"scenes", "set", "axes", "offsets", "renderers", "convergence"});
   Section part;
   part.kind = SectionKind::kLowPoly;
-  read_scenes(doc, f, at, base, &part.scenes);
-  part.set = read_set(doc, f, at);
-  part.axes = read_axes(doc, f, at);
-  part.methods = read_method_list(doc, "offsets", f, at, offset_ids(), "offset method");
-  part.renderers = read_renderers(doc, f, at);
-  if (doc.contains("convergence")) {
-    const json& c = doc["convergence"];
-    bool found = false;
+  read_scenes(r, base, &part.scenes);
+  part.set = read_set(r);
+  part.axes = read_axes(r);
+  part.methods = read_method_list(r, "offsets", offset_ids(), "offset method");
+  part.renderers = read_renderers(r);
+  if (r.has("convergence")) {
+    const json& c = r.at("convergence");
     for (std::size_t a = 0; a < part.axes.size(); ++a)
-      if (c.is_string() && c.get<std::string>() == part.axes[a].pointer) {
+      if (c.is_string() && c.get<std::string>() == part.axes[a].pointer)
         part.convergence_axis = static_cast<int>(a);
-        found = true;
-      }
-    if (!found)
-      throw InputError(f, at + "/convergence",
-                       "expected the pointer of one of /lowpoly/axes (the tessellation level)");
+    if (part.convergence_axis < 0)
+      r.fail("convergence",
+             "expected the pointer of one of /lowpoly/axes (the tessellation level)");
   }
+  r.finish();
   return part;
 }
 
-// Plots: a metric over two different axes of the study.
-std::vector<StudyPlot> read_plots(const json& plots, const std::string& f,
-                                  const std::vector<StudyAxis>& axes) {
-  if (!plots.is_array()) throw InputError(f, "/plots", "expected an array");
-  std::vector<StudyPlot> out;
-  for (std::size_t i = 0; i < plots.size(); ++i) {
-    const std::string p = fmt::format("/plots/{}", i);
-    if (!plots[i].is_object()) throw InputError(f, p, "expected an object");
-    reject_unknown(plots[i], {"metric", "x", "y", "kind", "renderer"}, f, p);
-    StudyPlot plot;
-    const json& metric = require(plots[i], "metric", f, p);
-    static const std::set<std::string> metrics{"profile.rmse_terminator",
-                                               "profile.rmse_overall",
-                                               "profile.max_error_terminator",
-                                               "profile.max_step",
-                                               "profile.position_error_deg",
-                                               "profile.width_deg",
-                                               "profile.lit_bias",
-                                               "image.rmse",
-                                               "image.ssim",
-                                               "image.max_error",
-                                               "view.rmse_grazing",
-                                               "view.bias_grazing"};
-    if (!metric.is_string() || !metrics.count(metric.get<std::string>())) {
-      std::string names;
-      for (const std::string& m : metrics) names += (names.empty() ? "" : ", ") + m;
-      throw InputError(f, p + "/metric", "expected one of " + names);
-    }
-    plot.metric = metric.get<std::string>();
-    auto axis_index = [&](const char* key) {
-      const json& v = require(plots[i], key, f, p);
-      for (std::size_t a = 0; a < axes.size(); ++a)
-        if (v.is_string() && v.get<std::string>() == axes[a].pointer) return static_cast<int>(a);
-      throw InputError(f, child(p, key), "expected the pointer of one of the study's axes");
-    };
-    plot.x = axis_index("x");
-    plot.y = axis_index("y");
-    if (plot.x == plot.y)
-      throw InputError(f, p + "/y", "expected an axis other than x (a plot needs two axes)");
-    if (plots[i].contains("kind")) {
-      const json& k = plots[i]["kind"];
-      if (!k.is_string() || (k != "contour" && k != "heatmap"))
-        throw InputError(f, p + "/kind", "expected \"contour\" or \"heatmap\"");
-      plot.kind = k.get<std::string>();
-    }
-    if (plots[i].contains("renderer")) {
-      const json& r = plots[i]["renderer"];
-      if (!r.is_string() || !renderer_from_id(r.get<std::string>()))
-        throw InputError(f, p + "/renderer", "expected " + renderer_choices());
-      plot.renderer = r.get<std::string>();
-    }
-    out.push_back(plot);
+// The metrics a plot may draw.
+const std::set<std::string>& plot_metrics() {
+  static const std::set<std::string> metrics{"profile.rmse_terminator",
+                                             "profile.rmse_overall",
+                                             "profile.max_error_terminator",
+                                             "profile.max_step",
+                                             "profile.position_error_deg",
+                                             "profile.width_deg",
+                                             "profile.lit_bias",
+                                             "image.rmse",
+                                             "image.ssim",
+                                             "image.max_error",
+                                             "view.rmse_grazing",
+                                             "view.bias_grazing"};
+  return metrics;
+}
+
+// A plot: a metric over two different axes of the study.
+StudyPlot read_plot(Reader p, const std::vector<StudyAxis>& axes) {
+  p.expect({"metric", "x", "y", "kind", "renderer"});
+  StudyPlot plot;
+  const json& metric = p.at("metric");
+  if (!metric.is_string() || !plot_metrics().count(metric.get<std::string>()))
+    p.fail("metric", fmt::format("expected one of {}", fmt::join(plot_metrics(), ", ")));
+  plot.metric = metric.get<std::string>();
+  auto axis_index = [&](const char* key) {
+    const json& v = p.at(key);
+    for (std::size_t a = 0; a < axes.size(); ++a)
+      if (v.is_string() && v.get<std::string>() == axes[a].pointer) return static_cast<int>(a);
+    p.fail(key, "expected the pointer of one of the study's axes");
+  };
+  plot.x = axis_index("x");
+  plot.y = axis_index("y");
+  if (plot.x == plot.y) p.fail("y", "expected an axis other than x (a plot needs two axes)");
+  if (p.has("kind")) {
+    const json& k = p.at("kind");
+    if (!k.is_string() || (k != "contour" && k != "heatmap"))
+      p.fail("kind", "expected \"contour\" or \"heatmap\"");
+    plot.kind = k.get<std::string>();
   }
+  if (p.has("renderer")) {
+    const json& r = p.at("renderer");
+    if (!r.is_string() || !renderer_from_id(r.get<std::string>()))
+      p.fail("renderer", "expected " + renderer_choices());
+    plot.renderer = r.get<std::string>();
+  }
+  p.finish();
+  return plot;
+}
+
+std::vector<StudyPlot> read_plots(Reader& r, const std::vector<StudyAxis>& axes) {
+  if (!r.at("plots").is_array()) r.fail("plots", "expected an array");
+  std::vector<StudyPlot> out;
+  for (std::size_t i = 0; i < r.at("plots").size(); ++i)
+    out.push_back(read_plot(r.item("plots", i, "expected an object"), axes));
   return out;
 }
 
-GroundTruthSettings read_ground_truth(const json& g, const std::string& f) {
-  if (!g.is_object()) throw InputError(f, "/ground_truth", "expected an object");
-  reject_unknown(g, {"tolerance", "max_edge_refinements", "max_spp_refinements"}, f,
-                 "/ground_truth");
+GroundTruthSettings read_ground_truth(Reader g) {
+  g.expect({"tolerance", "max_edge_refinements", "max_spp_refinements"});
   GroundTruthSettings out;
-  if (g.contains("tolerance")) {
-    const json& t = g["tolerance"];
-    if (!t.is_number() || !(t.get<double>() > 0.0 && t.get<double>() <= 1.0))
-      throw InputError(
-          f, "/ground_truth/tolerance",
-          "expected a number in (0, 1] (fraction of albedo*E/pi), got " + describe_json(t));
-    out.tolerance = t.get<double>();
-  }
-  for (auto [key, target] : {std::pair{"max_edge_refinements", &out.max_edge_refinements},
-                             std::pair{"max_spp_refinements", &out.max_spp_refinements}}) {
-    if (!g.contains(key)) continue;
-    const long long n = strict_integer(g[key], 0, 5);
-    if (n < 0)
-      throw InputError(f, std::string("/ground_truth/") + key,
-                       "expected an integer in [0, 5], got " + describe_json(g[key]));
-    *target = static_cast<int>(n);
-  }
+  out.tolerance = g.number_or(
+      "tolerance", out.tolerance, [](double t) { return t > 0.0 && t <= 1.0; },
+      "in (0, 1] (fraction of albedo*E/pi)");
+  out.max_edge_refinements =
+      static_cast<int>(g.integer_or("max_edge_refinements", out.max_edge_refinements, 0, 5));
+  out.max_spp_refinements =
+      static_cast<int>(g.integer_or("max_spp_refinements", out.max_spp_refinements, 0, 5));
+  g.finish();
   return out;
 }
 
 // "figures": {"methods": [...]}: labels of the study's own bump methods, as
 // the study names them ("shading-offset(s=0.3)", or its id when that is
 // unambiguous).
-std::vector<std::string> read_figure_methods(const json& figures, const std::string& f,
-                                             const Section& bump) {
-  if (!figures.is_object()) throw InputError(f, "/figures", "expected an object");
-  reject_unknown(figures, {"methods"}, f, "/figures");
+std::vector<std::string> read_figure_methods(Reader figures, const Section& bump) {
+  figures.expect({"methods"});
   std::vector<std::string> out;
-  if (!figures.contains("methods")) return out;
-  const json& list = figures["methods"];
-  if (!list.is_array()) throw InputError(f, "/figures/methods", "expected an array of methods");
+  if (!figures.has("methods")) return out;
+  const json& list = figures.at("methods");
+  if (!list.is_array()) figures.fail("methods", "expected an array of methods");
   for (std::size_t i = 0; i < list.size(); ++i) {
-    const std::string p = fmt::format("/figures/methods/{}", i);
-    if (!list[i].is_string()) throw InputError(f, p, "expected a method label (string)");
+    if (!list[i].is_string()) figures.fail_item("methods", i, "expected a method label (string)");
     const std::string name = list[i].get<std::string>();
     std::vector<std::string> matches;
     for (const StudyMethod& m : bump.methods)
       if (m.label == name || m.id == name) matches.push_back(m.label);
     if (matches.size() != 1)
-      throw InputError(f, p,
-                       fmt::format("expected one of the study's /methods by label, got \"{}\" ({})",
-                                   name, matches.empty() ? "not in the study" : "ambiguous"));
+      figures.fail_item(
+          "methods", i,
+          fmt::format("expected one of the study's /methods by label, got \"{}\" ({})", name,
+                      matches.empty() ? "not in the study" : "ambiguous"));
     out.push_back(matches.front());
   }
+  figures.finish();
   return out;
 }
 
@@ -370,62 +338,68 @@ void add_baseline(Study& s) {
       "and of the combined error: it was added to /methods.");
 }
 
+// /name, or the file's stem made plain: the default output folder results/NAME.
+std::string read_name(Reader& r, const std::string& path) {
+  if (!r.has("name")) {
+    std::string name = file_safe(fs::path(path).stem().string().substr(0, 100));
+    return name.empty() || name[0] == '.' ? "study" + name : name;
+  }
+  if (!r.at("name").is_string()) r.fail("name", "expected a string");
+  const std::string name = r.at("name").get<std::string>();
+  if (!plain_name(name))
+    r.fail("name", fmt::format("expected a study name of 1 to 100 letters, digits, '-', '_' or "
+                               "'.' (not starting with '.'), got \"{}\"",
+                               name));
+  return name;
+}
+
+// The sections: bump (the document's own scenes), low-poly, filtering and
+// interplay. A study is one of them, or several.
+void read_sections(Reader& r, const fs::path& base, Study& s) {
+  if (r.has("lowpoly")) s.lowpoly = read_lowpoly(r.object("lowpoly", "expected an object"), base);
+  if (r.has("filtering"))
+    s.filtering =
+        read_filtering_section(r.object("filtering", "expected an object with \"maps\""), base);
+  if (r.has("interplay"))
+    s.interplay =
+        read_interplay_section(r.object("interplay", "expected an object with \"scene\""), base);
+  if (r.has("scenes") || (!s.lowpoly && !s.filtering && !s.interplay))
+    read_scenes(r, base, &s.bump.scenes);
+  // Without scenes these would sweep nothing: an error, not a silent no-op.
+  if (s.bump.scenes.empty())
+    for (const char* key : {"set", "axes", "methods", "renderers", "plots", "figures"})
+      if (r.has(key))
+        r.fail(key, "unused key: it belongs to the bump section, and the study has no /scenes");
+  s.bump.set = read_set(r);
+  s.bump.axes = read_axes(r);
+  s.bump.methods = read_method_list(r, "methods", terminator_ids(), "method");
+  add_baseline(s);
+  s.bump.renderers = read_renderers(r);
+}
+
 }  // namespace
 
 Study load_study(const std::string& path) {
   const json doc = read_json_file(path);
-  const std::string& f = path;
-  if (!doc.is_object()) throw InputError(f, "", "expected a JSON object");
-  reject_unknown(doc,
-                 {"version", "name", "scenes", "set", "axes", "methods", "renderers", "blender_spp",
-                  "ground_truth", "plots", "figures", "lowpoly", "filtering", "interplay"},
-                 f, "");
-  const json& version = require(doc, "version", f, "");
+  Reader r(doc, "", path, "expected a JSON object");
+  r.expect({"version", "name", "scenes", "set", "axes", "methods", "renderers", "blender_spp",
+            "ground_truth", "plots", "figures", "lowpoly", "filtering", "interplay"});
+  const json& version = r.at("version");
   if (strict_integer(version, 1, 1000) != kStudyFormatVersion)
-    throw InputError(
-        f, "/version",
-        fmt::format("expected {}, got {}", kStudyFormatVersion, describe_json(version)));
+    r.fail("version",
+           fmt::format("expected {}, got {}", kStudyFormatVersion, Reader::describe(version)));
   Study s;
   s.file = path;
-  s.absolute_file = std::filesystem::absolute(path).lexically_normal().string();
-  if (doc.contains("name")) {
-    if (!doc["name"].is_string()) throw InputError(f, "/name", "expected a string");
-    s.name = doc["name"].get<std::string>();
-    // The name becomes the default output folder results/NAME: a plain name only.
-    if (!plain_name(s.name))
-      throw InputError(f, "/name",
-                       fmt::format("expected a study name of 1 to 100 letters, digits, '-', '_' "
-                                   "or '.' (not starting with '.'), got \"{}\"",
-                                   s.name));
-  } else {  // the file's stem, made plain
-    s.name = file_safe(fs::path(path).stem().string().substr(0, 100));
-    if (s.name.empty() || s.name[0] == '.') s.name = "study" + s.name;
-  }
-  const fs::path base = fs::path(path).parent_path();
-  if (doc.contains("lowpoly")) s.lowpoly = read_lowpoly(doc["lowpoly"], f, base);
-  if (doc.contains("filtering"))
-    s.filtering = read_filtering_section(doc["filtering"], f, base.string());
-  if (doc.contains("interplay"))
-    s.interplay = read_interplay_section(doc["interplay"], f, base.string());
-  // A study is a bump, low-poly, filtering or interplay study, or several.
-  if (doc.contains("scenes") || (!s.lowpoly && !s.filtering && !s.interplay))
-    read_scenes(doc, f, "", base, &s.bump.scenes);
-  s.bump.set = read_set(doc, f, "");
-  s.bump.axes = read_axes(doc, f, "");
-  s.bump.methods = read_method_list(doc, "methods", f, "", terminator_ids(), "method");
-  add_baseline(s);
-  s.bump.renderers = read_renderers(doc, f, "");
-  if (doc.contains("blender_spp")) {
-    const long long spp = strict_integer(doc["blender_spp"], 1, 65536);
-    if (spp < 0)
-      throw InputError(
-          f, "/blender_spp",
-          "expected an integer in [1, 65536], got " + describe_json(doc["blender_spp"]));
-    s.blender_spp = static_cast<int>(spp);
-  }
-  if (doc.contains("ground_truth")) s.ground_truth = read_ground_truth(doc["ground_truth"], f);
-  if (doc.contains("plots")) s.plots = read_plots(doc["plots"], f, s.bump.axes);
-  if (doc.contains("figures")) s.figure_methods = read_figure_methods(doc["figures"], f, s.bump);
+  s.absolute_file = fs::absolute(path).lexically_normal().string();
+  s.name = read_name(r, path);
+  read_sections(r, fs::path(path).parent_path(), s);
+  s.blender_spp = static_cast<int>(r.integer_or("blender_spp", s.blender_spp, 1, 65536));
+  if (r.has("ground_truth"))
+    s.ground_truth = read_ground_truth(r.object("ground_truth", "expected an object"));
+  if (r.has("plots")) s.plots = read_plots(r, s.bump.axes);
+  if (r.has("figures"))
+    s.figure_methods = read_figure_methods(r.object("figures", "expected an object"), s.bump);
+  r.finish();
   return s;
 }
 

@@ -26,8 +26,8 @@ namespace penumbra {
 //                of `penumbra filtering`); default: T.
 // Each render then gets T / J threads, at least one: what an external
 // renderer is given (POV-Ray's +WT; Blender always renders on one). A
-// command or step that renders one image at a time (`penumbra render`, a
-// study's interplay section) gives it threads(): T, or J where J > T.
+// command that renders one image at a time (`penumbra render`) gives it
+// threads(): T, or J where J > T.
 struct Parallelism {
   int renders = 1;             // J
   int threads_per_render = 1;  // T / J, at least 1

@@ -27,6 +27,7 @@
 namespace penumbra {
 namespace {
 
+namespace fs = std::filesystem;
 using nlohmann::json;
 
 const std::string kSource = PENUMBRA_SOURCE_DIR;
@@ -128,6 +129,26 @@ TEST_F(Interplay, RowsAreTheHandWrittenRendersComparedWithTheMapsDisplacement) {
   ASSERT_FALSE(log.empty());
   EXPECT_NE(log.back().find("0 rendered now, 6 from the cache"), std::string::npos) << log.back();
   EXPECT_EQ(json::parse(read_file(path("out/report.json")))["interplay"], ip);
+}
+
+// The section's renders are the run's: counted with it, rendered by its
+// executor, stopped with it (no report from a partial run) and taken from
+// the cache when it resumes.
+TEST_F(Interplay, ItsRendersJoinTheRunsRenderPhase) {
+  StudyOptions o = options(nullptr);
+  o.max_new_renders = 2;
+  const StudyRunStats stopped = run_study(load_study(write(study())), o);
+  EXPECT_EQ(stopped.renders, 6u);
+  EXPECT_EQ(stopped.rendered, 2u);
+  EXPECT_EQ(stopped.not_started, 4u);
+  EXPECT_FALSE(fs::exists(path("out/report.json")));
+  o.max_new_renders = -1;
+  const StudyRunStats rest = run_study(load_study(write(study())), o);
+  EXPECT_TRUE(rest.complete());
+  EXPECT_EQ(rest.renders, 6u);
+  EXPECT_EQ(rest.cached, 2u);
+  EXPECT_EQ(rest.rendered, 4u);
+  EXPECT_TRUE(fs::exists(path("out/report.json")));
 }
 
 TEST_F(Interplay, MalformedSectionsNameFileAndPointer) {

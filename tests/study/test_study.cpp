@@ -353,17 +353,24 @@ TEST_F(Study, MalformedStudiesNameFileAndPointer) {
          j["plots"] = {{{"metric", "image.ssim"}, {"x", "/nope"}, {"y", "/height/amplitude"}}};
        },
        "/plots/0/x", "axes"},
-      {[](json& j) { j["figures"] = {{"methods", {"mitsuba3"}}}; }, "/figures/methods/0",
-       "not in the study"},
-      {[](json& j) { j["figures"] = {{"method", {"none"}}}; }, "/figures/method", "unknown key"},
       {[](json& j) {
-         j["axes"] = {{{"name", "shading"},
-                       {"values",
-                        {{{"label", "a"}, {"id", "Bad Id"}, {"set", {{"/terminator/lobes", "all"}}}}}}}};
+         j["figures"] = {{"methods", {"mitsuba3"}}};
+       },
+       "/figures/methods/0", "not in the study"},
+      {[](json& j) {
+         j["figures"] = {{"method", {"none"}}};
+       },
+       "/figures/method", "unknown key"},
+      {[](json& j) {
+         j["axes"] = {
+             {{"name", "shading"},
+              {"values",
+               {{{"label", "a"}, {"id", "Bad Id"}, {"set", {{"/terminator/lobes", "all"}}}}}}}};
        },
        "/axes/0/values/0/id", "short id"},
       {[](json& j) {
-         const json value = {{"label", "a"}, {"id", "same"}, {"set", {{"/terminator/lobes", "all"}}}};
+         const json value = {
+             {"label", "a"}, {"id", "same"}, {"set", {{"/terminator/lobes", "all"}}}};
          j["axes"] = {{{"name", "shading"}, {"values", {value, value}}}};
        },
        "/axes/0/values/1/id", "already used"},
@@ -431,6 +438,31 @@ TEST_F(Study, LowPolyStudyComparesEveryOffsetWithTheAnalyticSurface) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.pointer(), "/lowpoly/offsets/1") << e.what();
   }
+}
+
+// The bump section's keys in a study without its scenes would sweep
+// nothing: refused as unused, naming the key.
+TEST_F(Study, BumpKeysWithoutScenesAreUnused) {
+  const json lowpoly_only = {
+      {"version", 1},
+      {"lowpoly",
+       {{"scenes", {kSource + "/scenes/lowpoly/sphere.json"}},
+        {"axes", {{{"pointer", "/shape/tessellation/segments"}, {"values", {8}}}}},
+        {"renderers", {"evaluator"}}}}};
+  EXPECT_NO_THROW(load_study(write("good.json", lowpoly_only)));
+  const std::vector<MalformedCase> cases = {
+      {[](json& j) { j["methods"] = {"none"}; }, "/methods", "unused key"},
+      {[](json& j) {
+         j["set"] = {{"/camera/spp", 4}};
+       },
+       "/set", "unused key"},
+      {[](json& j) { j["renderers"] = {"evaluator"}; }, "/renderers", "no /scenes"},
+      {[](json& j) {
+         j["figures"] = {{"methods", json::array()}};
+       },
+       "/figures", "unused key"},
+  };
+  expect_refused(lowpoly_only, "", cases, [&](const json& j) { return write("bad.json", j); });
 }
 
 // A sweep with more variants than the page shows (harness/penumbra_data.py,
