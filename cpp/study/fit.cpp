@@ -235,7 +235,7 @@ void load_variants(const FitOptions& o, const json& report, FitResult* r) {
   for (const FitVariant& v : r->variants)
     for (std::size_t b = 0; b < v.data.tally.count.size(); ++b) {
       const double centre = (double(b) + 0.5) * v.data.tally.bin_degrees;
-      if (centre < 60.0 || centre >= 100.0) continue;
+      if (centre < kTerminatorBegin || centre >= kTerminatorEnd) continue;
       outside += v.data.tally.rest[b];
       total += v.data.tally.rest[b];
       for (const auto& [cell, light] : v.data.tally.scaled[b]) total += light;
