@@ -34,7 +34,7 @@ const std::vector<ShadingVectors>& pool() {
 
 void bm_factor(benchmark::State& state, penumbra::TerminatorMethod method) {
   const auto& vectors = pool();
-  penumbra::MethodSettings settings{method, 0.5};
+  penumbra::MethodSettings settings{method, 0.5, nullptr};
   std::size_t i = 0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(penumbra::terminator_factor(settings, vectors[i]));
@@ -47,7 +47,7 @@ void bm_factor(benchmark::State& state, penumbra::TerminatorMethod method) {
 void bm_shade(benchmark::State& state, penumbra::TerminatorMethod method) {
   const auto& vectors = pool();
   penumbra::TerminatorSettings settings;
-  settings.method = {method, 0.5};
+  settings.method = {method, 0.5, nullptr};
   settings.lobes = penumbra::Lobes::kAll;
   penumbra::Material material;
   material.specular_weight = 0.4;

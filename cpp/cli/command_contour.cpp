@@ -68,7 +68,12 @@ int contour(const ContourArgs& a, std::ostream& out) {
     const auto m = method_from_id(id);
     if (!m)
       throw UsageError(fmt::format("--method: unknown method \"{}\" (see penumbra methods)", id));
-    methods.push_back({*m, 0.0});
+    if (method_info(*m).needs_table)
+      throw UsageError(fmt::format(
+          "--method {}: its G is a table over the grid of penumbra fit; fit.json's pictures hold "
+          "it at the cells' centres",
+          id));
+    methods.push_back({*m, 0.0, nullptr});
   }
   std::error_code ec;
   fs::create_directories(a.output, ec);

@@ -4,7 +4,10 @@
 
 #include <fmt/format.h>
 
+#include "analysis/factor_emit.h"
 #include "cli/command.h"
+#include "image/image_io.h"
+#include "scene/factor_table_file.h"
 #include "study/fit.h"
 
 namespace penumbra {
@@ -14,7 +17,30 @@ namespace {
 struct FitArgs {
   std::string folder, output;
   int resamples = 2000;
+  std::vector<std::string> emit;  // languages (factor_emit.h)
+  std::string table;              // emit this table.json without fitting
 };
+
+EmitLanguage emit_language(const std::string& id) {
+  for (const auto& [name, value] : kEmitLanguageNames)
+    if (id == name) return value;
+  throw UsageError("--emit: expected c, glsl or osl, got " + id);
+}
+
+std::string provenance(const std::string& source, const FactorTable& table) {
+  return fmt::format("Fitted by penumbra fit ({}), table digest {}.", source,
+                     factor_table_digest(table));
+}
+
+// --table FILE --emit LANG: the function of a table already fitted, on stdout.
+int emit_only(const FitArgs& a, const CommandContext& c) {
+  if (!a.folder.empty() || !a.output.empty())
+    throw UsageError("--table emits a fitted table without fitting: give no folder and no -o");
+  if (a.emit.size() != 1) throw UsageError("--table needs exactly one --emit c|glsl|osl");
+  const auto table = load_factor_table(a.table);
+  c.out << emit_factor_table(*table, emit_language(a.emit[0]), provenance(a.table, *table));
+  return kExitOk;
+}
 
 void print_summary(const FitResult& r, std::ostream& out) {
   const auto pct = [](const PooledError& e) {
@@ -34,7 +60,8 @@ void print_summary(const FitResult& r, std::ostream& out) {
                        100 * s.share.interval.high);
 }
 
-int fit(const FitArgs& a, const CommandContext& c) {
+int fit_into(const FitArgs& a, const CommandContext& c) {
+  for (const std::string& id : a.emit) emit_language(id);
   FitOptions options;
   options.folder = a.folder;
   options.resamples = a.resamples;
@@ -48,7 +75,27 @@ int fit(const FitArgs& a, const CommandContext& c) {
   print_summary(result, c.out);
   c.out << fmt::format("wrote {0}/fit.json, {0}/fit.csv and {0}/table.json in {1:.1f} s\n",
                        a.output, result.seconds);
+  for (const std::string& id : a.emit) {
+    const EmitLanguage language = emit_language(id);
+    const std::string file =
+        (std::filesystem::path(a.output) / ("fitted" + std::string(emit_extension(language))))
+            .string();
+    write_text_file(file, emit_factor_table(result.table, language,
+                                            provenance("study " + result.study, result.table)));
+    c.out << fmt::format("wrote {}: penumbra_fitted_g, the table as {}\n", file, id);
+  }
   return kExitOk;
+}
+
+int fit(const FitArgs& a, const CommandContext& c) {
+  if (!a.table.empty()) return emit_only(a, c);
+  if (a.folder.empty())
+    throw UsageError("fit needs a finished study's folder (or --table FILE --emit LANG)");
+  FitArgs args = a;
+  // Beside the study, where `penumbra report` finds it for the report's
+  // "What is achievable" section.
+  if (args.output.empty()) args.output = (std::filesystem::path(a.folder) / "fit").string();
+  return fit_into(args, c);
 }
 
 }  // namespace
@@ -59,10 +106,17 @@ Command add_fit_command(CLI::App& app, SharedOptions&) {
       "fit",
       "what any terminator factor of the light and deviation angles could achieve on a finished "
       "study, each method's share of it, and a table fitted without the family it is measured on");
-  cmd->add_option("folder", a->folder, "finished study output folder (report.json, cache/)")
-      ->required();
-  cmd->add_option("-o,--output", a->output, "folder for fit.json, fit.csv and table.json")
-      ->required();
+  cmd->add_option("folder", a->folder, "finished study output folder (report.json, cache/)");
+  cmd->add_option("-o,--output", a->output,
+                  "folder for fit.json, fit.csv and table.json (default: FOLDER/fit, where the "
+                  "study's report finds it)");
+  cmd->add_option("--emit", a->emit,
+                  "also write the fitted table as a function a renderer can paste: "
+                  "OUT/fitted.c, .glsl or .osl (repeatable)")
+      ->check(CLI::IsMember({"c", "glsl", "osl"}));
+  cmd->add_option("--table", a->table,
+                  "print the function of this table.json (with one --emit) instead of fitting")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--resamples", a->resamples, "bootstrap resamples over variants")
       ->check(CLI::Range(100, 100000))
       ->capture_default_str();

@@ -207,14 +207,10 @@ HeightBounds height_bounds(const HeightFunction& function, const SurfaceMap* map
 
 std::string map_digest(const SurfaceMap& m) {
   const int header[4] = {static_cast<int>(m.kind), m.width, m.height, m.channels()};
-  std::uint64_t a = fnv1a(header, sizeof header);
-  std::uint64_t b = fnv1a(header, sizeof header, kFnvOffset ^ 0x9e3779b97f4a7c15ull);
-  a = fnv1a(m.texels.data(), m.texels.size() * sizeof(float), a);
-  b = fnv1a(m.texels.data(), m.texels.size() * sizeof(float), b);
-  char text[33];
-  std::snprintf(text, sizeof text, "%016llx%016llx", static_cast<unsigned long long>(a),
-                static_cast<unsigned long long>(b));
-  return text;
+  ContentDigest digest;
+  digest.add(header, sizeof header);
+  digest.add(m.texels.data(), m.texels.size() * sizeof(float));
+  return digest.hex();
 }
 
 }  // namespace penumbra

@@ -13,7 +13,7 @@ constexpr std::array<MethodParameter, 1> kShadingOffsetParameters{{
      "f = 1/(1 - s/2)"},
 }};
 
-constexpr std::array<MethodInfo, 20> kMethods{{
+constexpr std::array<MethodInfo, 21> kMethods{{
     {TerminatorMethod::kNone,
      "none",
      "-",
@@ -263,6 +263,23 @@ constexpr std::array<MethodInfo, 20> kMethods{{
      "",
      "",
      true},
+    {TerminatorMethod::kFitted,
+     "fitted",
+     "Penumbra's `penumbra fit`: a table of G fitted to the displaced ground truth "
+     "(docs/achievable.md)",
+     "G(theta_i, delta) from /terminator/parameters/table (the table.json of penumbra fit), "
+     "multilinear between the cells' centres, 1 outside the table's grid",
+     {},
+     MethodKind::kFactor,
+     NormalAdjustment::kNone,
+     FactorLobes::kScene,
+     false,
+     false,
+     "G where Ns == Ng is the table's value at deviation 0, which a fit need not make 1",
+     "",
+     false,
+     false,
+     true},
 }};
 
 double clamp01(double x) {
@@ -440,6 +457,8 @@ double terminator_factor(const MethodSettings& settings, const Vec3& ng, const V
       return microshadow_chan2018(dot(ns, wi), visibility);
     case TerminatorMethod::kMicroshadowBrinck2016:
       return microshadow_brinck2016(dot(ns, wi), visibility);
+    case TerminatorMethod::kFitted:
+      return settings.table ? settings.table->at(factor_inputs(ng, ns, wi, wo)) : 1.0;
   }
   return 1.0;
 }

@@ -15,10 +15,12 @@
 // and shading.cpp, the scene reader for a parameter, the tests, the studies).
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <span>
 #include <string_view>
 
+#include "core/factor_table.h"
 #include "core/normal_adjust.h"
 #include "core/vec.h"
 
@@ -45,6 +47,7 @@ enum class TerminatorMethod {
   kSchuessler2017Walk,
   kMicroshadowChan2018,
   kMicroshadowBrinck2016,
+  kFitted,
 };
 
 // How a method acts: a factor on the lobes' contribution, a factor plus the
@@ -94,16 +97,23 @@ struct MethodInfo {
   // model): its samples cannot be shared with other methods' renders
   // (evaluator/evaluator.h, render_methods).
   bool draws_random = false;
+  // The factor is a table read from a file (/terminator/parameters/table,
+  // the table.json that `penumbra fit` writes): a study or bench that takes
+  // every method leaves it out unless a table is given.
+  bool needs_table = false;
 };
 
 std::span<const MethodInfo> all_methods();
 const MethodInfo& method_info(TerminatorMethod method);
 std::optional<TerminatorMethod> method_from_id(std::string_view id);
 
-// A method with its parameter values (only shading-offset has one so far).
+// A method with its parameter values.
 struct MethodSettings {
   TerminatorMethod method = TerminatorMethod::kNone;
   double shading_offset = 0.0;  // shading-offset `s`, dimensionless, [0,1]
+  // fitted: G over (light, deviation, ...) angles, multilinear between the
+  // cells' centres (core/factor_table.h), with its content digest.
+  std::shared_ptr<const FactorTable> table = nullptr;
 };
 
 // Unit vectors at a shading point, all in the same space.
@@ -114,8 +124,9 @@ struct ShadingVectors {
   Vec3 ng, ns, wi, wo;
 };
 
-// The factor multiplied into the affected lobes' contribution, in [0,1].
-// Finite for every finite unit input, degenerate ones included. 1 for the
+// The factor multiplied into the affected lobes' contribution, in [0,1]
+// (fitted: in the table's range, which may exceed 1 where raw bump is too
+// dark). Finite for every finite unit input, degenerate ones included. 1 for the
 // adjustment-only methods; the microfacet models have no factor (1 here;
 // shading.cpp evaluates them).
 // `visibility`: the height field's ambient visibility at the point, in [0,1]

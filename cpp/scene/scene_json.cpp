@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include "image/bump_maps.h"
+#include "scene/factor_table_file.h"
 #include "util/json_reader.h"
 
 namespace penumbra {
@@ -368,6 +369,18 @@ HeightSpec read_height(Reader r, const Shape& shape) {
   return h;
 }
 
+// /terminator/parameters/table: a path, relative ones already made relative
+// to the scene file (resolve_map_files).
+std::shared_ptr<const FactorTable> read_table_file(Reader& p) {
+  const std::string file = p.string("table");
+  if (file.empty()) p.fail("table", "expected the path of a table.json, got \"\"");
+  try {
+    return load_factor_table(file);
+  } catch (const InputError& e) {
+    p.fail("table", e.what());
+  }
+}
+
 TerminatorSettings read_terminator(Reader r) {
   TerminatorSettings t;
   if (r.has("method")) {
@@ -380,8 +393,13 @@ TerminatorSettings read_terminator(Reader r) {
     t.method.method = *method;
   }
   const MethodInfo& info = method_info(t.method.method);
+  if (info.needs_table && !r.has("parameters"))
+    r.fail("parameters", fmt::format("method \"{}\" needs {{\"table\": FILE}}, the table.json "
+                                     "that penumbra fit writes",
+                                     info.id));
   if (r.has("parameters")) {
     Reader p = r.object("parameters");
+    if (info.needs_table) t.method.table = read_table_file(p);
     for (const MethodParameter& parameter : info.parameters) {
       const std::string name(parameter.name);
       const double value = p.number_or(
@@ -445,15 +463,17 @@ void check_maps(const Scene& s, const std::string& origin) {
 }  // namespace
 
 void resolve_map_files(json& document, const std::string& scene_path) {
-  const json::json_pointer file("/height/file");
-  if (!document.is_object() || !document.contains(file) || !document[file].is_string()) return;
-  const std::filesystem::path path(document[file].get<std::string>());
-  if (path.empty() || path.is_absolute()) return;
-  // A bare file name has no parent: its folder is the working directory.
-  const std::filesystem::path folder = std::filesystem::path(scene_path).parent_path();
-  const std::filesystem::path base =
-      folder.empty() ? std::filesystem::current_path() : std::filesystem::absolute(folder);
-  document[file] = (base / path).lexically_normal().string();
+  for (const char* pointer : {"/height/file", "/terminator/parameters/table"}) {
+    const json::json_pointer file(pointer);
+    if (!document.is_object() || !document.contains(file) || !document[file].is_string()) continue;
+    const std::filesystem::path path(document[file].get<std::string>());
+    if (path.empty() || path.is_absolute()) continue;
+    // A bare file name has no parent: its folder is the working directory.
+    const std::filesystem::path folder = std::filesystem::path(scene_path).parent_path();
+    const std::filesystem::path base =
+        folder.empty() ? std::filesystem::current_path() : std::filesystem::absolute(folder);
+    document[file] = (base / path).lexically_normal().string();
+  }
 }
 
 Override parse_override(const std::string& text) {

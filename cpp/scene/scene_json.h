@@ -27,9 +27,10 @@ Override parse_override(const std::string& text);
 void apply_overrides(nlohmann::json& document, const std::vector<Override>& overrides,
                      const std::string& origin);
 
-// Makes a relative /height/file relative to the folder of the scene file
-// `scene_path` (as Mitsuba resolves scene resources), so that a scene finds
-// its maps from any working directory. load_scene does this.
+// Makes a relative /height/file and /terminator/parameters/table relative
+// to the folder of the scene file `scene_path` (as Mitsuba resolves scene
+// resources), so that a scene finds its maps and tables from any working
+// directory. load_scene does this.
 void resolve_map_files(nlohmann::json& document, const std::string& scene_path);
 
 // Validates and converts. `origin` is the file name used in error messages.

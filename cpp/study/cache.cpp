@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "image/image_io.h"
+#include "scene/factor_table_file.h"
 #include "study/plan.h"
 #include "util/hash.h"
 #include "util/strict_json.h"
@@ -86,14 +87,17 @@ void assign_keys(std::vector<Job>& jobs,
     const auto it = std::find_if(ids.begin(), ids.end(),
                                  [&](const auto& entry) { return entry.first == job.renderer; });
     const RendererIdentity identity = it != ids.end() ? it->second : RendererIdentity{};
-    if (!job.scene.height.map) {
+    const auto& table = job.scene.terminator.method.table;
+    if (!job.scene.height.map && !table) {
       job.key = render_key(job.scene_json, job.renderer, identity);
       continue;
     }
-    // An image map enters the key by its content, not by where it lies: a
-    // map edited in place re-renders, a moved one does not.
+    // An image map or a fitted table enters the key by its content, not by
+    // where it lies: a file edited in place re-renders, a moved one does not.
     nlohmann::json keyed = job.scene_json;
-    keyed["height"]["file"] = "content:" + job.scene.height.map->digest;
+    if (job.scene.height.map) keyed["height"]["file"] = "content:" + job.scene.height.map->digest;
+    if (table)
+      keyed["terminator"]["parameters"]["table"] = "content:" + factor_table_digest(*table);
     job.key = render_key(keyed, job.renderer, identity);
   }
 }

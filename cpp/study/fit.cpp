@@ -13,8 +13,9 @@
 
 #include "analysis/metrics.h"
 #include "core/terminator.h"
-#include "image/image_io.h"
 #include "evaluator/evaluator.h"
+#include "image/image_io.h"
+#include "scene/factor_table_file.h"
 #include "scene/scene_json.h"
 #include "util/strict_json.h"
 
@@ -483,16 +484,39 @@ json floor_json(const FloorFit& f) {
           {"kkt_residual", f.solution.kkt_residual}};
 }
 
-json grid_json(const FactorGrid& grid) {
-  json axes = json::array();
-  for (const FactorAxis& a : grid.axes)
-    axes.push_back(
-        {{"input",
-          std::string(name_of(std::span<const EnumName<FactorInput>>(kFactorInputNames), a.input))},
-         {"min_deg", a.min_deg},
-         {"max_deg", a.max_deg},
-         {"step_deg", a.step_deg}});
-  return axes;
+// G over the grid's cells for the report's contour figure (light,deviation
+// grids only): the study floor's G* (null where no variant has light), the
+// fitted table, and chiang2019 and estevez2019 with Ns tilted towards the
+// light (analysis/contour.h's geometry, Chiang et al. 2019 Fig. 5).
+json pictures_json(const FitResult& r) {
+  if (!light_deviation_grid(r.grid)) return nullptr;
+  const auto rows = [&](const std::vector<double>& g, const std::vector<char>* mask) {
+    const int nl = r.grid.axes[0].cells(), nd = r.grid.axes[1].cells();
+    json out = json::array();
+    for (int d = 0; d < nd; ++d) {
+      json row = json::array();
+      for (int l = 0; l < nl; ++l) {
+        const std::size_t c = std::size_t(d) * std::size_t(nl) + std::size_t(l);
+        row.push_back(mask && !(*mask)[c] ? json() : json(g[c]));
+      }
+      out.push_back(row);
+    }
+    return out;
+  };
+  const auto centres = [](const FactorAxis& a) {
+    json c = json::array();
+    for (int k = 0; k < a.cells(); ++k) c.push_back(a.min_deg + (k + 0.5) * a.step_deg);
+    return c;
+  };
+  return {{"light_deg", centres(r.grid.axes[0])},
+          {"deviation_deg", centres(r.grid.axes[1])},
+          {"note", "G at the cells' centres, rows by deviation; chiang2019 and estevez2019 with "
+                   "Ns tilted towards the light"},
+          {"g",
+           {{"floor", rows(r.study_floor.solution.g, &r.study_floor.solution.constrained)},
+            {"fitted", rows(r.table.values, nullptr)},
+            {"estevez2019", rows(table_of(r.grid, estevez2019), nullptr)},
+            {"chiang2019", rows(table_of(r.grid, chiang2019), nullptr)}}}};
 }
 
 json result_json(const FitResult& r) {
@@ -500,13 +524,14 @@ json result_json(const FitResult& r) {
          {"unit",
           "terminator-profile RMSE, fraction of albedo*E/pi, pooled over variants as a "
           "root mean square; intervals: 95 % percentile bootstrap over variants"},
-         {"grid", grid_json(r.grid)},
+         {"grid", factor_grid_json(r.grid)},
          {"variants", r.variants.size()},
          {"skipped", r.skipped},
          {"retraced", r.retraced},
          {"retraced_different", r.retraced_different},
          {"outside_grid_share", r.outside_share},
          {"floor", floor_json(r.study_floor)},
+         {"pictures", pictures_json(r)},
          {"held_out_pooled", interval_json(r.held_out_pooled)},
          {"table_smoothness", r.table_smoothness},
          {"seconds", r.seconds}};
@@ -567,10 +592,11 @@ void write_fit(const FitResult& r, const std::filesystem::path& out) {
   std::filesystem::create_directories(out);
   write_text_file((out / "fit.json").string(), result_json(r).dump(2) + "\n");
   write_text_file((out / "fit.csv").string(), result_csv(r));
-  const json table{{"grid", grid_json(r.table.grid)},
-                   {"smoothness", r.table_smoothness},
-                   {"values", r.table.values},
-                   {"note", "G per cell, first axis fastest; outside the grid G = 1"}};
+  const json table = factor_table_json(
+      r.table, {{"smoothness", r.table_smoothness},
+                {"note",
+                 "G at the cells' centres, first axis fastest, multilinear between them; "
+                 "outside the grid G = 1"}});
   write_text_file((out / "table.json").string(), table.dump(1) + "\n");
 }
 

@@ -148,6 +148,16 @@ std::vector<RendererKind> read_renderers(Reader& r) {
   return out;
 }
 
+// A relative "table" parameter (the fitted method's table.json) is taken
+// from the study file's folder, as its scene paths are.
+void resolve_table_path(const std::string& study_file, json* parameters) {
+  const auto it = parameters->find("table");
+  if (it == parameters->end() || !it->is_string()) return;
+  const fs::path path(it->get<std::string>());
+  if (path.empty() || path.is_absolute()) return;
+  *it = (fs::absolute(fs::path(study_file).parent_path()) / path).lexically_normal().string();
+}
+
 // {"id": ..., "parameters": {...}}, element `i` of the list under `key`.
 StudyMethod read_method_object(Reader m, const char* what) {
   m.expect({"id", "parameters"});
@@ -159,6 +169,7 @@ StudyMethod read_method_object(Reader m, const char* what) {
     if (!m.at("parameters").is_object())
       m.fail("parameters", "expected an object of parameter values");
     method.parameters = m.at("parameters");
+    resolve_table_path(m.origin(), &method.parameters);
   }
   m.finish();
   return method;
@@ -166,12 +177,15 @@ StudyMethod read_method_object(Reader m, const char* what) {
 
 // Method ids, or {"id": ..., "parameters": {...}} objects, under `key`;
 // parameter values are checked by the scene reader when variants expand.
-// Absent: every id. `what` names the kind in errors ("method", "offset method").
+// Absent: every id of `defaults`. `what` names the kind in errors ("method",
+// "offset method").
 std::vector<StudyMethod> read_method_list(Reader& r, const char* key,
-                                          const std::vector<std::string>& ids, const char* what) {
+                                          const std::vector<std::string>& ids,
+                                          const std::vector<std::string>& defaults,
+                                          const char* what) {
   std::vector<StudyMethod> out;
   if (!r.has(key)) {
-    for (const std::string& id : ids) out.push_back({id, json(), id});
+    for (const std::string& id : defaults) out.push_back({id, json(), id});
     return out;
   }
   const json& list = r.nonempty_array(key, fmt::format("{} ids", what));
@@ -200,9 +214,12 @@ std::vector<std::string> offset_ids() {
   return ids;
 }
 
-std::vector<std::string> terminator_ids() {
+// Every method a study may name; `with_table`: also those that need a table
+// file, which a study without "methods" cannot give them.
+std::vector<std::string> terminator_ids(bool with_table) {
   std::vector<std::string> ids;
-  for (const MethodInfo& info : all_methods()) ids.emplace_back(info.id);
+  for (const MethodInfo& info : all_methods())
+    if (with_table || !info.needs_table) ids.emplace_back(info.id);
   return ids;
 }
 
@@ -213,7 +230,7 @@ Section read_lowpoly(Reader r, const fs::path& base) {
   read_scenes(r, base, &part.scenes);
   part.set = read_set(r);
   part.axes = read_axes(r);
-  part.methods = read_method_list(r, "offsets", offset_ids(), "offset method");
+  part.methods = read_method_list(r, "offsets", offset_ids(), offset_ids(), "offset method");
   part.renderers = read_renderers(r);
   if (r.has("convergence")) {
     const json& c = r.at("convergence");
@@ -372,7 +389,8 @@ void read_sections(Reader& r, const fs::path& base, Study& s) {
         r.fail(key, "unused key: it belongs to the bump section, and the study has no /scenes");
   s.bump.set = read_set(r);
   s.bump.axes = read_axes(r);
-  s.bump.methods = read_method_list(r, "methods", terminator_ids(), "method");
+  s.bump.methods =
+      read_method_list(r, "methods", terminator_ids(true), terminator_ids(false), "method");
   add_baseline(s);
   s.bump.renderers = read_renderers(r);
 }

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <string>
 #include <string_view>
 
@@ -21,5 +22,24 @@ inline std::uint64_t fnv1a(const void* data, std::size_t bytes, std::uint64_t h 
 inline std::uint64_t fnv1a(std::string_view text, std::uint64_t h = kFnvOffset) {
   return fnv1a(text.data(), text.size(), h);
 }
+
+// Two FNV-1a hashes with different seeds over the same bytes, written as 32
+// hex digits: the content keys of image maps and factor tables.
+class ContentDigest {
+ public:
+  void add(const void* data, std::size_t bytes) {
+    a_ = fnv1a(data, bytes, a_);
+    b_ = fnv1a(data, bytes, b_);
+  }
+  std::string hex() const {
+    char text[33];
+    std::snprintf(text, sizeof text, "%016llx%016llx", static_cast<unsigned long long>(a_),
+                  static_cast<unsigned long long>(b_));
+    return text;
+  }
+
+ private:
+  std::uint64_t a_ = kFnvOffset, b_ = kFnvOffset ^ 0x9e3779b97f4a7c15ull;
+};
 
 }  // namespace penumbra

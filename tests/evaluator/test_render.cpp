@@ -112,6 +112,11 @@ TEST(Render, SmoothSpherePerspectiveWithPointLightMatchesAnalyticRadiance) {
       sphere_hit);
 }
 
+// The fitted method's parameter: a small table (tests/evaluator/data).
+const std::string kFittedTable = "/terminator/parameters={\"table\": \"" +
+                                 std::string(PENUMBRA_SOURCE_DIR) +
+                                 "/tests/evaluator/data/fitted-table.json\"}";
+
 TEST(Render, BumpWithZeroAmplitudeEqualsSmoothBitForBit) {
   for (const MethodInfo& m : all_methods()) {
     const std::vector<std::string> common = {"/height/amplitude=0", "/camera/width=48",
@@ -119,6 +124,7 @@ TEST(Render, BumpWithZeroAmplitudeEqualsSmoothBitForBit) {
                                              "/terminator/method=\"" + std::string(m.id) + "\""};
     auto with = [&](const char* representation) {
       std::vector<std::string> sets = common;
+      if (m.needs_table) sets.push_back(kFittedTable);
       sets.push_back(std::string("/representation=") + representation);
       return render(scene_with("sphere-weave.json", sets)).pixels;
     };

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -109,6 +110,63 @@ TEST(Tally, PredictsAFactorMethodsRenderToTheGridsResolution) {
   EXPECT_LT(errors[1], 0.01) << errors[0] << " " << errors[1] << " " << errors[2];
   EXPECT_LT(errors[2], 0.5 * errors[1]);
   EXPECT_LT(errors[1], 0.5 * errors[0]);
+}
+
+// What penumbra fit optimises is what the fitted method renders: a table's
+// prediction through raw bump's tally is the `fitted` render of that table
+// (float channel: relative 1e-6), on the fit's default grid, with a GGX
+// lobe the factor leaves alone, and the light at both of the default
+// study's directions.
+TEST(Tally, FittedMethodRendersWhatTheTallyPredicts) {
+  const FactorGrid grid{
+      {{FactorInput::kLight, 20.0, 120.0, 2.0}, {FactorInput::kDeviation, 0.0, 60.0, 4.0}}};
+  auto table = std::make_shared<FactorTable>();
+  table->grid = grid;
+  for (int c = 0; c < grid.cells(); ++c)  // smooth in both angles, in [0.1, 1.9]
+    table->values.push_back(1.0 + 0.9 * std::sin(0.07 * c) * std::cos(0.002 * c * c));
+  for (const char* light : {"/light/direction=[-1, 0, -0.2]", "/light/direction=[-1, 0, 0.4]"}) {
+    const Scene bump = scene_with("sphere-weave.json",
+                                  {"/camera/width=40", "/camera/height=40", "/camera/spp=4", light,
+                                   "/material/specular={\"weight\": 0.4, \"roughness\": 0.3}",
+                                   "/terminator/lobes=\"diffuse\""});
+    PixelTally tally;
+    render_tallied(bump, grid, &tally);
+    Scene fitted = bump;
+    fitted.terminator.method = {TerminatorMethod::kFitted, 0.0, table};
+    const Image image = render(fitted);
+    const Image raw = render(bump);
+    int differ = 0;
+    for (int y = 0; y < 40; ++y)
+      for (int x = 0; x < 40; ++x) {
+        const std::size_t p = std::size_t(y) * 40 + std::size_t(x);
+        const double predicted =
+            tallied(tally, p, [&](int c) { return table->values[std::size_t(c)]; });
+        EXPECT_NEAR(predicted, image.at(x, y, 0), 1e-6 * image.at(x, y, 0) + 1e-12)
+            << x << "," << y;
+        differ += std::abs(image.at(x, y, 0) - raw.at(x, y, 0)) > 1e-3;
+      }
+    EXPECT_GT(differ, 50) << "the table changed too few pixels to test anything";
+  }
+}
+
+// A table of ones is raw bump to the bit; a table of halves over every
+// angle halves a Lambertian render exactly (a power of two scales each
+// sample's light without rounding).
+TEST(Tally, FittedTablesOfConstantsAreExact) {
+  const Scene bump = scene_with("cylinder-grating.json",
+                                {"/camera/width=32", "/camera/height=32", "/camera/spp=4"});
+  const Image none = render(bump);
+  for (const double g : {1.0, 0.5}) {
+    auto table = std::make_shared<FactorTable>();
+    table->grid = {
+        {{FactorInput::kLight, 0.0, 180.0, 10.0}, {FactorInput::kDeviation, 0.0, 180.0, 10.0}}};
+    table->values.assign(std::size_t(table->grid.cells()), g);
+    Scene fitted = bump;
+    fitted.terminator.method = {TerminatorMethod::kFitted, 0.0, table};
+    const Image image = render(fitted);
+    for (std::size_t i = 0; i < none.pixels.size(); i += none.channels.size())
+      ASSERT_EQ(image.pixels[i], float(g) * none.pixels[i]) << i;
+  }
 }
 
 TEST(Tally, RefusesAnythingButRawBump) {

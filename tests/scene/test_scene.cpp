@@ -202,3 +202,39 @@ TEST(Scene, OverridesUseJsonPointers) {
 
 }  // namespace
 }  // namespace penumbra
+
+namespace penumbra {
+namespace {
+
+// The fitted method's table: required, read strictly with the table file's
+// own pointer in the message, and found beside the scene file.
+TEST(Scene, FittedMethodReadsItsTableFile) {
+  const fs::path dir = fs::temp_directory_path() / "penumbra-Scene-FittedMethodReadsItsTableFile";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "sub");
+  std::ofstream(dir / "sub" / "table.json")
+      << R"({"grid": [{"input": "light", "min_deg": 0, "max_deg": 90, "step_deg": 45}],
+             "values": [0.25, 0.75], "smoothness": 1})";
+  std::ofstream(dir / "bad.json")
+      << R"({"grid": [{"input": "light", "min_deg": 0, "max_deg": 90, "step_deg": 45}],
+             "values": [0.25, -1]})";
+  json scene = base_scene();
+  scene["terminator"] = {{"method", "fitted"}};
+  EXPECT_NE(error_of(scene).find("/terminator/parameters: method \"fitted\" needs"),
+            std::string::npos)
+      << error_of(scene);
+  scene["terminator"]["parameters"] = {{"table", (dir / "bad.json").string()}};
+  const std::string bad = error_of(scene);
+  EXPECT_NE(bad.find("/terminator/parameters/table"), std::string::npos) << bad;
+  EXPECT_NE(bad.find("/values/1"), std::string::npos) << bad;
+  // Relative to the scene file, from any working directory.
+  scene["terminator"]["parameters"] = {{"table", "sub/table.json"}};
+  std::ofstream(dir / "scene.json") << scene.dump();
+  const Scene loaded = load_scene((dir / "scene.json").string());
+  ASSERT_TRUE(loaded.terminator.method.table);
+  EXPECT_EQ(loaded.terminator.method.table->values, (std::vector<double>{0.25, 0.75}));
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace penumbra
