@@ -9,7 +9,9 @@
 
 #include "core/roughness_filter.h"
 #include "core/terminator.h"
+#include "image/bump_maps.h"
 #include "study/names.h"
+#include "util/strict_json.h"
 
 namespace penumbra {
 namespace fs = std::filesystem;
@@ -81,6 +83,15 @@ FilteringMapSpec read_map(Reader m, const fs::path& base, std::set<std::string>*
   map.height_scale = read_number(m, "height_scale", 0.0, 1e6, true, 1.0);
   map.edge = read_edge(m, MapEdge::kWrap);
   m.finish();
+  // Read now, as scene maps are: a map that cannot be measured (NaN, slopes
+  // too steep) is refused before the run writes anything.
+  try {
+    const HeightMap heights = read_height_map(map.file, map.channel);
+    check_map_slopes(heights, map.file, map.texel_size > 0.0 ? map.texel_size : 1.0 / heights.width,
+                     map.height_scale);
+  } catch (const InputError& e) {
+    m.fail("file", e.what());
+  }
   return map;
 }
 
