@@ -56,8 +56,13 @@ std::vector<Command> declare_commands(CLI::App& app, SharedOptions& shared,
   std::vector<Command> commands;
   for (AddCommand add : kCommands) commands.push_back(add(app, shared));
   for (const Command& command : commands) command.app->footer(footer);
+  require_finite_numbers(app);
   return commands;
 }
+
+// Messages hold file names, which may hold newlines and escape sequences:
+// printed as InputError prints them, one line. Long enough for any message.
+constexpr std::size_t kMaxErrorChars = 4000;
 
 // The exit status of the exception being handled, its message printed.
 int exit_code_of_exception(std::ostream& err) {
@@ -67,19 +72,19 @@ int exit_code_of_exception(std::ostream& err) {
     err << "penumbra: error: " << e.what() << "\n";
     return kExitBadInput;
   } catch (const ExportError& e) {
-    err << "penumbra: error: cannot export: " << e.what() << "\n";
+    err << "penumbra: error: cannot export: " << printable(e.what(), kMaxErrorChars) << "\n";
     return kExitBadInput;
   } catch (const UsageError& e) {
-    err << "penumbra: error: " << e.what() << " (see penumbra --help)\n";
+    err << "penumbra: error: " << printable(e.what(), kMaxErrorChars) << " (see penumbra --help)\n";
     return kExitBadInput;
   } catch (const OutputError& e) {
-    err << "penumbra: error: " << e.what() << "\n";
+    err << "penumbra: error: " << printable(e.what(), kMaxErrorChars) << "\n";
     return kExitBadInput;
   } catch (const RenderCancelled& e) {
-    err << "penumbra: stopped: " << e.what() << "; nothing written\n";
+    err << "penumbra: stopped: " << printable(e.what(), kMaxErrorChars) << "; nothing written\n";
     return StopSignals::exit_code();
   } catch (const std::exception& e) {  // RendererError among them
-    err << "penumbra: failed: " << e.what() << "\n";
+    err << "penumbra: failed: " << printable(e.what(), kMaxErrorChars) << "\n";
     return kExitFailure;
   }
 }
@@ -115,7 +120,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e, out, err);  // --help, --version
-    err << "penumbra: error: " << e.what() << " (see penumbra --help)\n";
+    err << "penumbra: error: " << printable(e.what(), kMaxErrorChars) << " (see penumbra --help)\n";
     return kExitBadInput;
   }
   return dispatch(commands, shared, out, err);

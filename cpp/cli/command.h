@@ -46,6 +46,15 @@ struct SharedOptions {
   int jobs = 0;
 };
 
+// The check every floating-point option gets (cli.cpp adds it to each one):
+// CLI11 reads "nan" and "inf" as numbers, and NaN passes every range check
+// (each comparison with it is false), so a NaN would stand for "default"
+// or make a bound unfailable.
+const CLI::Validator& finite_number();
+// Adds finite_number() to every floating-point option of `app` and of its
+// subcommands, so that no command can forget it.
+void require_finite_numbers(CLI::App& app);
+
 // --jobs, with the one meaning it has in every command (util/parallel.h).
 CLI::Option* add_jobs_option(CLI::App* cmd, SharedOptions& shared);
 

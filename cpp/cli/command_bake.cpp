@@ -55,6 +55,12 @@ int bake(const BakeArgs& a, std::ostream& out) {
   if (a.on == "shape") return bake_on_shape(a, scene, out);
   const Image map =
       bake_height_map(scene.height.function, scene.height.amplitude, a.size, a.extent);
+  // A huge extent overflows the height function's phase (sin(Inf) is NaN).
+  if (const std::size_t bad = count_nonfinite(map); bad > 0)
+    throw InputError(loaded.origin, "/height",
+                     fmt::format("--extent {:.6g}: {} of {} baked heights are NaN or Inf; expected "
+                                 "an extent over which the height function stays finite",
+                                 a.extent, bad, map.pixels.size()));
   write_exr(map, a.output, {{"penumbra:baked_from", a.scene}});
   const double texel = a.extent / a.size;
   out << fmt::format(

@@ -54,8 +54,7 @@ struct Inputs {
 };
 
 Image read_image_checked(const std::string& path) {
-  if (!fs::is_regular_file(path)) throw UsageError(fmt::format("{}: no such file", path));
-  return read_image(path);
+  return read_image(path);  // InputError naming the file: missing, not a file, unreadable
 }
 
 void require_rgb(const Image& image, const std::string& path) {
@@ -139,7 +138,8 @@ void check_same_scene(const CompareArgs& a, std::ostream& err) {
   const std::string message = fmt::format(
       "{} and {} show different scenes (penumbra:scene differs at {})", a.reference, a.test, list);
   if (a.same_scene) throw UsageError(message + "; --same-scene");
-  err << "penumbra: warning: " << message << "; the metrics compare unrelated images\n";
+  err << "penumbra: warning: " << printable(message, 2000)
+      << "; the metrics compare unrelated images\n";
 }
 
 // -o: OpenEXR, writable, and not one of the images compared.
@@ -418,8 +418,9 @@ void print_view(const ViewMetrics& vm, const ComparisonIntervals& ci, std::ostre
 
 // The text form: every metric of --json, with units and intervals.
 void print_comparison(const Report& r, std::ostream& out) {
-  out << fmt::format("reference {} (coverage: {})\ntest      {} (coverage: {})\n", r.a.reference,
-                     r.coverage[0], r.a.test, r.coverage[1]);
+  out << fmt::format("reference {} (coverage: {})\ntest      {} (coverage: {})\n",
+                     printable(r.a.reference, 240), r.coverage[0], printable(r.a.test, 240),
+                     r.coverage[1]);
   if (r.skipped.empty())
     print_profile(r.m.profile, r.m.intervals, r.scale, out);
   else
@@ -445,7 +446,11 @@ int compare(const CompareArgs& a, const CommandContext& c) {
     throw UsageError(fmt::format("--max-profile-rmse: no profile to check: {}", skipped));
   const bool over = a.max_rmse >= 0.0 && !(m.profile.rmse_overall <= a.max_rmse);
   const bool pass = m.image.nonfinite == 0 && !over;
-  if (!a.difference.empty())
+  // No output holds NaN or Inf (image_io.h); the exit status says why.
+  if (!a.difference.empty() && m.image.nonfinite > 0)
+    c.err << "penumbra: warning: -o " << printable(a.difference, 240)
+          << " not written: the images hold NaN or Inf values\n";
+  else if (!a.difference.empty())
     write_exr(difference_image(in.test, in.reference, in.options), a.difference,
               {{"penumbra:difference", a.test + " - " + a.reference},
                {"penumbra:radiance_unit", "W m^-2 sr^-1"}});

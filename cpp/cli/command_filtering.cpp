@@ -9,8 +9,8 @@
 #include "cli/command.h"
 #include "core/roughness_filter.h"
 #include "image/bump_maps.h"
-#include "study/figures.h"
 #include "image/image_io.h"
+#include "study/figures.h"
 
 namespace penumbra {
 
@@ -78,10 +78,11 @@ int filtering(const FilteringArgs& a, const CommandContext& c) {
   const MapEdge edge = check_map_args(a.map);
   const FilteringOptions options = filtering_options(a, c.parallelism);
   const HeightMap map = read_height_map(a.map.heights, a.map.channel);
+  const double texel_size = a.map.texel_size > 0.0 ? a.map.texel_size : 1.0 / map.width;
+  check_map_slopes(map, a.map.heights, texel_size, a.map.height_scale);
   std::error_code ec;
   fs::create_directories(a.map.output, ec);
   check_writable((fs::path(a.map.output) / "filtering.json").string());
-  const double texel_size = a.map.texel_size > 0.0 ? a.map.texel_size : 1.0 / map.width;
   const std::vector<PyramidLevel> pyramid = build_bump_pyramid(offsets_from_heights(
       map.heights, map.width, map.height, texel_size, a.map.height_scale, edge));
   const auto start = std::chrono::steady_clock::now();

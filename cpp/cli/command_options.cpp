@@ -1,7 +1,9 @@
 // Options and checks that several commands share (cli/command.h).
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 
 #include <fmt/format.h>
@@ -14,6 +16,27 @@
 namespace penumbra {
 
 namespace fs = std::filesystem;
+
+const CLI::Validator& finite_number() {
+  static const CLI::Validator validator(
+      [](std::string& text) -> std::string {
+        errno = 0;
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || std::isfinite(value)) return "";  // CLI11 says "not a number"
+        return fmt::format("expected a finite number, got \"{}\"", printable(text, 40));
+      },
+      "", "finite");
+  return validator;
+}
+
+void require_finite_numbers(CLI::App& app) {
+  for (CLI::Option* option : app.get_options())
+    // transform() puts it first: before a range check says "not in range".
+    if (option->get_type_name().find("FLOAT") != std::string::npos)
+      option->transform(finite_number());
+  for (CLI::App* sub : app.get_subcommands({})) require_finite_numbers(*sub);
+}
 
 CLI::Option* add_jobs_option(CLI::App* cmd, SharedOptions& shared) {
   return cmd->add_option("--jobs", shared.jobs,
@@ -57,9 +80,9 @@ std::vector<Override> collect_overrides(const SceneArgs& a) {
 LoadedScene read_scene(const std::string& path, const SceneArgs& a) {
   const std::vector<Override> overrides = collect_overrides(a);
   nlohmann::json document = read_json_file(path);
-  resolve_map_files(document, path);
   const std::string origin = overrides.empty() ? path : path + " (after --set)";
   apply_overrides(document, overrides, origin);
+  resolve_map_files(document, path);  // after --set: its /height/file too
   Scene scene = scene_from_json(document, origin);
   return {std::move(document), origin, std::move(scene)};
 }
@@ -111,6 +134,7 @@ MapEdge check_map_args(const MapArgs& a) {
   for (const EnumName<MapEdge>& e : kMapEdgeNames)
     if (a.edge == e.name) edge = e.value;
   if (!edge) throw UsageError(fmt::format("--edge: expected wrap or clamp, got \"{}\"", a.edge));
+  if (a.output.empty()) throw UsageError("-o: expected a folder name, got \"\"");
   if (!std::isfinite(a.height_scale))
     throw UsageError(
         fmt::format("--height-scale: expected a finite number, got {}", a.height_scale));

@@ -23,6 +23,7 @@ int pyramid(const MapArgs& a, std::ostream& out) {
   const auto start = std::chrono::steady_clock::now();
   const HeightMap map = read_height_map(a.heights, a.channel);
   const double texel_size = a.texel_size > 0.0 ? a.texel_size : 1.0 / map.width;
+  check_map_slopes(map, a.heights, texel_size, a.height_scale);
   const auto read = std::chrono::steady_clock::now();
   const std::vector<PyramidLevel> levels = build_bump_pyramid(
       offsets_from_heights(map.heights, map.width, map.height, texel_size, a.height_scale, edge));

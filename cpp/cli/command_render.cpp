@@ -12,6 +12,7 @@
 #include "image/image_io.h"
 #include "renderers/renderers.h"
 #include "util/files.h"
+#include "util/strict_json.h"
 #include "util/version.h"
 
 namespace penumbra {
@@ -55,8 +56,23 @@ std::string log_path_for(const std::string& output, RendererKind renderer) {
   return p.string();
 }
 
+// The scene's map file (/height/file, already made absolute) is an input:
+// an output of the same file would replace it, as compare refuses too.
+void check_not_an_input(const std::string& output, const char* option, const LoadedScene& loaded) {
+  const nlohmann::json::json_pointer file("/height/file");
+  if (output.empty() || !loaded.document.contains(file) || !loaded.document[file].is_string())
+    return;
+  const std::string map = loaded.document[file].get<std::string>();
+  std::error_code ec;
+  if (fs::equivalent(output, map, ec))
+    throw UsageError(fmt::format("{} {}: is the scene's /height/file {}, an input of the render",
+                                 option, printable(output, 240), printable(map, 240)));
+}
+
 // Everything that can be refused is refused before the render starts.
 void check_outputs(const RenderArgs& a, RendererKind renderer, const LoadedScene& loaded) {
+  check_not_an_input(a.output, "-o", loaded);
+  check_not_an_input(a.preview, "--preview", loaded);
   check_extension(a.output, ".exr", "-o",
                   ": only OpenEXR holds the float R G B A and analysis channels of a render "
                   "(--preview FILE.png writes an 8-bit picture)");
@@ -104,6 +120,7 @@ int render(const RenderArgs& a, const CommandContext& c) {
   if (!renderer)
     throw UsageError(
         fmt::format("--renderer: expected {}, got \"{}\"", renderer_choices(""), a.renderer));
+  const ImageReadLimit image_limit(a.max_memory_gib * kGiB);  // the scene's map
   const LoadedScene loaded = read_scene(a.scene, a.scene_args);
   const Scene& scene = loaded.scene;
   check_outputs(a, *renderer, loaded);

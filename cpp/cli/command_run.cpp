@@ -12,6 +12,7 @@
 
 #include "cli/command.h"
 #include "cli/stop_signals.h"
+#include "image/image_io.h"
 #include "study/study.h"
 
 namespace penumbra {
@@ -56,9 +57,10 @@ void print_cost(const CostEstimate& cost, std::ostream& out) {
                     line.tessellated ? " (low-poly)" : "");
     const std::string basis =
         line.measured > 0
-            ? fmt::format("per-sample rate: median of {} cached renders of this study; their range "
-                          "{:.1f} to {:.1f} core-s",
-                          line.measured, line.core_seconds_low, line.core_seconds_high)
+            ? fmt::format(
+                  "per-sample rate: median of {} cached renders of this study; their range "
+                  "{:.1f} to {:.1f} core-s",
+                  line.measured, line.core_seconds_low, line.core_seconds_high)
             : "built-in, measured on a 2-core machine; none cached yet";
     out << fmt::format(
         "  {:<32} {:>7} renders {:>9.1f} core-s  ({:.3g} core-s each + {:.3g} per 10^6 pixel "
@@ -208,6 +210,10 @@ StudyOptions study_options(const RunArgs& a, const Study& study, const CommandCo
 }
 
 int run(const RunArgs& a, const CommandContext& c) {
+  // A study writes PNG previews after its renders: a missing image module
+  // (a binary copied without lib/penumbra/) is found now, not mid-run.
+  if (!a.dry_run) load_image_formats();
+  const ImageReadLimit image_limit(a.max_memory_gib * kGiB);  // the maps the study reads
   const Study study = load_study(a.study);
   StudyOptions o = study_options(a, study, c);
   const bool tty = ::isatty(STDERR_FILENO);

@@ -43,10 +43,11 @@ int pick_channel(const Image& image, const std::string& path, const std::string&
 }
 
 Image read_map_image(const std::string& path) {
-  if (!fs::is_regular_file(path)) throw InputError(path, "", "no such file");
   Image image;
   try {
-    image = read_image(path);
+    image = read_image(path);  // InputError naming the file
+  } catch (const InputError&) {
+    throw;
   } catch (const std::exception& e) {
     throw InputError(path, "", fmt::format("cannot read it as an image: {}", e.what()));
   }
@@ -162,6 +163,26 @@ HeightMap read_height_map(const std::string& path, const std::string& channel) {
       map.heights[std::size_t(y) * image.width + x] = h;
     }
   return map;
+}
+
+void check_map_slopes(const HeightMap& map, const std::string& path, double texel_size,
+                      double height_scale) {
+  // Neighbours across the edge count too: conservative for a clamped edge.
+  double steepest = 0.0;
+  const auto at = [&](int x, int y) { return double(map.heights[std::size_t(y) * map.width + x]); };
+  for (int y = 0; y < map.height; ++y)
+    for (int x = 0; x < map.width; ++x) {
+      const double h = at(x, y);
+      steepest = std::max({steepest, std::abs(at((x + 1) % map.width, y) - h),
+                           std::abs(at(x, (y + 1) % map.height) - h)});
+    }
+  const double slope = steepest * std::abs(height_scale) / texel_size;
+  if (!(slope <= kMaxMapSlope))
+    throw InputError(path, "",
+                     fmt::format("heights x --height-scale {:.6g} / --texel-size {:.6g} give "
+                                 "slopes up to {:.3g}; expected at most {:.0e}, so that the "
+                                 "pyramid's squared slopes stay finite",
+                                 height_scale, texel_size, slope, kMaxMapSlope));
 }
 
 Image bake_height_map(const HeightFunction& f, double amplitude, int size, double extent) {

@@ -29,6 +29,17 @@ struct HeightMap {
 };
 HeightMap read_height_map(const std::string& path, const std::string& channel = "");
 
+// The steepest slope a height map may give, in scene units per scene unit:
+// the pyramids square and sum slopes in 32-bit float (at most ~3.4e38), so
+// a larger one makes every level Inf or NaN.
+inline constexpr double kMaxMapSlope = 1e18;
+
+// InputError naming `path` when the map's steepest difference between
+// neighbouring texels, times `height_scale` / `texel_size`, exceeds
+// kMaxMapSlope (or is not finite): a pyramid of it could not be finite.
+void check_map_slopes(const HeightMap& map, const std::string& path, double texel_size,
+                      double height_scale);
+
 // A height map (one channel, chosen as read_height_map chooses it) or a
 // tangent-space normal map (channels R, G, B, or the only three) as a
 // SurfaceMap with its digest; tiling and edge are left at their defaults.

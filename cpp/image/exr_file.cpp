@@ -12,8 +12,13 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStandardAttributes.h>
+#include <ImfStdIO.h>
 #include <ImfStringAttribute.h>
+#include <ImfXdr.h>
 #include <fmt/format.h>
+
+#include "image/image_io.h"
+#include "util/strict_json.h"
 
 namespace penumbra {
 namespace {
@@ -49,6 +54,35 @@ void string_attributes(const Imf::Header& header, std::map<std::string, std::str
       (*out)[it.name()] = s->value();
 }
 
+// Most tiles a file may declare: InputFile allocates a table of 8 bytes
+// per tile before the first pixel, and 1x1 tiles make it as long as the image.
+constexpr long long kMaxExrTiles = 1LL << 22;
+
+// The first header alone, checked before InputFile builds its offset tables
+// from it (their size follows the declared data window and tiles).
+void check_exr_header(const std::string& path) {
+  Imf::StdIFStream in(path.c_str());
+  int magic = 0, version = 0;
+  Imf::Xdr::read<Imf::StreamIO>(in, magic);
+  Imf::Xdr::read<Imf::StreamIO>(in, version);
+  Imf::Header header;
+  header.readFrom(in, version);
+  const Imath::Box2i window = header.dataWindow();
+  const long long width = 1LL + window.max.x - window.min.x;
+  const long long height = 1LL + window.max.y - window.min.y;
+  std::size_t channels = 0;
+  for (auto it = header.channels().begin(); it != header.channels().end(); ++it) ++channels;
+  check_declared_image(path, width, height, channels);
+  if (!header.hasTileDescription()) return;
+  const Imf::TileDescription& tiles = header.tileDescription();
+  const long long count = ((width + tiles.xSize - 1) / std::max(1u, tiles.xSize)) *
+                          ((height + tiles.ySize - 1) / std::max(1u, tiles.ySize));
+  if (tiles.xSize == 0 || tiles.ySize == 0 || count > kMaxExrTiles)
+    throw InputError(path, "",
+                     fmt::format("declares {}x{} tiles of {}x{} pixels; expected at most {} tiles",
+                                 width, height, tiles.xSize, tiles.ySize, kMaxExrTiles));
+}
+
 }  // namespace
 
 bool is_exr_file(const std::string& path) {
@@ -79,12 +113,14 @@ void write_exr_file(const Image& image, const std::string& path,
 
 Image read_exr_file(const std::string& path, std::map<std::string, std::string>* attributes) {
   try {
+    check_exr_header(path);
     Imf::InputFile file(path.c_str());
     const Imf::Header& header = file.header();
     const Imath::Box2i window = header.dataWindow();
     Image image;
-    image.width = window.max.x - window.min.x + 1;
-    image.height = window.max.y - window.min.y + 1;
+    // In 64 bits: a hostile data window overflows int.
+    const long long width = 1LL + window.max.x - window.min.x;
+    const long long height = 1LL + window.max.y - window.min.y;
     for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
       if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
         throw std::runtime_error(
@@ -95,27 +131,31 @@ Image read_exr_file(const std::string& path, std::map<std::string, std::string>*
                      [](const std::string& a, const std::string& b) {
                        return channel_rank(a) < channel_rank(b);
                      });
-    if (image.width <= 0 || image.height <= 0 || image.channels.empty())
-      throw std::runtime_error(fmt::format("an empty image ({}x{}, {} channels)", image.width,
-                                           image.height, image.channels.size()));
+    check_declared_image(path, width, height, image.channels.size());
+    image.width = int(width), image.height = int(height);
     image.pixels.assign(std::size_t(image.width) * image.height * image.channels.size(), 0.0f);
     file.setFrameBuffer(frame_buffer(image, window.min.x, window.min.y));
     file.readPixels(window.min.y, window.max.y);
     if (attributes) string_attributes(header, attributes);
     return image;
+  } catch (const InputError&) {
+    throw;
   } catch (const std::exception& e) {
-    throw std::runtime_error(fmt::format("{}: cannot read: {}", path, e.what()));
+    throw InputError(path, "", fmt::format("cannot read it as OpenEXR: {}", e.what()));
   }
 }
 
 std::map<std::string, std::string> read_exr_attributes(const std::string& path) {
   try {
+    check_exr_header(path);
     Imf::InputFile file(path.c_str());
     std::map<std::string, std::string> attributes;
     string_attributes(file.header(), &attributes);
     return attributes;
+  } catch (const InputError&) {
+    throw;
   } catch (const std::exception& e) {
-    throw std::runtime_error(fmt::format("{}: cannot read: {}", path, e.what()));
+    throw InputError(path, "", fmt::format("cannot read it as OpenEXR: {}", e.what()));
   }
 }
 

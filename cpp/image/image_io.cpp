@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <mutex>
 
 #include <dlfcn.h>
 #include <fmt/format.h>
@@ -20,6 +21,7 @@
 #include "util/data_files.h"
 #include "util/files.h"
 #include "util/hash.h"
+#include "util/strict_json.h"
 
 namespace penumbra {
 namespace fs = std::filesystem;
@@ -58,18 +60,19 @@ const OiioModule* load_oiio_module() {
     const fs::path file = (folder / "penumbra" / "libpenumbra_oiio.so").lexically_normal();
     void* handle = ::dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!handle) {
-      tried += fmt::format("\n  {}", ::dlerror());
+      tried += fmt::format("; {}", ::dlerror());
       continue;
     }
     using Entry = const OiioModule* (*)();
     const auto entry = reinterpret_cast<Entry>(::dlsym(handle, "penumbra_oiio_module"));
     const OiioModule* module = entry ? entry() : nullptr;
     if (module && module->abi == kOiioModuleAbi) return module;
-    tried += fmt::format("\n  {}: not a module of this Penumbra build", file.string());
+    tried += fmt::format("; {}: not a module of this Penumbra build", file.string());
   }
   throw std::runtime_error(
       "image formats other than OpenEXR need Penumbra's OpenImageIO module "
-      "(libpenumbra_oiio.so), which could not be loaded:" +
+      "lib/penumbra/libpenumbra_oiio.so, which could not be loaded from beside the executable "
+      "or from its parent folder" +
       tried);
 }
 
@@ -80,6 +83,87 @@ const OiioModule& oiio() {
   return *module;
 }
 
+// What libpng and other decoders print to stderr while a call runs: taken
+// out of the stream and handed to the caller, so that a bad file gives one
+// line. Reads are serialised here, since fd 2 is the process's.
+class StderrCapture {
+ public:
+  StderrCapture() : lock_(mutex()) {
+    std::fflush(stderr);
+    file_ = std::tmpfile();
+    saved_ = file_ ? ::dup(STDERR_FILENO) : -1;
+    if (saved_ >= 0) ::dup2(::fileno(file_), STDERR_FILENO);
+  }
+  ~StderrCapture() {
+    restore();
+    if (file_) std::fclose(file_);
+  }
+  StderrCapture(const StderrCapture&) = delete;
+  StderrCapture& operator=(const StderrCapture&) = delete;
+
+  // Restores stderr and returns what was printed meanwhile.
+  std::string take() {
+    restore();
+    std::string text;
+    if (!file_) return text;
+    std::rewind(file_);
+    char buffer[512];
+    std::size_t n = 0;
+    while (text.size() < 4096 && (n = std::fread(buffer, 1, sizeof buffer, file_)) > 0)
+      text.append(buffer, n);
+    return text;
+  }
+
+ private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  void restore() {
+    if (saved_ < 0) return;
+    std::fflush(stderr);
+    ::dup2(saved_, STDERR_FILENO);
+    ::close(saved_);
+    saved_ = -1;
+  }
+  std::lock_guard<std::mutex> lock_;
+  std::FILE* file_ = nullptr;
+  int saved_ = -1;
+};
+
+// A decoder's messages as part of one line: lines joined with "; ".
+std::string one_line(std::string text) {
+  while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+  std::string out;
+  for (char c : text) out += c == '\n' ? std::string("; ") : std::string(1, c);
+  return out;
+}
+
+double& read_limit() {
+  static double limit = kMaxImageReadBytes;
+  return limit;
+}
+
+// Reads a non-EXR file through the module, its header first.
+Image read_with_module(const std::string& path, std::map<std::string, std::string>* attributes) {
+  const OiioModule& module = oiio();
+  Image image;
+  StderrCapture capture;
+  std::string why = module.read_header(path, &image);
+  if (why.empty()) {
+    check_declared_image(path, image.width, image.height, image.channels.size());
+    why = module.read(path, &image, attributes);
+  }
+  const std::string printed = one_line(capture.take());
+  if (why.empty()) {
+    if (!printed.empty()) std::fprintf(stderr, "%s\n", printed.c_str());
+    return image;
+  }
+  why = one_line(why);
+  if (!printed.empty() && why.find(printed) == std::string::npos) why += " (" + printed + ")";
+  throw InputError(path, "", "cannot read it as an image: " + why);
+}
+
 // The sRGB transfer function of IEC 61966-2-1, to 8 bits with rounding.
 unsigned char encode_srgb8(float linear) {
   const double v = std::clamp(double(linear), 0.0, 1.0);
@@ -88,6 +172,38 @@ unsigned char encode_srgb8(float linear) {
 }
 
 }  // namespace
+
+ImageReadLimit::ImageReadLimit(double max_bytes) : previous_(read_limit()) {
+  read_limit() = std::min(previous_, max_bytes);
+}
+
+ImageReadLimit::~ImageReadLimit() {
+  read_limit() = previous_;
+}
+
+void check_declared_image(const std::string& path, long long width, long long height,
+                          std::size_t channels) {
+  if (width <= 0 || height <= 0 || channels == 0)
+    throw InputError(path, "",
+                     fmt::format("declares an empty image ({}x{} pixels, {} channels); expected "
+                                 "at least 1x1 with a channel",
+                                 width, height, channels));
+  const double bytes = double(width) * double(height) * double(channels) * sizeof(float);
+  if (bytes > read_limit())
+    throw InputError(path, "",
+                     fmt::format("declares {}x{} pixels with {} channels, {:.3g} GiB as float; "
+                                 "expected at most {:.3g} GiB (the image-size limit, or "
+                                 "--max-memory); not decoded",
+                                 width, height, channels, bytes / double(1 << 30),
+                                 read_limit() / double(1 << 30)));
+}
+
+void check_finite_output(const Image& image, const std::string& path) {
+  const std::size_t bad = count_nonfinite(image);
+  if (bad > 0)
+    throw OutputError(fmt::format("{}: would hold {} NaN or Inf values (of {}); not written",
+                                  printable(path, 240), bad, image.pixels.size()));
+}
 
 void check_writable(const std::string& path) {
   const fs::path p(path);
@@ -116,6 +232,7 @@ void load_image_formats() {
 
 void write_exr(const Image& image, const std::string& path,
                const std::vector<std::pair<std::string, std::string>>& metadata) {
+  check_finite_output(image, path);
   write_via_temporary(path, [&](const std::string& temporary) {
     try {
       write_exr_file(image, temporary, metadata);
@@ -131,6 +248,7 @@ void write_preview_png(const Image& image, const std::string& path) {
             b = image.channel_index("B");
   if (r < 0 || g < 0 || b < 0)
     throw std::runtime_error(fmt::format("{}: a preview needs channels R, G and B", path));
+  check_finite_output(image, path);
   // Premultiplied RGB is the image composited over black, so the PNG carries
   // no alpha (a viewer would otherwise show a transparent background).
   std::vector<unsigned char> rgb(std::size_t(image.width) * image.height * 3);
@@ -202,14 +320,10 @@ std::string read_image_attribute(const std::string& path, const std::string& nam
 }
 
 Image read_image(const std::string& path, std::map<std::string, std::string>* attributes) {
+  if (const std::string problem = input_file_problem(path); !problem.empty())
+    throw InputError(path, "", problem);
   if (is_exr_file(path)) return read_exr_file(path, attributes);
-  Image image;
-  const std::string why = oiio().read(path, &image, attributes);
-  if (!why.empty()) throw std::runtime_error(fmt::format("{}: cannot read: {}", path, why));
-  if (image.width <= 0 || image.height <= 0 || image.channels.empty())
-    throw std::runtime_error(fmt::format("{}: an empty image ({}x{}, {} channels)", path,
-                                         image.width, image.height, image.channels.size()));
-  return image;
+  return read_with_module(path, attributes);
 }
 
 }  // namespace penumbra

@@ -20,6 +20,35 @@ class OutputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The most memory an image file may take once read (every channel as 32-bit
+// float: width x height x channels x 4 bytes), checked against the size its
+// header declares before any pixel is decoded, since a 65-byte PNG can
+// declare 65536 x 65536. docs/scene-format.md documents it.
+inline constexpr double kMaxImageReadBytes = 2.0 * 1024 * 1024 * 1024;
+
+// Lowers the limit while it lives, for a command's --max-memory; the limit
+// in force is the smallest of kMaxImageReadBytes and every live scope's.
+class ImageReadLimit {
+ public:
+  explicit ImageReadLimit(double max_bytes);
+  ~ImageReadLimit();
+  ImageReadLimit(const ImageReadLimit&) = delete;
+  ImageReadLimit& operator=(const ImageReadLimit&) = delete;
+
+ private:
+  double previous_;
+};
+
+// InputError naming `path` when an image of this size would take more than
+// the limit; also refuses a size or channel count of zero.
+void check_declared_image(const std::string& path, long long width, long long height,
+                          std::size_t channels);
+
+// Throws OutputError naming the file when `image` holds NaN or Inf: every
+// image writer calls it before the file is renamed into place, so that no
+// command reports success over a non-finite output.
+void check_finite_output(const Image& image, const std::string& path);
+
 // Fails early, before a long render, when `path` cannot be created.
 void check_writable(const std::string& path);
 
@@ -48,7 +77,10 @@ std::map<std::string, std::string> read_image_attributes(const std::string& path
 std::string image_checksum(const Image& image);
 
 // Reads any file OpenImageIO can read, all channels as float; with
-// `attributes`, also every string attribute of its header.
+// `attributes`, also every string attribute of its header. A file that is
+// not a regular file, declares more than the limit above or cannot be
+// decoded is InputError, one line naming it (the decoders' own messages,
+// which libpng prints to stderr, are folded into that line).
 Image read_image(const std::string& path, std::map<std::string, std::string>* attributes = nullptr);
 
 }  // namespace penumbra

@@ -2,6 +2,8 @@
 // file in Penumbra that includes OpenImageIO.
 #include "image/oiio_module.h"
 
+#include <algorithm>
+
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imageio.h>
 
@@ -17,6 +19,24 @@ std::string write_rgb8(const std::string& path, int width, int height, const uns
   return why.empty() ? "OpenImageIO gave no reason" : why;
 }
 
+// One name per channel the file holds: some readers name fewer.
+void take_spec(const OIIO::ImageSpec& spec, Image* image) {
+  image->width = spec.width;
+  image->height = spec.height;
+  image->channels = spec.channelnames;
+  const std::size_t count = std::size_t(std::max(spec.nchannels, 0));
+  image->channels.resize(count);
+  for (std::size_t c = 0; c < count; ++c)
+    if (image->channels[c].empty()) image->channels[c] = "channel" + std::to_string(c);
+}
+
+std::string read_header(const std::string& path, Image* image) {
+  auto input = OIIO::ImageInput::open(path);
+  if (!input) return OIIO::geterror();
+  take_spec(input->spec(), image);
+  return {};
+}
+
 std::string read(const std::string& path, Image* image,
                  std::map<std::string, std::string>* attributes) {
   // ImageInput rather than ImageBuf: ImageBuf reads through OpenImageIO's
@@ -24,10 +44,8 @@ std::string read(const std::string& path, Image* image,
   auto input = OIIO::ImageInput::open(path);
   if (!input) return OIIO::geterror();
   const OIIO::ImageSpec spec = input->spec();
-  image->width = spec.width;
-  image->height = spec.height;
-  image->channels = spec.channelnames;
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) return {};
+  take_spec(spec, image);
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) return "an empty image";
   image->pixels.resize(std::size_t(spec.width) * spec.height * spec.nchannels);
   if (!input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image->pixels.data()))
     return input->geterror();
@@ -43,6 +61,6 @@ std::string read(const std::string& path, Image* image,
 extern "C" __attribute__((visibility("default"))) const penumbra::OiioModule*
 penumbra_oiio_module() {
   static const penumbra::OiioModule module{penumbra::kOiioModuleAbi, penumbra::write_rgb8,
-                                           penumbra::read};
+                                           penumbra::read_header, penumbra::read};
   return &module;
 }

@@ -13,7 +13,7 @@
 
 namespace penumbra {
 
-inline constexpr int kOiioModuleAbi = 1;
+inline constexpr int kOiioModuleAbi = 2;
 
 struct OiioModule {
   int abi = kOiioModuleAbi;
@@ -22,6 +22,9 @@ struct OiioModule {
   // file name's extension, to exactly `path`.
   std::string (*write_rgb8)(const std::string& path, int width, int height,
                             const unsigned char* rgb) = nullptr;
+  // The size and channel names the header declares, without pixels: the
+  // caller checks them before `read` allocates.
+  std::string (*read_header)(const std::string& path, Image* image) = nullptr;
   // Every channel as float; with `attributes`, also the string attributes.
   std::string (*read)(const std::string& path, Image* image,
                       std::map<std::string, std::string>* attributes) = nullptr;

@@ -57,8 +57,12 @@ constexpr double kBytesPerPixel = 7 * 4 * 4;
 // Bytes per triangle of a mesh with its Embree BVH (measured: about 100).
 constexpr double kBytesPerTriangle = 120.0;
 
+// In the unit that shows the size: a small run's 80 KiB is not "0.00 GiB".
 std::string gib(double bytes) {
-  return fmt::format("{:.2f} GiB", bytes / kGiB);
+  if (bytes >= kGiB) return fmt::format("{:.2f} GiB", bytes / kGiB);
+  if (bytes >= 1024.0 * 1024.0) return fmt::format("{:.1f} MiB", bytes / (1024.0 * 1024.0));
+  if (bytes >= 1024.0) return fmt::format("{:.1f} KiB", bytes / 1024.0);
+  return fmt::format("{:.0f} bytes", bytes);
 }
 
 }  // namespace
@@ -107,8 +111,10 @@ void check_resources(const ResourceEstimate& estimate, double max_memory_bytes,
   std::error_code ec;
   const std::filesystem::space_info space = std::filesystem::space(output_folder, ec);
   if (!ec && double(space.available) < estimate.output_bytes)
-    throw OutputError(fmt::format("{}: {} free, the output may take up to {}", output_folder,
-                                  gib(double(space.available)), gib(estimate.output_bytes)));
+    throw OutputError(fmt::format(
+        "{}: only {} free on its file system, and the output may need up to {}; free some "
+        "space or write elsewhere",
+        output_folder, gib(double(space.available)), gib(estimate.output_bytes)));
 }
 
 }  // namespace penumbra

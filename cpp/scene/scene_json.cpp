@@ -213,7 +213,7 @@ Material read_material(Reader r) {
 
 // /height/file and its placement. A relative path is taken from the working
 // directory here; load_scene and studies make it relative to the scene file
-// first (resolve_map_files).
+// first, after every override (resolve_map_files).
 void read_map(Reader& r, HeightSpec* h) {
   const MapKind kind = h->family == HeightFamily::kHeightMap ? MapKind::kHeight : MapKind::kNormal;
   const std::string file = r.string("file");
@@ -625,9 +625,9 @@ Scene scene_from_json(const json& document, const std::string& origin) {
 
 Scene load_scene(const std::string& path, const std::vector<Override>& overrides) {
   json document = read_json_file(path);
-  resolve_map_files(document, path);
   const std::string origin = overrides.empty() ? path : path + " (after --set)";
   apply_overrides(document, overrides, origin);
+  resolve_map_files(document, path);  // after --set: its /height/file too
   return scene_from_json(document, origin);
 }
 

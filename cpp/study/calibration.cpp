@@ -162,6 +162,7 @@ std::vector<Spec> calibration_specs(const CalibrationOptions& options) {
       }
       const std::string origin = file + " (calibration case)";
       apply_overrides(document, all, origin);
+      resolve_map_files(document, file);
       specs.push_back({shape, p.representation, p.method, p.renderer,
                        key(shape, p.representation, p.method, p.renderer, p.scale),
                        scene_from_json(document, origin)});

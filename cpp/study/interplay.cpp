@@ -28,10 +28,10 @@ namespace {
 // The scene document after the section's set, without its name (not content).
 json base_document(const InterplaySection& s) {
   json doc = read_json_file(s.scene);
-  resolve_map_files(doc, s.scene);
   std::vector<Override> overrides;
   for (const auto& [pointer, value] : s.set.items()) overrides.push_back({pointer, value});
   apply_overrides(doc, overrides, s.scene + " (study /interplay/set)");
+  resolve_map_files(doc, s.scene);
   doc.erase("name");
   return doc;
 }

@@ -134,6 +134,7 @@ struct VariantContext {
   const json& base;
   const std::vector<Override>& overrides;
   const std::string& origin;
+  const std::string& scene_file;  // a relative /height/file is from its folder
   int blender_spp;
 };
 
@@ -144,6 +145,7 @@ void add_job(const VariantContext& c, RendererKind r, const StudyMethod* m, Vari
   for (Override& o : section_overrides(c.section.kind, m)) all.push_back(std::move(o));
   if (r == RendererKind::kBlender) all.push_back({"/camera/spp", c.blender_spp});
   apply_overrides(doc, all, c.origin);
+  resolve_map_files(doc, c.scene_file);
   Job job;
   job.variant = variant_index;
   job.renderer = r;
@@ -198,7 +200,7 @@ void add_section(const Study& study, const Section& section, Plan& plan) {
       const std::vector<Override> overrides = axis_combination(set, section.axes, c, &v);
       const std::string origin = fmt::format("{} (study {}, {} {})", scene_file, study.file,
                                              bump ? "variant" : "low-poly variant", v.id);
-      const VariantContext context{section, base, overrides, origin, study.blender_spp};
+      const VariantContext context{section, base, overrides, origin, scene_file, study.blender_spp};
       const std::size_t index = plan.variants.size();
       for (RendererKind r : section.renderers) add_renderer_jobs(context, r, v, index, plan);
       plan.variants.push_back(std::move(v));

@@ -167,6 +167,15 @@ void prepare_folders(const fs::path& out, const StudyOptions& options, StudyRunS
                      stats.stale_removed));
 }
 
+// A run refused before its first file (the free-space check, an input
+// found bad late) leaves no empty folders behind, nor one it created.
+void remove_empty_folders(const fs::path& out, bool out_existed) {
+  std::error_code ec;
+  for (const char* sub : {"cache", "images"})
+    if (fs::is_empty(out / sub, ec) && !ec) fs::remove(out / sub, ec);
+  if (!out_existed && fs::is_empty(out, ec) && !ec) fs::remove(out, ec);
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -368,6 +377,41 @@ void report_study(const Study& study, const Rendered& in, const StepContext& con
   if (options.figures) draw_figures(out, options, stats);
 }
 
+// run_study once its folders exist: the sections, the renders and the report.
+StudyRunStats run_prepared(const Study& study, Plan& plan, Renderers& renderers, Executor& executor,
+                           const StudyOptions& options, StudyRunStats& stats,
+                           std::chrono::steady_clock::time_point start) {
+  const fs::path out(options.output_dir);
+  const RenderCache cache((out / "cache").string());
+  auto blender_sessions = std::make_unique<BlenderSessions>((out / "cache").string());
+  renderers.blender_sessions = blender_sessions.get();
+  const StepContext context{out.string(), cache, renderers, options.parallelism, options.log};
+  // The sections' renders join the plan's (study/sections.h).
+  std::optional<InterplayJobs> interplay;
+  if (study.interplay) interplay = plan_interplay_section(*study.interplay, context);
+  const std::vector<Job> section_jobs = interplay ? interplay->jobs : std::vector<Job>{};
+  stats.renders += section_jobs.size();
+  const std::vector<VariantConvergence> convergence =
+      converge(study, plan, independent_jobs(plan, section_jobs), cache, options, renderers,
+               executor, stats);
+  if (stats.not_started > 0) {  // interrupted while checking the truths
+    stats.seconds = seconds_since(start);
+    return stats;
+  }
+  std::vector<Job> jobs = plan.jobs;
+  jobs.insert(jobs.end(), section_jobs.begin(), section_jobs.end());
+  Renders r = render_jobs(study.file, jobs, cache, renderers, executor, options, stats);
+  stats.blender_processes = blender_sessions->started();
+  blender_sessions.reset();  // the processes end here, not after the figures
+  renderers.blender_sessions = nullptr;
+  stats.seconds = seconds_since(start);
+  if (stats.not_started > 0) return stats;  // interrupted: no report from a partial study
+
+  report_study(study, {plan, convergence, r, interplay}, context, options, stats);
+  stats.seconds = seconds_since(start);
+  return stats;
+}
+
 }  // namespace
 
 StudyRunStats run_study(const Study& study, const StudyOptions& options) {
@@ -390,34 +434,14 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     count_planned(plan, cache, checks, options.parallelism.threads(), stats);
     return stats;
   }
+  const bool out_existed = fs::exists(out);
   prepare_folders(out, options, stats);
-  auto blender_sessions = std::make_unique<BlenderSessions>((out / "cache").string());
-  renderers.blender_sessions = blender_sessions.get();
-  const StepContext context{out.string(), cache, renderers, options.parallelism, options.log};
-  // The sections' renders join the plan's (study/sections.h).
-  std::optional<InterplayJobs> interplay;
-  if (study.interplay) interplay = plan_interplay_section(*study.interplay, context);
-  const std::vector<Job> section_jobs = interplay ? interplay->jobs : std::vector<Job>{};
-  stats.renders += section_jobs.size();
-  const std::vector<VariantConvergence> convergence =
-      converge(study, plan, independent_jobs(plan, section_jobs), cache, options, renderers,
-               *executor, stats);
-  if (stats.not_started > 0) {  // interrupted while checking the truths
-    stats.seconds = seconds_since(start);
-    return stats;
+  try {
+    return run_prepared(study, plan, renderers, *executor, options, stats, start);
+  } catch (...) {
+    remove_empty_folders(out, out_existed);
+    throw;
   }
-  std::vector<Job> jobs = plan.jobs;
-  jobs.insert(jobs.end(), section_jobs.begin(), section_jobs.end());
-  Renders r = render_jobs(study.file, jobs, cache, renderers, *executor, options, stats);
-  stats.blender_processes = blender_sessions->started();
-  blender_sessions.reset();  // the processes end here, not after the figures
-  renderers.blender_sessions = nullptr;
-  stats.seconds = seconds_since(start);
-  if (stats.not_started > 0) return stats;  // interrupted: no report from a partial study
-
-  report_study(study, {plan, convergence, r, interplay}, context, options, stats);
-  stats.seconds = seconds_since(start);
-  return stats;
 }
 
 }  // namespace penumbra

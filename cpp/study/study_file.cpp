@@ -10,6 +10,7 @@
 #include "scene/scene_json.h"
 #include "study/names.h"
 #include "study/study_file_sections.h"
+#include "util/files.h"
 #include "util/json_reader.h"
 #include "util/strict_json.h"
 
@@ -41,8 +42,11 @@ void read_scenes(Reader& r, const fs::path& base, std::vector<std::string>* scen
   for (std::size_t i = 0; i < list.size(); ++i) {
     if (!list[i].is_string()) r.fail_item("scenes", i, "expected a path (string)");
     const fs::path p = base / list[i].get<std::string>();
-    if (!fs::is_regular_file(p))
-      r.fail_item("scenes", i, fmt::format("no such scene file: {}", p.string()));
+    if (const std::string problem = input_file_problem(p.string()); !problem.empty())
+      r.fail_item("scenes", i,
+                  problem == "no such file"
+                      ? fmt::format("no such scene file: {}", p.string())
+                      : fmt::format("scene file {}: {}", p.string(), problem));
     scenes->push_back(p.lexically_normal().string());
   }
 }

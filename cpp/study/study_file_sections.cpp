@@ -9,7 +9,10 @@
 
 #include "core/roughness_filter.h"
 #include "core/terminator.h"
+#include "image/bump_maps.h"
 #include "study/names.h"
+#include "util/files.h"
+#include "util/strict_json.h"
 
 namespace penumbra {
 namespace fs = std::filesystem;
@@ -64,7 +67,8 @@ FilteringMapSpec read_map(Reader m, const fs::path& base, std::set<std::string>*
   if (m.has("bake")) {
     m.expect({"name", "bake", "size", "extent", "edge"});
     const fs::path scene = base / read_string(m, "bake");
-    if (!fs::is_regular_file(scene)) m.fail("bake", "no such scene file: " + scene.string());
+    if (const std::string problem = input_file_problem(scene.string()); !problem.empty())
+      m.fail("bake", fmt::format("scene file {}: {}", scene.string(), problem));
     map.bake_scene = scene.lexically_normal().string();
     map.size = static_cast<int>(m.integer_or("size", 1024, 2, 16384));
     map.extent = read_number(m, "extent", 0.0, 1e6, true, 1.0);
@@ -74,13 +78,23 @@ FilteringMapSpec read_map(Reader m, const fs::path& base, std::set<std::string>*
   }
   m.expect({"name", "file", "channel", "texel_size", "height_scale", "edge"});
   const fs::path file = base / read_string(m, "file");
-  if (!fs::is_regular_file(file)) m.fail("file", "no such height map: " + file.string());
+  if (const std::string problem = input_file_problem(file.string()); !problem.empty())
+    m.fail("file", fmt::format("height map {}: {}", file.string(), problem));
   map.file = file.lexically_normal().string();
   if (m.has("channel")) map.channel = read_string(m, "channel");
   map.texel_size = read_number(m, "texel_size", 0.0, 1e6, true, 0.0);
   map.height_scale = read_number(m, "height_scale", 0.0, 1e6, true, 1.0);
   map.edge = read_edge(m, MapEdge::kWrap);
   m.finish();
+  // Read now, as scene maps are: a map that cannot be measured (NaN, slopes
+  // too steep) is refused before the run writes anything.
+  try {
+    const HeightMap heights = read_height_map(map.file, map.channel);
+    check_map_slopes(heights, map.file, map.texel_size > 0.0 ? map.texel_size : 1.0 / heights.width,
+                     map.height_scale);
+  } catch (const InputError& e) {
+    m.fail("file", e.what());
+  }
   return map;
 }
 
@@ -212,8 +226,9 @@ InterplaySection read_interplay_section(Reader s, const fs::path& base) {
   InterplaySection out;
   const json& scene = s.at("scene");
   const fs::path path = base / (scene.is_string() ? scene.get<std::string>() : "");
-  if (!scene.is_string() || !fs::is_regular_file(path))
-    s.fail("scene", "expected a scene file, got " + Reader::describe(scene));
+  if (!scene.is_string()) s.fail("scene", "expected a scene file, got " + Reader::describe(scene));
+  if (const std::string problem = input_file_problem(path.string()); !problem.empty())
+    s.fail("scene", fmt::format("scene file {}: {}", path.string(), problem));
   out.scene = path.lexically_normal().string();
   if (s.has("size")) {
     const std::optional<long long> size = strict_integer(s.at("size"), 16, 16384);

@@ -15,6 +15,31 @@
 namespace penumbra {
 namespace fs = std::filesystem;
 
+std::string input_file_problem(const std::string& path) {
+  if (path.empty()) return "expected a file name, got \"\"";
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec && status.type() != fs::file_type::not_found) return "cannot be opened: " + ec.message();
+  switch (status.type()) {
+    case fs::file_type::regular:
+      return "";
+    case fs::file_type::not_found:
+      return "no such file";
+    case fs::file_type::directory:
+      return "is a folder, not a file";
+    case fs::file_type::fifo:
+      return "is a FIFO (named pipe), not a regular file";
+    case fs::file_type::character:
+      return "is a character device, not a regular file";
+    case fs::file_type::block:
+      return "is a block device, not a regular file";
+    case fs::file_type::socket:
+      return "is a socket, not a regular file";
+    default:
+      return "is not a regular file";
+  }
+}
+
 const std::string& host_tag() {
   static const std::string tag = [] {
     char name[256] = {};

@@ -12,6 +12,12 @@ namespace penumbra {
 // logs and stamps, whose absence the caller handles as "nothing there").
 std::string read_file(const std::string& path);
 
+// Why `path` cannot be read as an input file ("" when it is a regular file,
+// after symbolic links): "no such file", "is a folder", "is a FIFO ...",
+// "is a character device ..." (/dev/zero would be read forever), or the
+// system's reason (a symbolic-link loop). Callers put it into their one line.
+std::string input_file_problem(const std::string& path);
+
 // This machine's host name, reduced to [A-Za-z0-9-] ("host" if none).
 const std::string& host_tag();
 

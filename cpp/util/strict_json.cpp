@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "util/files.h"
+
 namespace penumbra {
 
 using nlohmann::json;
@@ -234,6 +236,8 @@ std::optional<json> parse_json_value_or_word(const std::string& text, const std:
 }
 
 json read_json_file(const std::string& path) {
+  if (const std::string problem = input_file_problem(path); !problem.empty())
+    throw InputError(path, "", "cannot open the file for reading: " + problem);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "", "cannot open the file for reading");
   std::stringstream buffer;
