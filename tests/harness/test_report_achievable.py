@@ -145,6 +145,8 @@ class Section(unittest.TestCase):
         self.assertIn('their 95 % intervals do not overlap, and the held-out '
                       'table is lower.', apart)
         self.assertNotIn('are tied', apart)
+        self.assertIn('Per held-out family, against the best shipped method '
+                      'there: fitted table lower in 1, tie in 1 (of 2).', tie)
         verdicts = [r[6] for r in rows_of(tie, 'achievable-held-out')]
         self.assertEqual(verdicts, ['tie (intervals overlap)',
                                     'fitted table lower'])
