@@ -272,17 +272,20 @@ def contour_fig(fit, style):
                        if np.isfinite(t).any()])
     levels = np.linspace(0, math.ceil(top * 2) / 2, 2 * int(
         math.ceil(top * 2)) + 1)
+    # Labelled lines at 0.5 and 1 only: G* is fitted cell by cell and
+    # noisy, and a line at every level would bury it in labels.
     im = contour_panel(axs[0][0], L, D, g['floor'], 'G*: the study floor',
-                       levels=levels)
+                       levels=levels, lines=[0.5, 1.0])
     for ax, m in zip(axs[0][1:], names):
-        contour_panel(ax, L, D, g[m], m, levels=levels)
+        contour_panel(ax, L, D, g[m], m, levels=levels, lines=[0.5, 1.0])
     fig.colorbar(im, ax=axs[0].tolist(), label='G (1: raw bump)')
     diffs = {m: g[m] - g['floor'] for m in names}
     lim = max([float(np.nanmax(np.abs(d))) for d in diffs.values()
                if np.isfinite(d).any()] + [1e-3])
     axs[1][0].axis('off')
     for ax, m in zip(axs[1][1:], names):
-        im = contour_panel(ax, L, D, diffs[m], f'{m} − G*', lim)
+        im = contour_panel(ax, L, D, diffs[m], f'{m} − G*', lim,
+                           lines=[0.0])
     if names:
         fig.colorbar(im, ax=axs[1].tolist(), label='G − G*')
     outer_labels(axs)
