@@ -10,6 +10,8 @@ temporary name and renamed when complete).
 import os
 import tempfile
 
+from penumbra_achievable import (
+    contour_fig, fit_path, load_fit, share_fig)
 from penumbra_data import METRICS, PRIMARY, BadInput, Report, objs
 from penumbra_grid_figure import grid_fig
 from penumbra_figures import (
@@ -21,10 +23,13 @@ from penumbra_sweeps import heatmap_fig
 from penumbra_tables import (
     csv_text, latex, level_table, markdown, ranking_table, table_caption)
 
+ACHIEVABLE = ('achievable-share', 'achievable-contour')
 FIGURE_OPTIONS = ('--kind', '--x', '--y', '--metric', '--methods',
                   '--variant', '--scene', '--style', '--columns', '-o')
 TABLE_OPTIONS = ('--format', '--by', '--metric', '-o')
-KINDS = ('line', 'profile', 'ranking', 'heatmap', 'grid')
+KINDS = ('line', 'profile', 'ranking', 'heatmap', 'grid') + ACHIEVABLE
+# What an achievable kind takes: it draws STUDY/fit/fit.json alone.
+ACHIEVABLE_OPTIONS = ('--kind', '--style', '--columns', '-o')
 
 
 def parse(argv, allowed):
@@ -171,6 +176,8 @@ def figure_command(argv):
     path = output_path(opts, ('pdf', 'svg', 'png'))
     if path is None:
         raise BadInput('-o', 'is required (FILE.pdf, .svg or .png)')
+    if kind in ACHIEVABLE:
+        return [achievable_figure(kind, opts, argv[0], style, path)], None
     report = Report(argv[0])
     with style.active():
         fig = figure_of(kind, opts, report, Stats(report), style)
@@ -179,6 +186,24 @@ def figure_command(argv):
                        'from (a study without raw bump `none` has no '
                        'combined error)')
     return [write_figure(fig, path, style)], None
+
+
+def achievable_figure(kind, opts, study, style, path):
+    """A figure of STUDY/fit/fit.json (penumbra fit's), not of report.json:
+    the share chart, or the contour plot of G* (fit.json's pictures)."""
+    extra = [o for o in opts if o not in ACHIEVABLE_OPTIONS]
+    if extra:
+        raise BadInput(extra[0], f'does not apply to --kind {kind}')
+    fit = load_fit(fit_path(study))
+    with style.active():
+        fig = (share_fig if kind == 'achievable-share' else
+               contour_fig)(fit, style)
+    if fig is None:
+        raise BadInput(fit['src'], '/pictures: absent or null (penumbra '
+                       'fit writes it for a light,deviation grid; an older '
+                       'one wrote none)' if kind == 'achievable-contour'
+                       else '/methods: no method with a share')
+    return write_figure(fig, path, style)
 
 
 def table_command(argv):

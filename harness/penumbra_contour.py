@@ -37,17 +37,23 @@ def load_contour(path):
     return L, D, G
 
 
-def contour_panel(ax, L, D, G, title, diff=None):
-    """G, or a difference when diff is given (its symmetric limit)."""
+def contour_panel(ax, L, D, G, title, diff=None, levels=None, lines=None):
+    """G on levels (default 0 to 1 in tenths: a factor that only darkens),
+    or a difference when diff is given (its symmetric limit); lines: the
+    labelled contour lines (default: every level, or 8 for a difference),
+    fewer where the values are noisy (a floor fitted cell by cell)."""
     if diff is None:
-        levels, cmap, lines = np.linspace(0, 1, 11), 'viridis', None
+        cmap = 'viridis'
+        levels = np.linspace(0, 1, 11) if levels is None else levels
     else:
         levels = MaxNLocator(20, symmetric=True).tick_values(-diff, diff)
         cmap = 'RdBu'
-        lines = MaxNLocator(8, symmetric=True).tick_values(-diff, diff)
+        if lines is None:
+            lines = MaxNLocator(8, symmetric=True).tick_values(-diff, diff)
     z = np.ma.masked_invalid(G)
     if z.count():
-        extend = 'both' if diff is None and (z.min() < 0 or z.max() > 1) \
+        extend = 'both' if diff is None and (z.min() < levels[0] or
+                                             z.max() > levels[-1]) \
             else 'neither'
         im = ax.contourf(L, D, z, levels=levels, cmap=cmap, extend=extend)
         contour_lines(ax, L, D, z, levels if lines is None else lines,

@@ -15,8 +15,10 @@ import os
 
 import jinja2
 
+from penumbra_achievable_html import achievable_context
 from penumbra_context import (
     ci_cell, figure, figure_file, grid_cell, table)
+from penumbra_achievable import FIT_FILE
 from penumbra_filtering_html import filtering_context, interplay_context
 from penumbra_data import (
     METRICS, get_metric, metric_label, num, obj, objs, stem)
@@ -279,6 +281,8 @@ def report_context(report, figs):
         if report.lowpoly else None,
         'filtering': filtering_context(report, figs),
         'interplay': interplay_context(report),
+        'achievable': achievable_context(
+            figs['achievable']['fit'], figs['achievable'], FIT_FILE),
         'terminator': [f'{t:g}' for t in report.terminator],
         'lit': [f'{t:g}' for t in report.lit],
         'image_unit': str(report.units.get('image', 'W m^-2 sr^-1'))}

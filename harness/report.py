@@ -19,7 +19,8 @@ point (argument handling, exit status, messages); the work is done by
 
 Usage (Debian's Python, with python3-matplotlib and python3-jinja2):
   /usr/bin/python3 harness/report.py report OUT [--self-contained]
-      reads OUT/report.json; writes OUT/figures/*.{png,svg,pdf} and
+      reads OUT/report.json (and OUT/fit/fit.json when there: the "What
+      is achievable" section); writes OUT/figures/*.{png,svg,pdf} and
       OUT/report.html, which links its images (relative URLs into
       OUT/images and OUT/figures: keep the folder together), or with
       --self-contained embeds every image as a data: URI (one file).
@@ -49,6 +50,13 @@ Usage (Debian's Python, with python3-matplotlib and python3-jinja2):
       penumbra_stats.highlighted). --style paper: 8-pt text, exactly 3.5
       in (--columns 1) or 7 in (2, the default) wide, TrueType fonts in
       the PDF; screen: the report's look.
+  /usr/bin/python3 harness/report.py figure OUT --kind
+          achievable-share|achievable-contour [--style paper|screen]
+          [--columns 1|2] -o FILE.(pdf|svg|png)
+      draws from OUT/fit/fit.json (penumbra fit's; docs/achievable.md), not
+      report.json: each method's share of the achievable improvement with
+      its interval, or the contour plot of the floor's G* beside the
+      methods and their differences from it (fit.json's `pictures`).
   /usr/bin/python3 harness/report.py table OUT --format latex|markdown|csv
           [--by POINTER] [--metric M] [-o FILE]
       the ranking table (rank group, method, combined error C with its
@@ -127,6 +135,8 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 sys.dont_write_bytecode = True
 
+from penumbra_achievable import (  # noqa: E402
+    achievable_figures, load_study_fit)
 from penumbra_commands import figure_command, table_command  # noqa: E402
 from penumbra_contour import contour_figures, load_contour  # noqa: E402
 from penumbra_data import BadInput, PageImages, Report  # noqa: E402
@@ -142,7 +152,11 @@ def run_report(out, self_contained=False):
     every path written, report.html last."""
     PageImages.embed, PageImages.out = self_contained, out
     report = Report(out)
+    fit = load_study_fit(out)  # checked before anything is drawn
     figs = report_figures(report, Stats(report))
+    figs['achievable'] = achievable_figures(
+        fit, os.path.join(out, 'figures'))
+    figs['written'] += figs['achievable']['written']
     progress('report.html' + (' (self-contained)' if self_contained else ''))
     return figs['written'] + [write_report(report, figs)]
 
@@ -152,7 +166,8 @@ def run_contour(path, outdir):
 
 
 USAGE = ('usage: report.py report OUT [--self-contained] | '
-         'report.py figure OUT --kind line|profile|ranking|heatmap|grid '
+         'report.py figure OUT --kind line|profile|ranking|heatmap|grid|'
+         'achievable-share|achievable-contour '
          '[options] '
          '-o FILE | report.py table OUT --format latex|markdown|csv '
          '[--by POINTER] [-o FILE] | '

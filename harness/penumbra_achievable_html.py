@@ -1,0 +1,185 @@
+"""report.html's "What is achievable" section (templates/achievable.html.j2)
+from the study's fit/fit.json (penumbra_achievable.load_fit), or, without
+one, the line that says how to get it.
+
+Errors are terminator-profile RMSE pooled over variants, shown in % of
+albedo·E/π with their 95 % intervals; shares and constants as fractions.
+The fitted table's error is always the held-out one (fitted without the
+family it is measured on); the study floor on the family, which was
+fitted with it, appears only beside it and labelled in-sample.
+"""
+import math
+
+from penumbra_achievable import MORE_INPUTS, overlap, share_caption
+from penumbra_context import ci_cell, figure_file, table
+from penumbra_data import fmt
+
+PCT = '% of albedo·E/π'
+
+
+def pct_cell(iv):
+    """'6.49 [4.50, 8.39]' of a [value, low, high] fraction, in %, as a
+    right-aligned table cell."""
+    return ci_cell(iv[0], iv[1:], 100.0, digits=2)
+
+
+def pct(iv):
+    return pct_cell(iv)['text']
+
+
+def pct_value(v):
+    """One fraction without an interval, in % (n/a when undefined), as a
+    right-aligned table cell."""
+    return {'text': f'{v * 100:.2f}', 'cls': 'n'} if math.isfinite(v) \
+        else {'text': 'n/a', 'cls': 'n na'}
+
+
+def frac_cell(iv, digits=2):
+    return ci_cell(iv[0], iv[1:], 1.0, digits=digits)
+
+
+def frac(iv, digits=2):
+    return frac_cell(iv, digits)['text']
+
+
+def absent_context(fit_file):
+    return {'absent': f'No {fit_file} in this study folder: `penumbra fit '
+            'STUDY` then `penumbra report STUDY` add the "What is '
+            'achievable" section (the lowest error any light,deviation '
+            'factor reaches, each method\'s share of it, and a table fitted '
+            'and held out by scene family).'}
+
+
+def shipped_best(fit):
+    """The shipped method with the lowest pooled error (not raw bump, not a
+    fitted table), or None."""
+    rows = [m for m in fit['methods'] if m['method'] != 'none' and not
+            m['method'].startswith('fitted') and math.isfinite(m['error'][0])]
+    return min(rows, key=lambda m: (m['error'][0], m['method']),
+               default=None)
+
+
+def verdict(fitted, best, best_name):
+    """The tie rule on intervals: overlapping intervals are a tie; else
+    the lower one is named."""
+    if overlap(fitted, best):
+        return 'tie (intervals overlap)'
+    return ('fitted table lower' if fitted[0] < best[0]
+            else f'{best_name} lower')
+
+
+def comparison_sentence(fit):
+    """Whether the held-out table beats the best shipped method out of
+    sample, pooled over the study; None without a shipped method or
+    without held-out families."""
+    best = shipped_best(fit)
+    if best is None or not fit['held_out']:
+        return None
+    h, b, name = fit['held_out_pooled'], best['error'], best['method']
+    head = (f'Out of sample, the fitted table held out by scene family '
+            f'has E = {pct(h)} {PCT} over {fit["variants"]} variants; the '
+            f'best shipped method, {name}, has E = {pct(b)} {PCT}: ')
+    if overlap(h, b):
+        text = ('their 95 % intervals overlap, so the held-out table and '
+                f'{name} are tied.')
+    else:
+        lower = 'the held-out table' if h[0] < b[0] else name
+        text = (f'their 95 % intervals do not overlap, and {lower} is '
+                'lower.')
+    return head + text + ' ' + family_tally(fit)
+
+
+def family_tally(fit):
+    """'Per held-out family, against the best shipped method there: tie
+    in 3, fitted table lower in 1 (of 4).'"""
+    counts = {}
+    for f in fit['held_out']:
+        v = verdict(f['held_out'], f['best'], 'best shipped method')
+        v = v.replace(' (intervals overlap)', '')
+        counts[v] = counts.get(v, 0) + 1
+    return ('Per held-out family, against the best shipped method there: ' +
+            ', '.join(f'{v} in {n}' for v, n in sorted(counts.items())) +
+            f' (of {len(fit["held_out"])}).')
+
+
+def held_out_table(fit):
+    head = ['held-out family', 'variants',
+            f'fitted table, held out: E ({PCT})',
+            'best shipped method there',
+            f'its E ({PCT})', f'raw bump E ({PCT})', 'held-out vs best',
+            f'in-sample (the study floor, fitted with the family): E '
+            f'({PCT}; not an out-of-sample error)']
+    rows = [[h['family'], h['variants'], pct_cell(h['held_out']),
+             h['best_method'], pct_cell(h['best']), pct_cell(h['none']),
+             verdict(h['held_out'], h['best'], h['best_method']),
+             pct_value(h['in_sample'])]
+            for h in fit['held_out']]
+    return table(head, rows)
+
+
+def constants_context(fit):
+    """A sentence per fitted constant: fitted value with its interval, the
+    published one, whether it lies inside; and a table of the errors."""
+    sentences, rows = [], []
+    for c in fit['constants']:
+        lo, hi = c['fitted'][1:]
+        inside = math.isfinite(lo + hi) and lo <= c['published'] <= hi
+        sentences.append(
+            f'{c["method"]}: fitted {c["constant"]}: k = '
+            f'{frac(c["fitted"], 3)} (dimensionless; 95 % bootstrap '
+            f'interval over variants) against the published '
+            f'{fmt(c["published"], digits=4)}; the published constant lies '
+            + ('inside' if inside else 'outside') + ' the interval.')
+        rows.append([c['method'], (c['published'], 1),
+                     frac_cell(c['fitted'], 3), 'yes' if inside else 'no',
+                     pct_value(c['error_published']),
+                     pct_value(c['error_held_out']),
+                     pct_value(c['error_in_sample'])])
+    head = ['method', 'published (dimensionless)',
+            'fitted [95 % interval] (dimensionless)',
+            'published inside', f'E at published ({PCT})',
+            f'E fitted, held out by family ({PCT})',
+            f'E fitted, in-sample ({PCT}; fitted on these variants)']
+    return {'sentences': sentences,
+            'table': table(head, rows) if rows else None}
+
+
+def achievable_context(fit, figs, fit_file):
+    """The section's context; fit None: the line saying how to get it."""
+    if fit is None:
+        return absent_context(fit_file)
+    f = fit['floor']
+    families = table(
+        ['scene family', 'variants', f'floor E* ({PCT})',
+         f'raw bump E ({PCT})'],
+        [[e['scope'], e['variants'], pct_cell(e['floor']),
+          pct_cell(e['none'])]
+         for e in fit['families']])
+    shares = table(
+        ['method', f'E ({PCT})', 'share of the achievable improvement '
+         '(fraction)'],
+        [[m['method'] + (' †' if m['method'] in MORE_INPUTS else ''),
+          pct_cell(m['error']), frac_cell(m['share'])]
+         for m in fit['methods']])
+    return {'absent': None, 'file': fit_file, 'unit': fit['unit'],
+            'floor': pct(f['floor']), 'none': pct(f['none']),
+            'variants': f['variants'], 'pct': PCT,
+            'families': families, 'shares': shares,
+            'share_figure': figure_file(
+                figs['share'], 'share of the achievable improvement',
+                'figures/achievable-share.{png,svg,pdf}: ' +
+                share_caption(fit)) if figs.get('share') else None,
+            'contour_figure': figure_file(
+                figs['contour'], 'G* and the methods over light angle and '
+                'deviation', 'figures/achievable-contour.{png,svg,pdf}: '
+                'top, G (fraction of the light let through) of the study '
+                'floor G* and of each method over the light angle from Ng '
+                'and the shading-normal deviation (degrees; chiang2019 and '
+                'estevez2019 with Ns tilted towards the light); bottom, '
+                'each one\'s difference from G* (blue: lets more light '
+                'through than the floor, red: less). Blank: cells no '
+                'variant lights.')
+            if figs.get('contour') else None,
+            'held_out': held_out_table(fit) if fit['held_out'] else None,
+            'comparison': comparison_sentence(fit),
+            'constants': constants_context(fit)}

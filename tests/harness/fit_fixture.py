@@ -1,0 +1,107 @@
+"""A synthetic fit/fit.json in the shape `penumbra fit` writes (docs/
+achievable.md), with the `pictures` key, for the harness's tests.
+
+Made-up but shaped numbers, no randomness. `tie`: the pooled held-out
+error's interval overlaps the best shipped method's (a tie), else it lies
+wholly below it. `pictures`: with the contour figure's G tables (smooth
+functions of the light angle and the deviation, null where no variant has
+light: light angle > 104° + deviation).
+"""
+import json
+import math
+import os
+
+FAMILIES = ['cylinder-grating', 'sphere-weave']
+LIGHT = [21.0 + 2 * i for i in range(50)]      # cell centres, degrees
+DEVIATION = [2.0 + 4 * j for j in range(15)]
+
+
+def iv(v, lo, hi):
+    return [v, lo, hi]
+
+
+def g_table(shift, slope):
+    """G over (deviation, light): 1 in the light, falling through the
+    terminator, which moves to lower light angles as the deviation grows;
+    null where the fixture's variants put no light."""
+    rows = []
+    for d in DEVIATION:
+        row = []
+        for a in LIGHT:
+            if a > 104 + d:
+                row.append(None)
+                continue
+            x = (a - 90 + shift * d) / slope
+            row.append(round(1.2 / (1 + math.exp(x)), 6))
+        rows.append(row)
+    return rows
+
+
+def pictures():
+    return {'light_deg': LIGHT, 'deviation_deg': DEVIATION,
+            'note': 'G per cell centre; chiang2019 and estevez2019 with Ns '
+                    'tilted towards the light',
+            'g': {'floor': g_table(0.5, 6.0), 'fitted': g_table(0.45, 7.0),
+                  'estevez2019': g_table(0.3, 5.0),
+                  'chiang2019': g_table(0.6, 4.0)}}
+
+
+# Per family: the first's interval overlaps the best shipped method's (a
+# tie), the second's lies wholly below it.
+FAMILY_HELD_OUT = [iv(0.0540, 0.0420, 0.0650), iv(0.0290, 0.0250, 0.0330)]
+
+
+def fit_doc(tie=True, with_pictures=True):
+    best = iv(0.0500, 0.0400, 0.0600)          # chiang2019, the best shipped
+    pooled = iv(0.0520, 0.0450, 0.0610) if tie else iv(0.0310, 0.0270, 0.0350)
+    doc = {
+        'unit': 'terminator-profile RMSE, fraction of albedo*E/pi, pooled '
+                'over variants as a root mean square; intervals: 95 % '
+                'percentile bootstrap over variants',
+        'study': 'fixture', 'variants': 36,
+        'floor': {'scope': 'study', 'variants': 36, 'kkt_residual': 1e-12,
+                  'floor': iv(0.0300, 0.0210, 0.0390),
+                  'none': iv(0.0900, 0.0700, 0.1100)},
+        'family_floors': [
+            {'scope': f, 'variants': 18, 'kkt_residual': 1e-12,
+             'floor': iv(0.0250 + 0.01 * k, 0.0200 + 0.01 * k,
+                         0.0300 + 0.01 * k),
+             'none': iv(0.0800 + 0.02 * k, 0.0600 + 0.02 * k,
+                        0.1000 + 0.02 * k)} for k, f in enumerate(FAMILIES)],
+        'methods': [
+            {'method': 'chiang2019', 'error': best,
+             'share': iv(0.6667, 0.5500, 0.7800)},
+            {'method': 'mitsuba3', 'error': iv(0.0550, 0.0440, 0.0660),
+             'share': iv(0.5833, 0.4000, 0.7000)},
+            {'method': 'estevez2019', 'error': iv(0.0650, 0.0500, 0.0800),
+             'share': iv(0.4167, 0.3500, 0.4800),
+             'on_grid': {'error': 0.0648, 'resolution_error': 0.0002}},
+            {'method': 'shading-offset(s=0.3)',
+             'error': iv(0.1200, 0.1000, 0.1400),
+             'share': iv(-0.5000, -1.2000, -0.1000)}],
+        'held_out': [
+            {'family': f, 'variants': 18, 'smoothness': 1.0,
+             'held_out': FAMILY_HELD_OUT[k],
+             'in_sample_floor': 0.0333 + 0.001 * k,
+             'none': iv(0.0800, 0.0600, 0.1000),
+             'best_method': 'chiang2019', 'best': best}
+            for k, f in enumerate(FAMILIES)],
+        'held_out_pooled': pooled,
+        'constants': [{
+            'method': 'estevez2019',
+            'constant': 'k in alpha^2 = k tan^2(delta)',
+            'published': 0.125, 'fitted': iv(0.8931, 0.5470, 1.3887),
+            'error_fitted_in_sample': 0.0631, 'error_published': 0.0724,
+            'error_fitted_held_out': 0.0658}]}
+    if with_pictures:
+        doc['pictures'] = pictures()
+    return doc
+
+
+def write_fit(study, doc):
+    """study/fit/fit.json; returns its path."""
+    os.makedirs(os.path.join(study, 'fit'), exist_ok=True)
+    path = os.path.join(study, 'fit', 'fit.json')
+    with open(path, 'w', encoding='utf-8') as f:
+        json.dump(doc, f, indent=1)
+    return path

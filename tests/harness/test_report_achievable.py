@@ -1,0 +1,265 @@
+#!/usr/bin/python3
+"""report.html's "What is achievable" section and the achievable-share and
+achievable-contour figures (issue 39), from a synthetic study folder
+(report_fixture.py) and a synthetic fit/fit.json (fit_fixture.py), without
+the C++ binary.
+
+Usage: test_report_achievable.py SOURCE_DIR [unittest options]
+
+Checks that
+  - the section appears iff STUDY/fit/fit.json exists, and without it the
+    page says in one line how to get it;
+  - the numbers on the page are fit.json's, formatted (% of albedo·E/π
+    with intervals, shares and k as fractions);
+  - the fitted table's column is the held-out error, the in-sample one only
+    in its labelled column;
+  - the tie sentence and the per-family verdicts follow the interval rule:
+    overlapping intervals say tie, disjoint ones name the lower;
+  - `report.py figure --kind achievable-share|achievable-contour` writes
+    the same bytes twice, a paper PDF 3.5 or 7 in wide;
+  - a bad fit.json (missing key, wrong shape, malformed) is one line
+    'report.py: <fit.json>: <JSON pointer>: ...', exit 2, nothing written.
+"""
+import copy
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+SOURCE = os.path.abspath(sys.argv[1]) if len(sys.argv) > 1 else os.path.join(
+    os.path.dirname(os.path.abspath(__file__)), '..', '..')
+REPORT = os.path.join(SOURCE, 'harness', 'report.py')
+sys.path[:0] = [os.path.dirname(os.path.abspath(__file__))]
+sys.dont_write_bytecode = True
+
+import fit_fixture as ff  # noqa: E402
+import report_fixture as fx  # noqa: E402
+
+TMP = tempfile.mkdtemp(prefix='penumbra-report-achievable.')
+BASE = os.path.join(TMP, 'base')
+fx.write_fixture(BASE, scenes=fx.SCENES[:1], lights=fx.LIGHTS[:1],
+                 methods=fx.METHODS[:6])
+
+
+def study(name, doc=None):
+    """A copy of the base study, with doc as its fit/fit.json (None:
+    without one); returns its folder."""
+    path = os.path.join(TMP, name)
+    shutil.copytree(BASE, path)
+    if doc is not None:
+        ff.write_fit(path, doc)
+    return path
+
+
+def run(*args):
+    return subprocess.run(['/usr/bin/python3', REPORT] + list(args), text=True,
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+
+
+def page_of(path):
+    r = run('report', path)
+    assert r.returncode == 0, r.stderr
+    with open(os.path.join(path, 'report.html'), encoding='utf-8') as f:
+        return f.read()
+
+
+def pct(iv):
+    """fit.json's [value, low, high] as the page shows it, in %."""
+    return '{:.2f} [{:.2f}, {:.2f}]'.format(*(x * 100 for x in iv))
+
+
+def rows_of(page, table_id):
+    """The rows of a table of the page, each a list of cell texts."""
+    start = page.index(f'id="{table_id}"')
+    body = page[start:page.index('</table>', start)]
+    return [[re.sub(r'<[^>]+>', '', c) for c in
+             re.findall(r'<td[^>]*>(.*?)</td>', row)]
+            for row in re.findall(r'<tr>(.*?)</tr>', body, re.S)][1:]
+
+
+class Section(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.doc = ff.fit_doc(tie=True)
+        cls.pages = {'absent': page_of(study('absent')),
+                     'tie': page_of(study('tie', cls.doc)),
+                     'apart': page_of(study('apart', ff.fit_doc(tie=False)))}
+
+    def test_section_iff_fit_json(self):
+        absent = self.pages['absent']
+        self.assertIn('<h2 id="achievable">What is achievable</h2>', absent)
+        self.assertIn('No fit/fit.json in this study folder: `penumbra fit '
+                      'STUDY` then `penumbra report STUDY`', absent)
+        self.assertNotIn('id="achievable-families"', absent)
+        self.assertNotIn('achievable-share.png', absent)
+        for name in ('tie', 'apart'):
+            self.assertIn('id="achievable-families"', self.pages[name])
+            self.assertNotIn('No fit/fit.json', self.pages[name])
+
+    def test_numbers_are_fit_json(self):
+        page, d = self.pages['tie'], self.doc
+        self.assertIn(f'E* = {pct(d["floor"]["floor"])} % of albedo·E/π',
+                      page)
+        self.assertIn(f'raw bump: E = {pct(d["floor"]["none"])} % of '
+                      'albedo·E/π', page)
+        self.assertEqual(rows_of(page, 'achievable-families'), [
+            [f['scope'], str(f['variants']), pct(f['floor']), pct(f['none'])]
+            for f in d['family_floors']])
+        shares = rows_of(page, 'achievable-shares')
+        for row, m in zip(shares, d['methods']):
+            self.assertEqual(row[0].rstrip(' †'), m['method'])
+            self.assertEqual(row[1:], [pct(m['error']), '{:.2f} [{:.2f}, '
+                                       '{:.2f}]'.format(*m['share'])])
+        k = d['constants'][0]['fitted']
+        self.assertIn('k = {:.3f} [{:.3f}, {:.3f}]'.format(*k), page)
+        self.assertIn('against the published 0.125; the published constant '
+                      'lies outside the interval.', page)
+
+    def test_held_out_is_the_fitted_figure(self):
+        rows = rows_of(self.pages['tie'], 'achievable-held-out')
+        for row, h in zip(rows, self.doc['held_out']):
+            self.assertEqual(row[:6], [
+                h['family'], str(h['variants']), pct(h['held_out']),
+                h['best_method'], pct(h['best']), pct(h['none'])])
+            self.assertEqual(row[7], f'{h["in_sample_floor"] * 100:.2f}')
+        self.assertIn('in-sample (the study floor, fitted with the family)',
+                      self.pages['tie'])
+
+    def test_report_writes_both_figures(self):
+        figs = os.listdir(os.path.join(TMP, 'tie', 'figures'))
+        for name in ('achievable-share', 'achievable-contour'):
+            for ext in ('png', 'svg', 'pdf'):
+                self.assertIn(f'{name}.{ext}', figs)
+
+    def test_tie_rule(self):
+        tie, apart = self.pages['tie'], self.pages['apart']
+        pooled = self.doc['held_out_pooled']
+        self.assertIn(f'fitted table held out by scene family has E = '
+                      f'{pct(pooled)}', tie)
+        self.assertIn('their 95 % intervals overlap, so the held-out table '
+                      'and chiang2019 are tied.', tie)
+        self.assertIn('their 95 % intervals do not overlap, and the held-out '
+                      'table is lower.', apart)
+        self.assertNotIn('are tied', apart)
+        self.assertIn('Per held-out family, against the best shipped method '
+                      'there: fitted table lower in 1, tie in 1 (of 2).', tie)
+        verdicts = [r[6] for r in rows_of(tie, 'achievable-held-out')]
+        self.assertEqual(verdicts, ['tie (intervals overlap)',
+                                    'fitted table lower'])
+
+
+class Figures(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.study = study('figures', ff.fit_doc())
+        cls.dir = os.path.join(TMP, 'figure-out')
+        os.makedirs(cls.dir)
+
+    def test_same_bytes(self):
+        for kind in ('achievable-share', 'achievable-contour'):
+            for ext in ('pdf', 'svg', 'png'):
+                paths = [os.path.join(self.dir, f'{kind}-{k}.{ext}')
+                         for k in range(2)]
+                for p in paths:
+                    r = run('figure', self.study, '--kind', kind, '-o', p)
+                    self.assertEqual(r.returncode, 0, r.stderr)
+                    self.assertEqual(r.stdout.strip(), p)
+                with open(paths[0], 'rb') as a, open(paths[1], 'rb') as b:
+                    self.assertEqual(a.read(), b.read(), f'{kind} {ext}')
+
+    def test_paper_width(self):
+        for kind in ('achievable-share', 'achievable-contour'):
+            for cols, width in (('1', 3.5), ('2', 7.0)):
+                path = os.path.join(self.dir, f'paper-{kind}-{cols}.pdf')
+                r = run('figure', self.study, '--kind', kind, '--style',
+                        'paper', '--columns', cols, '-o', path)
+                self.assertEqual(r.returncode, 0, r.stderr)
+                with open(path, 'rb') as f:
+                    box = re.search(rb'/MediaBox\s*\[\s*([\d.]+)\s+[\d.]+\s+'
+                                    rb'([\d.]+)', f.read())
+                x0, x1 = (float(v) for v in box.groups())
+                self.assertAlmostEqual((x1 - x0) / 72, width, places=2)
+
+
+def broken(edit):
+    """fit_doc with one edit applied."""
+    doc = copy.deepcopy(ff.fit_doc())
+    edit(doc)
+    return doc
+
+
+BAD = [  # (name, fit.json document or text, the pointer named)
+    ('no-floor', broken(lambda d: d.pop('floor')), '/floor'),
+    ('short-share', broken(lambda d: d['methods'][1].update(share=[0.5, 0.4])),
+     '/methods/1/share'),
+    ('string-variants', broken(lambda d: d.update(variants='36')),
+     '/variants'),
+    ('family-none', broken(lambda d: d['family_floors'][0].pop('none')),
+     '/family_floors/0/none'),
+    ('rows', broken(lambda d: d['pictures']['g']['floor'].pop()),
+     '/pictures/g/floor'),
+    ('row-length', broken(lambda d: d['pictures']['g']['fitted'][3].pop()),
+     '/pictures/g/fitted'),
+    ('light-order', broken(lambda d: d['pictures']['light_deg'].reverse()),
+     '/pictures/light_deg'),
+    ('held-out-best', broken(lambda d: d['held_out'][1].update(best=None)),
+     '/held_out/1/best'),
+    ('malformed', '{"floor": ', 'malformed JSON')]
+
+
+class BadFitJson(unittest.TestCase):
+    def test_report_and_figure_refuse(self):
+        out = os.path.join(TMP, 'bad-out')
+        os.makedirs(out)
+        for name, doc, where in BAD:
+            path = study('bad-' + name, doc if isinstance(doc, dict) else {})
+            fit = os.path.join(path, 'fit', 'fit.json')
+            if not isinstance(doc, dict):
+                with open(fit, 'w', encoding='utf-8') as f:
+                    f.write(doc)
+            before = sorted(os.listdir(path))
+            r = run('report', path)
+            self.assertEqual(r.returncode, 2, f'{name}: {r.stderr}')
+            self.assertRegex(r.stderr, rf'^report\.py: {re.escape(fit)}: '
+                             rf'{re.escape(where)}\S*[: ].*\n$', name)
+            self.assertEqual(sorted(os.listdir(path)), before, name)
+            for kind in ('achievable-share', 'achievable-contour'):
+                r = run('figure', path, '--kind', kind, '-o',
+                        os.path.join(out, f'{name}.pdf'))
+                self.assertEqual(r.returncode, 2, f'{name}: {r.stderr}')
+                self.assertRegex(r.stderr, rf'^report\.py: {re.escape(fit)}: '
+                                 rf'{re.escape(where)}', name)
+            self.assertEqual(os.listdir(out), [], name)
+
+    def test_without_pictures(self):
+        path = study('no-pictures', ff.fit_doc(with_pictures=False))
+        r = run('figure', path, '--kind', 'achievable-contour', '-o',
+                os.path.join(TMP, 'no-pictures.pdf'))
+        self.assertEqual(r.returncode, 2)
+        self.assertRegex(r.stderr, r'^report\.py: \S*fit\.json: /pictures: ')
+        self.assertFalse(os.path.exists(os.path.join(TMP, 'no-pictures.pdf')))
+        r = run('figure', path, '--kind', 'achievable-share', '--x', '/a',
+                '-o', os.path.join(TMP, 'x.pdf'))
+        self.assertEqual(r.returncode, 2)
+        self.assertRegex(r.stderr, r'^report\.py: --x: does not apply')
+        page = page_of(path)
+        self.assertIn('has no "pictures"', page)
+        self.assertNotIn('achievable-contour.png', page)
+        # null: what penumbra fit writes for a grid of other inputs
+        path = study('null-pictures', broken(
+            lambda d: d.update(pictures=None)))
+        page = page_of(path)
+        self.assertIn('has no "pictures"', page)
+        self.assertNotIn('achievable-contour.png', page)
+        self.assertIn('achievable-share.png', page)
+
+
+if __name__ == '__main__':
+    try:
+        unittest.main(argv=[sys.argv[0]] + sys.argv[2:], verbosity=2)
+    finally:
+        shutil.rmtree(TMP, ignore_errors=True)
