@@ -95,7 +95,10 @@ def load_fit(path):
                        for e, p in c.array(doc, '', 'methods')],
            'held_out': [held_out_of(c, e, p)
                         for e, p in c.array(doc, '', 'held_out')],
-           'held_out_pooled': c.interval(doc, '', 'held_out_pooled'),
+           # null with no family held out (a study of one scene family)
+           'held_out_pooled': (None if doc.get('held_out_pooled', 0) is None
+                               and not doc.get('held_out')
+                               else c.interval(doc, '', 'held_out_pooled')),
            'constants': [constant_of(c, e, p)
                          for e, p in c.array(doc, '', 'constants')],
            'pictures': None}

@@ -25,7 +25,7 @@ struct RunArgs {
   std::string study, output;
   double timeout = 600.0;
   long max_renders = -1;
-  bool no_figures = false, quiet = false, dry_run = false;
+  bool no_figures = false, no_fit = false, quiet = false, dry_run = false;
   bool self_contained = false;  // report.html embeds its images
   double max_memory_gib = kDefaultMaxMemoryBytes / kGiB;
   std::string executor = "local";  // local or slurm
@@ -139,6 +139,7 @@ SlurmOptions slurm_options(const RunArgs& a, const std::string& output_dir) {
                      "--renders-per-task",
                      std::to_string(s.renders_per_task)};
   if (a.no_figures) s.continue_argv.push_back("--no-figures");
+  if (a.no_fit) s.continue_argv.push_back("--no-fit");
   if (a.self_contained) s.continue_argv.push_back("--self-contained");
   if (!s.partition.empty())
     s.continue_argv.insert(s.continue_argv.end(), {"--partition", s.partition});
@@ -187,7 +188,8 @@ void set_progress(StudyOptions& o, bool quiet, bool tty, std::mutex& mutex, std:
   };
   o.log = [&](const std::string& line) {
     if (line.find("FAILED") != std::string::npos || line.find("renders:") != std::string::npos ||
-        line.find("WARNING") != std::string::npos || line.rfind("figures:", 0) == 0) {
+        line.find("WARNING") != std::string::npos || line.rfind("figures:", 0) == 0 ||
+        line.rfind("fit:", 0) == 0) {
       std::lock_guard<std::mutex> lock(mutex);
       err << "\r" << line << "\n" << std::flush;
     }
@@ -201,6 +203,7 @@ StudyOptions study_options(const RunArgs& a, const Study& study, const CommandCo
   o.timeout_s = a.timeout;
   o.max_new_renders = a.max_renders;
   o.figures = !a.no_figures;
+  o.fit = !a.no_fit;
   o.self_contained_html = a.self_contained;
   o.interrupted = &StopSignals::interrupted();
   o.dry_run = a.dry_run;
@@ -283,6 +286,8 @@ Command add_run_command(CLI::App& app, SharedOptions& shared) {
                   "start at most this many new renders, then stop (resume later)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--no-figures", a->no_figures, "skip matplotlib figures and report.html");
+  cmd->add_flag("--no-fit", a->no_fit,
+                "skip penumbra fit into OUT/fit (the report's What is achievable section)");
   cmd->add_flag("--self-contained", a->self_contained,
                 "report.html embeds every image (one file to mail; default: it links "
                 "images/ and figures/ beside it)");

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "renderers/renderers.h"
+#include "study/provenance.h"
 #include "util/data_files.h"
 #include "util/files.h"
 #include "util/hash.h"
@@ -119,22 +120,16 @@ namespace {
 
 constexpr const char* kStampName = "figures/.inputs";
 
-// report.json without its provenance (study/provenance.h): the date and the
-// machine change every run, and no figure depends on them.
-std::string without_provenance(const std::string& text) {
-  nlohmann::json doc = nlohmann::json::parse(text, nullptr, false);
-  if (doc.is_discarded() || !doc.is_object()) return text;
-  doc.erase("provenance");
-  return doc.dump();
-}
-
 // Everything the figures are drawn from: report.json names every render by
 // its content key (so the same text means the same images), the harness's
 // scripts and templates, the interpreter and the HTML mode.
 std::string figure_inputs_digest(const fs::path& out, bool self_contained,
                                  const std::string& python) {
-  std::uint64_t h = fnv1a(without_provenance(read_file((out / "report.json").string())));
+  std::uint64_t h = fnv1a(without_run_keys(read_file((out / "report.json").string())));
   h = fnv1a(read_file((out / "lowpoly.csv").string()), h);
+  // The report's "What is achievable" section (study/fit.h), when fitted.
+  if (fs::is_regular_file(out / "fit" / "fit.json"))
+    h = fnv1a(without_run_keys(read_file((out / "fit" / "fit.json").string())), h);
   // The scripts, the page's templates and style sheet, and the column
   // table; not __pycache__, which Python rewrites as it pleases.
   const fs::path harness = fs::path(data_file("harness/report.py")).parent_path();

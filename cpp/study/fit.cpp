@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <random>
 #include <set>
@@ -15,9 +16,14 @@
 #include "core/terminator.h"
 #include "evaluator/evaluator.h"
 #include "image/image_io.h"
+#include "renderers/code_digest.h"
 #include "scene/factor_table_file.h"
 #include "scene/scene_json.h"
+#include "study/provenance.h"
+#include "util/files.h"
+#include "util/hash.h"
 #include "util/strict_json.h"
+#include "util/version.h"
 
 namespace penumbra {
 
@@ -510,8 +516,9 @@ json pictures_json(const FitResult& r) {
   };
   return {{"light_deg", centres(r.grid.axes[0])},
           {"deviation_deg", centres(r.grid.axes[1])},
-          {"note", "G at the cells' centres, rows by deviation; chiang2019 and estevez2019 with "
-                   "Ns tilted towards the light"},
+          {"note",
+           "G at the cells' centres, rows by deviation; chiang2019 and estevez2019 with "
+           "Ns tilted towards the light"},
           {"g",
            {{"floor", rows(r.study_floor.solution.g, &r.study_floor.solution.constrained)},
             {"fitted", rows(r.table.values, nullptr)},
@@ -532,9 +539,14 @@ json result_json(const FitResult& r) {
          {"outside_grid_share", r.outside_share},
          {"floor", floor_json(r.study_floor)},
          {"pictures", pictures_json(r)},
-         {"held_out_pooled", interval_json(r.held_out_pooled)},
+         {"held_out_pooled", r.held_out.empty() ? json() : interval_json(r.held_out_pooled)},
          {"table_smoothness", r.table_smoothness},
-         {"seconds", r.seconds}};
+         {"seconds", r.seconds},
+         // Arrays even when empty (one scene family: nothing to hold out).
+         {"family_floors", json::array()},
+         {"held_out", json::array()},
+         {"methods", json::array()},
+         {"constants", json::array()}};
   for (const FloorFit& f : r.family_floors) j["family_floors"].push_back(floor_json(f));
   for (const HeldOutFit& h : r.held_out)
     j["held_out"].push_back({{"family", h.family},
@@ -598,6 +610,24 @@ void write_fit(const FitResult& r, const std::filesystem::path& out) {
                  "G at the cells' centres, first axis fastest, multilinear between them; "
                  "outside the grid G = 1"}});
   write_text_file((out / "table.json").string(), table.dump(1) + "\n");
+}
+
+std::string fit_inputs_digest(const std::filesystem::path& study) {
+  std::uint64_t h = fnv1a(without_run_keys(read_file((study / "report.json").string())));
+  h = fnv1a(std::string(build_code_digests().evaluator) + "\n" + kPenumbraVersion, h);
+  return fmt::format("{:016x}", h);
+}
+
+bool fit_is_current(const std::filesystem::path& fit_dir, const std::string& digest) {
+  for (const char* file : {"fit.json", "fit.csv", "table.json"})
+    if (!std::filesystem::is_regular_file(fit_dir / file)) return false;
+  std::ifstream in(fit_dir / ".inputs");
+  std::string line;
+  return std::getline(in, line) && line == digest;
+}
+
+void write_fit_stamp(const std::filesystem::path& fit_dir, const std::string& digest) {
+  write_text_file((fit_dir / ".inputs").string(), digest + "\n");
 }
 
 }  // namespace penumbra

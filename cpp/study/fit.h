@@ -130,4 +130,13 @@ double fit_estevez2019_k(const std::vector<TallyVariant>& variants, const Factor
 // fitted table) in `out`.
 void write_fit(const FitResult& result, const std::filesystem::path& out);
 
+// What a fit of the study folder `study` is made from: report.json less its
+// provenance (it names every render by its content key), the evaluator's
+// code digest (the fit re-traces raw bump) and Penumbra's version.
+std::string fit_inputs_digest(const std::filesystem::path& study);
+// Whether `fit_dir` holds fit.json, fit.csv and table.json of a fit from
+// `digest` (its .inputs stamp), and writing that stamp after a fit.
+bool fit_is_current(const std::filesystem::path& fit_dir, const std::string& digest);
+void write_fit_stamp(const std::filesystem::path& fit_dir, const std::string& digest);
+
 }  // namespace penumbra

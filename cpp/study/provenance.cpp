@@ -79,4 +79,12 @@ nlohmann::json provenance_json(const Provenance& p) {
           {"study_sha256", p.study_sha256}};
 }
 
+std::string without_run_keys(const std::string& text) {
+  nlohmann::json doc = nlohmann::json::parse(text, nullptr, false);
+  if (doc.is_discarded() || !doc.is_object()) return text;
+  doc.erase("provenance");
+  doc.erase("seconds");
+  return doc.dump();
+}
+
 }  // namespace penumbra

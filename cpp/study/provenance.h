@@ -31,4 +31,9 @@ Provenance collect_provenance(const std::string& study_file,
 
 nlohmann::json provenance_json(const Provenance& p);
 
+// A JSON file's text without the keys that change every run and no output
+// depends on (report.json's provenance, fit.json's seconds): what digests
+// of a study's outputs hash. Text that is not a JSON object comes back as it is.
+std::string without_run_keys(const std::string& text);
+
 }  // namespace penumbra

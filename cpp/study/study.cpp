@@ -20,6 +20,7 @@
 #include "study/executor.h"
 #include "study/figures.h"
 #include "study/filtering_study.h"
+#include "study/fit.h"
 #include "study/interplay.h"
 #include "study/plan.h"
 #include "study/rendering.h"
@@ -357,8 +358,43 @@ struct Rendered {
   const std::optional<InterplayJobs>& interplay;
 };
 
+// penumbra fit into <out>/fit, unless the last fit's stamp says report.json
+// (less its provenance), the evaluator's code and Penumbra's version are
+// unchanged. A study without an evaluator raw-bump variant and its truth has
+// nothing to fit: said, not an error.
+void fit_study_folder(const fs::path& out, const StudyOptions& options, StudyRunStats& stats) {
+  const auto log = [&](const std::string& line) {
+    if (options.log) options.log("fit: " + line);
+  };
+  const std::string digest = fit_inputs_digest(out);
+  if (fit_is_current(out / "fit", digest)) {
+    log("report.json and the evaluator are unchanged: kept fit/ of the last run");
+    return;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  FitOptions fit;
+  fit.folder = out.string();
+  fit.progress = [&](const std::string& line) { log(line); };
+  FitResult result;
+  try {
+    result = fit_study(fit);
+  } catch (const InputError& e) {
+    log(fmt::format("nothing to fit ({})", e.what()));
+    return;
+  }
+  write_fit(result, out / "fit");
+  write_fit_stamp(out / "fit", digest);
+  stats.fit_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  log(
+      fmt::format("floor {:.2f} % [{:.2f}, {:.2f}] of albedo*E/pi against raw bump's {:.2f} %, "
+                  "fit/fit.json in {:.1f} s",
+                  100 * result.study_floor.floor.value, 100 * result.study_floor.floor.interval.low,
+                  100 * result.study_floor.floor.interval.high, 100 * result.study_floor.none.value,
+                  stats.fit_s));
+}
+
 // The steps after the render phase: the comparisons, the sections' steps,
-// the report files and the figures.
+// the report files, the fit and the figures.
 void report_study(const Study& study, const Rendered& in, const StepContext& context,
                   const StudyOptions& options, StudyRunStats& stats) {
   const fs::path out(context.out_dir);
@@ -374,6 +410,7 @@ void report_study(const Study& study, const Rendered& in, const StepContext& con
       {study, in.plan, comparisons, context.renderers.versions, in.renders.errors,
        in.renders.images.done, in.convergence, filtering, interplay ? &*interplay : nullptr},
       out.string());
+  if (options.fit) fit_study_folder(out, options, stats);
   if (options.figures) draw_figures(out, options, stats);
 }
 

@@ -38,6 +38,10 @@ struct StudyOptions {
   std::function<void(const std::string&)> log;     // progress lines
   std::function<void(std::size_t done, std::size_t total, double eta_s)> progress;
   bool figures = true;  // run harness/report.py (figures and report.html)
+  // Run `penumbra fit` into <output>/fit before the figures, so that the
+  // report has its "What is achievable" section (study/fit.h); kept while
+  // report.json and the evaluator's code are unchanged.
+  bool fit = true;
   // report.html embeds its images as data: URIs (one file to mail) instead
   // of linking images/ and figures/ beside it.
   bool self_contained_html = false;
@@ -78,7 +82,8 @@ struct StudyRunStats {
   // Passes that rendered several methods of one variant at once
   // (study/rendering.h, MethodBatches), and the renders they held.
   std::size_t method_batches = 0, batched_renders = 0;
-  int blender_processes = 0;             // Blender processes started; each serves many renders
+  double fit_s = 0.0;         // penumbra fit's wall time in this run (0: kept, or nothing to fit)
+  int blender_processes = 0;  // Blender processes started; each serves many renders
   std::optional<SlurmSubmission> slurm;  // what a Slurm run submitted
   CostEstimate cost;                     // dry run: of the renders to do
   bool complete() const { return failed == 0 && not_started == 0; }
