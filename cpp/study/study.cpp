@@ -167,6 +167,21 @@ void prepare_folders(const fs::path& out, const StudyOptions& options, StudyRunS
                      stats.stale_removed));
 }
 
+// One run at a time in a folder: a second would render everything the first
+// has not cached yet once more (docs/studies.md).
+FolderLock lock_folder(const fs::path& out) {
+  try {
+    return FolderLock(out.string());
+  } catch (const FolderLocked& e) {
+    throw OutputError(fmt::format(
+        "{}: another penumbra run is writing this folder ({}): wait for it to end, or choose "
+        "another -o",
+        out.string(), e.what()));
+  } catch (const std::runtime_error& e) {
+    throw OutputError(e.what());
+  }
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -365,7 +380,13 @@ void report_study(const Study& study, const Rendered& in, const StepContext& con
       {study, in.plan, comparisons, context.renderers.versions, in.renders.errors,
        in.renders.images.done, in.convergence, filtering, interplay ? &*interplay : nullptr},
       out.string());
-  if (options.figures) draw_figures(out, options, stats);
+  if (!options.figures) return;
+  try {
+    draw_figures(out, options, stats);
+  } catch (const RenderCancelled&) {
+    remove_report_files(out.string());
+    throw;
+  }
 }
 
 }  // namespace
@@ -391,6 +412,7 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
     return stats;
   }
   prepare_folders(out, options, stats);
+  const FolderLock lock = lock_folder(out);
   auto blender_sessions = std::make_unique<BlenderSessions>((out / "cache").string());
   renderers.blender_sessions = blender_sessions.get();
   const StepContext context{out.string(), cache, renderers, options.parallelism, options.log};
