@@ -362,18 +362,22 @@ class FullDisk : public Faults {
 };
 
 TEST_F(FullDisk, AStudyOnAFullDiskLeavesOnlyWholeFilesAndCountsTheRenderFailed) {
-  // Blender's first render answers, then fills the disk before Penumbra
-  // caches it.
-  fake_blender(fake_blender_answer(rgba_exr("good.exr", 0.25f)) + "; " + fill());
+  // The disk fills once the first render is cached: one worker, so the
+  // next render starts after this line and meets a full disk.
+  fake_blender(fake_blender_answer(rgba_exr("good.exr", 0.25f)));
   StudyOptions o = options("disk/out");
   std::vector<std::string> log;
-  o.log = [&](const std::string& line) { log.push_back(line); };
+  o.log = [&](const std::string& line) {
+    log.push_back(line);
+    if (line.find("] rendered ") == std::string::npos || fs::exists(path("disk/filler"))) return;
+    [[maybe_unused]] const int dd = std::system(fill().c_str());  // "no space left": the point
+  };
   try {
     run_study(study(), o);
   } catch (const std::exception& e) {  // the report cannot be written either
     log.push_back(e.what());
   }
-  ASSERT_TRUE(fs::exists(path("disk/filler"))) << "the fake never filled the disk";
+  ASSERT_TRUE(fs::exists(path("disk/filler"))) << "nothing was rendered";
   std::size_t rendered = 0, failed = 0;
   for (const std::string& line : log) {
     rendered += line.find("] rendered ") != std::string::npos;
@@ -476,8 +480,9 @@ TEST_F(SignalledRun, ASecondRunIntoABusyFolderExitsTwoNamingTheFirst) {
       << read_text(path("run.log"));
   const std::size_t entries = cached_images("out");
   const auto start = std::chrono::steady_clock::now();
+  // A short time-out: a second run that does render (the fault) ends soon.
   const CliResult second = run_penumbra({"run", path("study.json"), "-o", path("out"), "--jobs",
-                                         "1", "--no-figures", "--timeout", "600"});
+                                         "1", "--no-figures", "--timeout", "3"});
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   EXPECT_EQ(cached_images("out"), entries) << "the second run rendered";
