@@ -8,12 +8,12 @@ status 2, and nothing written (the output file is written under a
 temporary name and renamed when complete).
 """
 import os
-import tempfile
 
 from penumbra_achievable import (
     contour_fig, fit_path, load_fit, share_fig)
 from penumbra_data import METRICS, PRIMARY, BadInput, Report, objs
 from penumbra_grid_figure import grid_fig
+from penumbra_plot import replacing
 from penumbra_figures import (
     figure_methods, profile_fig, report_methods, report_styles)
 from penumbra_paper_figures import line_fig, ranking_fig
@@ -237,13 +237,6 @@ def table_command(argv):
 
 def write_text(path, text):
     """text into path atomically (nothing left behind on an error)."""
-    fd, tmp = tempfile.mkstemp(prefix='.table-', dir=os.path.dirname(
-        os.path.abspath(path)))
-    try:
-        with os.fdopen(fd, 'w', encoding='utf-8') as f:
-            f.write(text)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    with replacing(path) as tmp, open(tmp, 'w', encoding='utf-8') as f:
+        f.write(text)
     return path

@@ -26,6 +26,7 @@ from penumbra_headline_html import (
     headline_context, lines_context, mean_rmse_context, provenance_context,
     variants_context)
 from penumbra_grid_figure import bands, grid_renders
+from penumbra_plot import replacing
 from penumbra_lowpoly_html import lowpoly_context
 from penumbra_tables import ranking_table, table_caption
 
@@ -300,7 +301,6 @@ def write_report(report, figs):
     page = environment().get_template('report.html.j2').render(
         report_context(report, figs))
     path = os.path.join(report.out, 'report.html')
-    with open(path + '.tmp', 'w', encoding='utf-8') as f:
+    with replacing(path) as tmp, open(tmp, 'w', encoding='utf-8') as f:
         f.write(page.rstrip('\n') + '\n')  # one final newline
-    os.replace(path + '.tmp', path)
     return path

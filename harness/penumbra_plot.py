@@ -4,10 +4,12 @@ Importing this module selects the Agg backend (no display) and the rcParams
 that make the output reproducible: the same input gives the same bytes,
 with no dates or versions in the files and a fixed SVG hash salt.
 """
+import contextlib
 import math
 import multiprocessing
 import os
 import sys
+import tempfile
 import textwrap
 
 import matplotlib
@@ -34,14 +36,38 @@ def save(fig, outdir, name, formats=tuple(META)):
     bbox = fig.get_tightbbox().padded(0.05)
     fig.set_layout_engine('none')
     written = []
-    for ext in formats:
-        meta = META[ext]
-        path = os.path.join(outdir, f'{name}.{ext}')
-        fig.savefig(path, dpi=150 if ext == 'png' else 72, metadata=meta,
-                    bbox_inches=bbox)
-        written.append(path)
-    plt.close(fig)
+    try:
+        for ext in formats:
+            path = os.path.join(outdir, f'{name}.{ext}')
+            with replacing(path) as tmp:
+                fig.savefig(tmp, format=ext, dpi=150 if ext == 'png' else 72,
+                            metadata=META[ext], bbox_inches=bbox)
+            written.append(path)
+    finally:
+        plt.close(fig)
     return written
+
+
+# What replacing() names its temporary files: the C++ side removes those a
+# killed script left (study/figures.cpp).
+TEMPORARY_PREFIX = '.penumbra-draw-'
+
+
+@contextlib.contextmanager
+def replacing(path):
+    """A temporary name beside path to write to, renamed over path when
+    the block ends without an error and removed otherwise: a full disk
+    leaves no half-written file under path's name."""
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=TEMPORARY_PREFIX,
+                               suffix=os.path.splitext(path)[1], dir=folder)
+    os.close(fd)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
 
 
 def fitted_title(fig, text):

@@ -20,9 +20,8 @@ order the study names them), so it is the same in every figure.
 """
 import contextlib
 import os
-import tempfile
 
-from penumbra_plot import META, plt
+from penumbra_plot import META, plt, replacing
 
 WIDTHS = {1: 3.5, 2: 7.0}          # inches: one and two journal columns
 STYLES = {
@@ -99,21 +98,14 @@ def write_figure(fig, path, style):
     the size is the column's); on screen it is cropped to what was
     drawn, as in the report."""
     ext = os.path.splitext(path)[1][1:].lower()
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix='.figure-', suffix='.' + ext,
-                               dir=folder)
-    os.close(fd)
     try:
-        with plt.rc_context(STYLES[style.name]):
+        with replacing(path) as tmp, plt.rc_context(STYLES[style.name]):
             fig.savefig(tmp, format=ext, metadata=META[ext],
                         dpi=(300 if style.paper else 150) if ext == 'png'
                         else 72, bbox_inches=None if style.paper else 'tight',
                         pad_inches=0.05)
-        os.replace(tmp, path)
     finally:
         plt.close(fig)
-        if os.path.exists(tmp):
-            os.remove(tmp)
     return path
 
 

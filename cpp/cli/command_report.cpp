@@ -6,6 +6,7 @@
 
 #include "cli/command.h"
 #include "study/figures.h"
+#include "study/report_files.h"
 #include "study/study.h"
 #include "util/strict_json.h"
 
@@ -22,7 +23,8 @@ int report(const ReportArgs& a, const CommandContext& c) {
   const std::filesystem::path report = std::filesystem::path(a.folder) / "report.json";
   if (!std::filesystem::is_regular_file(report))
     throw UsageError(fmt::format("{}: no such file (give a study output folder)", report.string()));
-  read_json_file(report.string());  // strict: a damaged report is bad input, named here
+  // Strict and bounded: a damaged or hostile report is bad input, named here.
+  read_report_json(report.string());
   const std::string html =
       draw_report(a.folder, a.self_contained, "", kFiguresTimeoutS, [&c](const std::string& line) {
         c.err << "penumbra report: " << line << "\n" << std::flush;

@@ -9,6 +9,7 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStandardAttributes.h>
@@ -83,6 +84,20 @@ void check_exr_header(const std::string& path) {
                                  width, height, tiles.xSize, tiles.ySize, kMaxExrTiles));
 }
 
+// OpenEXR's output stream over a CheckedFile: OpenEXR writes the offset
+// table in OutputFile's destructor and swallows what that throws, so the
+// file keeps the failure for CheckedFile::finish() to throw.
+class CheckedStream : public Imf::OStream {
+ public:
+  explicit CheckedStream(CheckedFile& file) : Imf::OStream("penumbra output"), file_(file) {}
+  void write(const char c[], int n) override { file_.write(c, std::size_t(n)); }
+  uint64_t tellp() override { return file_.tell(); }
+  void seekp(uint64_t position) override { file_.seek(position); }
+
+ private:
+  CheckedFile& file_;
+};
+
 }  // namespace
 
 bool is_exr_file(const std::string& path) {
@@ -92,7 +107,7 @@ bool is_exr_file(const std::string& path) {
   return magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01;
 }
 
-void write_exr_file(const Image& image, const std::string& path,
+void write_exr_file(const Image& image, CheckedFile& out,
                     const std::vector<std::pair<std::string, std::string>>& attributes) {
   try {
     Imf::Header header(image.width, image.height);
@@ -103,7 +118,8 @@ void write_exr_file(const Image& image, const std::string& path,
     for (const auto& [key, value] : attributes) header.insert(key, Imf::StringAttribute(value));
     // The frame buffer only reads from the image; OpenEXR's Slice takes char*.
     Image& pixels = const_cast<Image&>(image);
-    Imf::OutputFile file(path.c_str(), header);
+    CheckedStream stream(out);
+    Imf::OutputFile file(stream, header);
     file.setFrameBuffer(frame_buffer(pixels, 0, 0));
     file.writePixels(image.height);
   } catch (const std::exception& e) {
@@ -157,6 +173,11 @@ std::map<std::string, std::string> read_exr_attributes(const std::string& path) 
   } catch (const std::exception& e) {
     throw InputError(path, "", fmt::format("cannot read it as OpenEXR: {}", e.what()));
   }
+}
+
+void write_exr_file(const Image& image, const std::string& path,
+                    const std::vector<std::pair<std::string, std::string>>& attributes) {
+  write_atomically(path, [&](CheckedFile& file) { write_exr_file(image, file, attributes); });
 }
 
 }  // namespace penumbra

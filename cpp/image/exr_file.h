@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "image/image.h"
+#include "util/files.h"
 
 namespace penumbra {
 
@@ -19,8 +20,12 @@ namespace penumbra {
 bool is_exr_file(const std::string& path);
 
 // Writes `image` as 32-bit float channels, ZIP compressed, with string
-// attributes, to exactly `path` (the caller handles temporary names).
-// Throws std::runtime_error with OpenEXR's reason.
+// attributes, into `file` (write_atomically gives it and finishes it).
+// Throws std::runtime_error with OpenEXR's reason or the write's.
+void write_exr_file(const Image& image, CheckedFile& file,
+                    const std::vector<std::pair<std::string, std::string>>& attributes);
+// The same into `path` (write_atomically), without write_exr's finiteness
+// check: for tests and tools that write non-finite values on purpose.
 void write_exr_file(const Image& image, const std::string& path,
                     const std::vector<std::pair<std::string, std::string>>& attributes);
 

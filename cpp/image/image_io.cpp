@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
+#include <functional>
 #include <map>
 #include <mutex>
 
@@ -27,28 +27,14 @@ namespace penumbra {
 namespace fs = std::filesystem;
 namespace {
 
-void commit(const std::string& temporary, const std::string& path) {
-  std::error_code ec;
-  fs::rename(temporary, path, ec);
-  if (ec) {
-    fs::remove(temporary, ec);
-    throw OutputError(
-        fmt::format("{}: cannot move the finished file into place: {}", path, ec.message()));
+// `fill` writes `path`'s content (write_atomically): whatever fails, the
+// file is left as it was, and the reason is an OutputError naming it.
+void write_output(const std::string& path, const std::function<void(CheckedFile&)>& fill) {
+  try {
+    write_atomically(path, fill);
+  } catch (const std::exception& e) {
+    throw OutputError(fmt::format("{}: cannot write: {}", path, e.what()));
   }
-}
-
-// Writes through a temporary name in the target folder, then renames:
-// `write(temporary)` returns "" or why it failed.
-template <typename Write>
-void write_via_temporary(const std::string& path, Write write) {
-  const std::string temporary = temporary_name(path);
-  const std::string why = write(temporary);
-  if (!why.empty()) {
-    std::error_code ec;
-    fs::remove(temporary, ec);
-    throw OutputError(fmt::format("{}: cannot write: {}", path, why));
-  }
-  commit(temporary, path);
 }
 
 // Where the module lies: beside the executable in a build folder, under
@@ -233,14 +219,7 @@ void load_image_formats() {
 void write_exr(const Image& image, const std::string& path,
                const std::vector<std::pair<std::string, std::string>>& metadata) {
   check_finite_output(image, path);
-  write_via_temporary(path, [&](const std::string& temporary) {
-    try {
-      write_exr_file(image, temporary, metadata);
-      return std::string();
-    } catch (const std::exception& e) {
-      return std::string(e.what());
-    }
-  });
+  write_output(path, [&](CheckedFile& file) { write_exr_file(image, file, metadata); });
 }
 
 void write_preview_png(const Image& image, const std::string& path) {
@@ -264,25 +243,14 @@ void write_preview_png(const Image& image, const std::string& path) {
 
 void write_png_rgb8(const std::string& path, int width, int height,
                     const std::vector<unsigned char>& rgb) {
-  const OiioModule& module = oiio();
-  write_via_temporary(path, [&](const std::string& temporary) {
-    return module.write_rgb8(temporary, width, height, rgb.data());
-  });
+  std::vector<unsigned char> bytes;
+  const std::string why = oiio().encode_rgb8(path, width, height, rgb.data(), &bytes);
+  if (!why.empty()) throw OutputError(fmt::format("{}: cannot write: {}", path, why));
+  write_binary_file(path, bytes.data(), bytes.size());
 }
 
 void write_binary_file(const std::string& path, const void* data, std::size_t bytes) {
-  const std::string temporary = temporary_name(path);
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
-    out.flush();
-    if (!out) {
-      std::error_code ec;
-      fs::remove(temporary, ec);
-      throw OutputError(fmt::format("{}: cannot write: {}", path, std::strerror(errno)));
-    }
-  }
-  commit(temporary, path);
+  write_output(path, [&](CheckedFile& file) { file.write(data, bytes); });
 }
 
 void write_text_file(const std::string& path, const std::string& text) {

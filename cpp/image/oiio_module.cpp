@@ -4,19 +4,29 @@
 
 #include <algorithm>
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imageio.h>
 
 namespace penumbra {
 namespace {
 
-std::string write_rgb8(const std::string& path, int width, int height, const unsigned char* rgb) {
+std::string encode_rgb8(const std::string& path, int width, int height, const unsigned char* rgb,
+                        std::vector<unsigned char>* bytes) {
+  auto output = OIIO::ImageOutput::create(path);
+  if (!output) return OIIO::geterror();
+  if (!output->supports("ioproxy"))
+    return "OpenImageIO cannot write " + std::string(output->format_name()) + " to memory";
+  OIIO::Filesystem::IOVecOutput memory(*bytes);
   OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-  OIIO::ImageBuf buffer(spec);
-  buffer.set_pixels(OIIO::ROI::All(), OIIO::TypeDesc::UINT8, rgb);
-  if (buffer.write(path)) return {};
-  const std::string why = buffer.geterror();
-  return why.empty() ? "OpenImageIO gave no reason" : why;
+  OIIO::Filesystem::IOProxy* proxy = &memory;
+  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+  if (!output->open(path, spec) || !output->write_image(OIIO::TypeDesc::UINT8, rgb) ||
+      !output->close()) {
+    const std::string why = output->geterror();
+    return why.empty() ? "OpenImageIO gave no reason" : why;
+  }
+  return {};
 }
 
 // One name per channel the file holds: some readers name fewer.
@@ -60,7 +70,7 @@ std::string read(const std::string& path, Image* image,
 
 extern "C" __attribute__((visibility("default"))) const penumbra::OiioModule*
 penumbra_oiio_module() {
-  static const penumbra::OiioModule module{penumbra::kOiioModuleAbi, penumbra::write_rgb8,
+  static const penumbra::OiioModule module{penumbra::kOiioModuleAbi, penumbra::encode_rgb8,
                                            penumbra::read_header, penumbra::read};
   return &module;
 }

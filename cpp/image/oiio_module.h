@@ -8,20 +8,22 @@
 
 #include <map>
 #include <string>
+#include <vector>
 
 #include "image/image.h"
 
 namespace penumbra {
 
-inline constexpr int kOiioModuleAbi = 2;
+inline constexpr int kOiioModuleAbi = 3;  // 2: encode_rgb8 to memory; 3: read_header
 
 struct OiioModule {
   int abi = kOiioModuleAbi;
   // Each returns "" on success, else OpenImageIO's reason; neither throws.
-  // An 8-bit RGB image, row-major from the top, in the format of the
-  // file name's extension, to exactly `path`.
-  std::string (*write_rgb8)(const std::string& path, int width, int height,
-                            const unsigned char* rgb) = nullptr;
+  // An 8-bit RGB image, row-major from the top, encoded in memory in the
+  // format of the file name's extension (Penumbra writes the bytes itself,
+  // checking each write: util/files.h).
+  std::string (*encode_rgb8)(const std::string& path, int width, int height,
+                             const unsigned char* rgb, std::vector<unsigned char>* bytes) = nullptr;
   // The size and channel names the header declares, without pixels: the
   // caller checks them before `read` allocates.
   std::string (*read_header)(const std::string& path, Image* image) = nullptr;

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "image/image_io.h"
 #include "renderers/renderers.h"
 #include "study/provenance.h"
 #include "util/data_files.h"
@@ -105,6 +106,8 @@ ProcessResult run_plot_process(const std::vector<std::string>& arguments,
 void run_plot_script(const std::vector<std::string>& arguments, const std::string& log_path,
                      const std::string& python, double timeout_s, const ProgressLog& progress) {
   const ProcessResult p = run_plot_process(arguments, log_path, python, timeout_s, progress);
+  // Stopped by Ctrl-C or SIGTERM: an interruption, not a failure of the script.
+  if (p.cancelled) throw RenderCancelled("the figures were not drawn (interrupted)");
   if (!p.ok())
     throw RendererError(
         fmt::format("harness/report.py failed ({}); log {}:\n{}",
@@ -175,10 +178,22 @@ void write_stamp(const fs::path& out, const std::string& digest, const std::stri
   for (std::string line; std::getline(log, line);)
     if (line.rfind(kProgress, 0) != 0 && fs::path(line).is_absolute() && fs::is_regular_file(line))
       text += line + "\n";
-  const std::string path = (out / kStampName).string(), tmp = temporary_name(path);
-  std::ofstream(tmp, std::ios::binary) << text;
+  try {
+    write_text_file((out / kStampName).string(), text);
+  } catch (const OutputError&) {  // without a stamp, the next run draws again
+  }
+}
+
+// What the script's atomic writes (harness/penumbra_plot.py, replacing())
+// leave when it is killed: hidden temporaries beside the figures.
+void remove_script_temporaries(const fs::path& out) {
   std::error_code ec;
-  fs::rename(tmp, path, ec);
+  std::vector<fs::path> found;
+  for (auto it = fs::recursive_directory_iterator(out, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
+    if (it->path().filename().string().rfind(".penumbra-draw-", 0) == 0)
+      found.push_back(it->path());
+  for (const fs::path& f : found) fs::remove(f, ec);
 }
 
 }  // namespace
@@ -200,7 +215,12 @@ std::string draw_report(const std::string& folder, bool self_contained, const st
   std::vector<std::string> arguments{"report", fs::absolute(out).string()};
   if (self_contained) arguments.push_back("--self-contained");
   const std::string log_path = (out / "report.log").string();
-  run_plot_script(arguments, log_path, python, timeout_s, progress);
+  try {
+    run_plot_script(arguments, log_path, python, timeout_s, progress);
+  } catch (...) {
+    remove_script_temporaries(out);
+    throw;
+  }
   write_stamp(out, digest, log_path);
   return html;
 }

@@ -16,6 +16,7 @@
 #include "study/cost.h"
 #include "study/execute.h"
 #include "util/files.h"
+#include "util/process.h"
 #include "util/strict_json.h"
 #include "util/version.h"
 
@@ -165,6 +166,11 @@ Image render_into_cache(const Job& job, const RenderCache& cache, double timeout
   settings.threads = threads;
   settings.log_path = cache.log_path(job.key);
   settings.blender_sessions = renderers.blender_sessions;
+  // A stop signal (util/process.h) ends the evaluator's render too, not only
+  // external processes: an interrupted task must not go on to cache it.
+  settings.progress.progress = [](double) {
+    if (processes_cancelled()) throw RenderCancelled("interrupted");
+  };
   std::error_code ignored;
   fs::remove(settings.log_path, ignored);
   RendererRun run;

@@ -22,6 +22,7 @@
 #include "study/names.h"
 #include "study/provenance.h"
 #include "study/ranking.h"
+#include "util/strict_json.h"
 
 namespace penumbra {
 namespace fs = std::filesystem;
@@ -998,15 +999,46 @@ json report_json(const ReportInputs& in) {
 
 }  // namespace
 
+constexpr const char* kLowpolyCsv = "lowpoly.csv";
+constexpr const char* kReportJson = "report.json";
+constexpr const char* kMetricsCsv = "metrics.csv";
+constexpr const char* kMetricsLongCsv = "metrics-long.csv";
+
 void write_report_files(const ReportInputs& in, const std::string& folder) {
   const fs::path out(folder);
   if (in.study.lowpoly)
-    write_text_file((out / "lowpoly.csv").string(),
+    write_text_file((out / kLowpolyCsv).string(),
                     comparison_csv(in, *in.study.lowpoly, lowpoly_columns()));
-  write_text_file((out / "report.json").string(), report_json(in).dump(1) + "\n");
-  write_text_file((out / "metrics.csv").string(),
-                  comparison_csv(in, in.study.bump, bump_columns()));
-  write_text_file((out / "metrics-long.csv").string(), long_csv(in, in.study.bump));
+  write_text_file((out / kReportJson).string(), report_json(in).dump(1) + "\n");
+  write_text_file((out / kMetricsCsv).string(), comparison_csv(in, in.study.bump, bump_columns()));
+  write_text_file((out / kMetricsLongCsv).string(), long_csv(in, in.study.bump));
+}
+
+namespace {
+
+void check_string_lengths(const json& j, const json::json_pointer& at, const std::string& file) {
+  if (j.is_string() && j.get_ref<const std::string&>().size() > kMaxReportString)
+    throw InputError(file, at.to_string(),
+                     fmt::format("expected a string of at most {} bytes, got {}", kMaxReportString,
+                                 j.get_ref<const std::string&>().size()));
+  if (j.is_object())
+    for (const auto& [key, value] : j.items()) check_string_lengths(value, at / key, file);
+  if (j.is_array())
+    for (std::size_t i = 0; i < j.size(); ++i) check_string_lengths(j[i], at / i, file);
+}
+
+}  // namespace
+
+json read_report_json(const std::string& path) {
+  json doc = read_json_file(path);
+  check_string_lengths(doc, json::json_pointer(), path);
+  return doc;
+}
+
+void remove_report_files(const std::string& folder) {
+  std::error_code ignored;
+  for (const char* name : {kLowpolyCsv, kReportJson, kMetricsCsv, kMetricsLongCsv})
+    fs::remove(fs::path(folder) / name, ignored);
 }
 
 }  // namespace penumbra

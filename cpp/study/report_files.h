@@ -6,9 +6,12 @@
 // holds the files to both, so a new key or column needs its documentation.
 #pragma once
 
+#include <cstddef>
 #include <map>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "study/compare.h"
 #include "study/convergence.h"
@@ -37,5 +40,19 @@ struct ReportInputs {
 // Writes report.json, metrics.csv and (with a low-poly section) lowpoly.csv
 // into `folder`.
 void write_report_files(const ReportInputs& in, const std::string& folder);
+
+// The longest string `penumbra report` takes from a report.json: the
+// figures lay text out in time that grows faster than its length, and no
+// label, headline or message Penumbra writes comes near it.
+inline constexpr std::size_t kMaxReportString = 64 * 1024;
+
+// Reads `path` as `penumbra report` takes it: strict JSON whose strings are
+// at most kMaxReportString bytes; InputError naming the file and the
+// pointer otherwise.
+nlohmann::json read_report_json(const std::string& path);
+
+// Removes what write_report_files writes: a run stopped before its figures
+// are drawn leaves the folder as one stopped while rendering does.
+void remove_report_files(const std::string& folder);
 
 }  // namespace penumbra

@@ -122,6 +122,40 @@ std::string parse_job_id(const std::string& output) {
   return m[2].str();
 }
 
+// Submits `argv` (an sbatch call) for the batch file `batch_file`; when
+// sbatch fails, nothing was submitted, so the batch file goes too (else
+// `penumbra status` would show a submission that never was).
+std::string submit_or_forget(const std::vector<std::string>& argv, const SlurmOptions& options,
+                             const fs::path& logs, const std::string& batch_file) {
+  try {
+    return parse_job_id(run_slurm_command(argv, options, logs));
+  } catch (const RendererError&) {
+    std::error_code ec;
+    fs::remove(batch_file, ec);
+    throw;
+  }
+}
+
+// The report job of `sub` was refused: without it nothing would continue
+// the study after the array, so the array is cancelled and its batch file
+// removed (a rerun submits its renders once more). When scancel fails too,
+// the array stays recorded: a rerun then counts its renders as queued
+// rather than submitting them twice. Returns the message to report.
+std::string withdraw_array(const std::string& why, const SlurmSubmission& sub,
+                           const SlurmOptions& options, const fs::path& logs) {
+  try {
+    run_slurm_command({"scancel", sub.array_job}, options, logs);
+  } catch (const RendererError& e) {
+    return fmt::format(
+        "{}; array job {} was submitted and could not be cancelled ({}): it is recorded in {}, "
+        "run the study again once it has ended",
+        why, sub.array_job, e.what(), sub.batch_file);
+  }
+  std::error_code ec;
+  fs::remove(sub.batch_file, ec);
+  return fmt::format("{}; array job {} was cancelled, nothing stays submitted", why, sub.array_job);
+}
+
 std::vector<std::string> sbatch_common(const SlurmOptions& options) {
   std::vector<std::string> argv{"sbatch", "--parsable"};
   if (!options.partition.empty()) argv.push_back("--partition=" + options.partition);
@@ -345,21 +379,35 @@ SlurmSubmission submit_renders(const std::vector<Job>& jobs, const std::vector<s
                 fmt::format("--array=0-{}%{}", sub.tasks - 1, options.array_limit),
                 "--output=" + (folder / "logs" / "render-%A_%a.out").string(), task_script,
                 options.continue_argv.at(0), "run-batch", sub.batch_file});
-  sub.array_job = parse_job_id(run_slurm_command(array, options, folder / "logs"));
+  sub.array_job = submit_or_forget(array, options, folder / "logs", sub.batch_file);
+  // Recorded before the report job is asked for, so that whatever happens
+  // next, a rerun sees these renders queued and does not submit them again.
+  batch["array_job"] = sub.array_job;
+  write_text_file(sub.batch_file, batch.dump(1) + "\n");
   std::vector<std::string> report = sbatch_common(options);
   report.insert(report.end(),
                 {"--job-name=penumbra-report", "--dependency=afterany:" + sub.array_job,
                  "--output=" + (folder / "logs" / "report-%j.out").string(), task_script});
   report.insert(report.end(), options.continue_argv.begin(), options.continue_argv.end());
   report.insert(report.end(), {"--slurm-chain", sub.chain});
-  sub.report_job = parse_job_id(run_slurm_command(report, options, folder / "logs"));
-  batch["array_job"] = sub.array_job;
+  try {
+    sub.report_job = parse_job_id(run_slurm_command(report, options, folder / "logs"));
+  } catch (const RendererError& e) {
+    throw RendererError(withdraw_array(e.what(), sub, options, folder / "logs"));
+  }
   batch["report_job"] = sub.report_job;
   write_text_file(sub.batch_file, batch.dump(1) + "\n");
   return sub;
 }
 
 namespace {
+
+// A cache key as render_key() writes it; anything else (a path, "zz") is
+// refused before it can name a file.
+bool is_render_key(const std::string& key) {
+  static const std::regex format("[0-9a-f]{32}");
+  return std::regex_match(key, format);
+}
 
 Job job_from_json(const json& j, const std::string& file, const std::string& pointer) {
   Job job;
@@ -397,7 +445,37 @@ SlurmChain chain_from_json(const json& c, const std::string& file, const std::st
 struct TaskEntry {
   Job job;
   std::optional<SlurmChain> chain;
+  std::string pointer;  // its place in the batch file, "/jobs/N"
 };
+
+// The identities the study was planned with, as the batch file records them.
+std::vector<std::pair<RendererKind, RendererIdentity>> planned_identities(const json& batch) {
+  std::vector<std::pair<RendererKind, RendererIdentity>> ids;
+  for (const auto& [id, planned] : batch.at("identities").items())
+    if (const std::optional<RendererKind> r = renderer_from_id(id))
+      ids.push_back({*r, {planned.at("version"), planned.at("code_digest")}});
+  return ids;
+}
+
+// Every entry's key recomputed from its scene: a scene edited after
+// planning must not be cached under the key of the scene that was planned,
+// where the next `penumbra run` would take it for that one.
+void check_keys(const std::vector<TaskEntry>& entries, const json& batch, const std::string& file) {
+  const auto ids = planned_identities(batch);
+  for (const TaskEntry& e : entries) {
+    if (!is_render_key(e.job.key))
+      throw InputError(file, e.pointer + "/key",
+                       fmt::format("expected a cache key of 32 hex digits, got \"{}\"",
+                                   printable(e.job.key, 80)));
+    std::vector<Job> recomputed{e.job};
+    assign_keys(recomputed, ids);
+    if (recomputed[0].key != e.job.key)
+      throw InputError(file, e.pointer + "/key",
+                       fmt::format("the batch file gives key {}, but the scene beside it has key "
+                                   "{} (edited after planning?): submit the study again",
+                                   e.job.key, recomputed[0].key));
+  }
+}
 
 // The entries of task `task`, rebuilt from the batch file.
 std::vector<TaskEntry> task_entries(const json& batch, int task, const std::string& file) {
@@ -414,7 +492,7 @@ std::vector<TaskEntry> task_entries(const json& batch, int task, const std::stri
   std::vector<TaskEntry> entries;
   for (std::size_t i = first; i < first + count; ++i) {
     const std::string pointer = fmt::format("/jobs/{}", i);
-    TaskEntry e{job_from_json(all[i], file, pointer), std::nullopt};
+    TaskEntry e{job_from_json(all[i], file, pointer), std::nullopt, pointer};
     if (all[i].contains("chain"))
       e.chain = chain_from_json(all[i]["chain"], file, pointer + "/chain");
     entries.push_back(std::move(e));
@@ -535,6 +613,7 @@ SlurmTaskResult run_slurm_task(const std::string& batch_file, int task, int thre
                                    "by another Penumbra version: submit the study again)",
                                    kBatchVersion));
     entries = task_entries(batch, task, batch_file);
+    check_keys(entries, batch, batch_file);
     study_folder = batch.at("study_folder").get<std::string>();
     timeout_s = batch.at("timeout_s").get<double>();
     std::vector<RendererKind> kinds;
@@ -571,6 +650,9 @@ SlurmStatus slurm_status(const std::string& study_folder) {
     SlurmStatus::Batch s;
     s.file = file;
     s.array_job = b.value("array_job", "");
+    // Written just before its sbatch call, by a submitter killed before
+    // the call answered: never known to Slurm, nothing to show.
+    if (s.array_job.empty()) continue;
     s.report_job = b.value("report_job", "");
     s.chain = b.value("chain", "");
     for (const json& j : b["jobs"]) {

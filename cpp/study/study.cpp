@@ -177,6 +177,21 @@ void remove_empty_folders(const fs::path& out, bool out_existed) {
   if (!out_existed && fs::is_empty(out, ec) && !ec) fs::remove(out, ec);
 }
 
+// One run at a time in a folder: a second would render everything the first
+// has not cached yet once more (docs/studies.md).
+FolderLock lock_folder(const fs::path& out) {
+  try {
+    return FolderLock(out.string());
+  } catch (const FolderLocked& e) {
+    throw OutputError(fmt::format(
+        "{}: another penumbra run is writing this folder ({}): wait for it to end, or choose "
+        "another -o",
+        out.string(), e.what()));
+  } catch (const std::runtime_error& e) {
+    throw OutputError(e.what());
+  }
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -411,7 +426,13 @@ void report_study(const Study& study, const Rendered& in, const StepContext& con
        in.renders.images.done, in.convergence, filtering, interplay ? &*interplay : nullptr},
       out.string());
   if (options.fit) fit_study_folder(out, options, stats);
-  if (options.figures) draw_figures(out, options, stats);
+  if (!options.figures) return;
+  try {
+    draw_figures(out, options, stats);
+  } catch (const RenderCancelled&) {
+    remove_report_files(out.string());
+    throw;
+  }
 }
 
 // run_study once its folders exist: the sections, the renders and the report.
@@ -473,6 +494,7 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   }
   const bool out_existed = fs::exists(out);
   prepare_folders(out, options, stats);
+  const FolderLock lock = lock_folder(out);
   try {
     return run_prepared(study, plan, renderers, *executor, options, stats, start);
   } catch (...) {

@@ -1,10 +1,13 @@
 #include "util/files.h"
 
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -88,6 +91,96 @@ std::size_t remove_stale_temporaries(const std::string& folder) {
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+CheckedFile::CheckedFile(const std::string& path) {
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd_ < 0) fail("cannot create it");
+}
+
+CheckedFile::~CheckedFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void CheckedFile::fail(const std::string& what) {
+  if (error_.empty()) error_ = fmt::format("{}: {}", what, std::strerror(errno));
+  throw std::runtime_error(error_);
+}
+
+void CheckedFile::write(const void* data, std::size_t bytes) {
+  if (!error_.empty()) throw std::runtime_error(error_);
+  const char* p = static_cast<const char*>(data);
+  while (bytes > 0) {
+    const ssize_t n = ::write(fd_, p, bytes);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      if (n == 0) errno = ENOSPC;
+      fail("write failed");
+    }
+    p += n;
+    bytes -= std::size_t(n);
+    position_ += std::uint64_t(n);
+  }
+}
+
+void CheckedFile::seek(std::uint64_t position) {
+  if (!error_.empty()) throw std::runtime_error(error_);
+  if (::lseek(fd_, off_t(position), SEEK_SET) < 0) fail("seek failed");
+  position_ = position;
+}
+
+void CheckedFile::finish() {
+  if (!error_.empty()) throw std::runtime_error(error_);
+  if (::fsync(fd_) != 0) fail("fsync failed");
+  const int fd = fd_;
+  fd_ = -1;
+  if (::close(fd) != 0) fail("close failed");
+}
+
+void write_atomically(const std::string& path, const std::function<void(CheckedFile&)>& fill) {
+  const std::string temporary = temporary_name(path);
+  std::error_code ec;
+  try {
+    CheckedFile file(temporary);
+    fill(file);
+    file.finish();
+  } catch (...) {
+    fs::remove(temporary, ec);
+    throw;
+  }
+  fs::rename(temporary, path, ec);
+  if (ec) {
+    const std::string why = ec.message();
+    fs::remove(temporary, ec);
+    throw std::runtime_error("cannot move the finished file into place: " + why);
+  }
+}
+
+FolderLock::FolderLock(const std::string& folder) {
+  const std::string path = (fs::path(folder) / ".penumbra-lock").string();
+  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0)
+    throw std::runtime_error(fmt::format("{}: cannot create: {}", path, std::strerror(errno)));
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int error = errno;
+    ::close(fd_);
+    fd_ = -1;
+    if (error != EWOULDBLOCK)
+      throw std::runtime_error(fmt::format("{}: cannot lock: {}", path, std::strerror(error)));
+    std::string holder = read_file(path);
+    while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' ')) holder.pop_back();
+    throw FolderLocked(holder.empty() ? std::string("a process that has not said which") : holder);
+  }
+  // Only the holder writes the file, so a reader sees the current holder
+  // (or, for a moment, nothing).
+  const std::string text = fmt::format("pid {} on {}\n", ::getpid(), host_tag());
+  if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, text.data(), text.size(), 0) < 0) {
+    // who holds it is a courtesy; the lock itself holds
+  }
+}
+
+FolderLock::~FolderLock() {
+  if (fd_ >= 0) ::close(fd_);  // releases the lock
 }
 
 }  // namespace penumbra

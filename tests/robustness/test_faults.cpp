@@ -4,18 +4,24 @@
 // missing. Fake renderers are shell scripts named by PENUMBRA_BLENDER.
 #include <gtest/gtest.h>
 
+#include "cli_test.h"
 #include "fake_blender.h"
 #include "study/study_options.h"
 #include "temp_dir_test.h"
 
 #include <signal.h>
+#include <sys/mount.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -28,7 +34,9 @@
 
 #include "image/exr_file.h"
 #include "image/image_io.h"
+#include "study/cache.h"
 #include "study/study.h"
+#include "util/files.h"
 #include "util/strict_json.h"
 
 namespace penumbra {
@@ -328,6 +336,186 @@ TEST_F(SignalledRun, KilledRunLeavesNoRendererAndResumesWhereItStopped) {
   const StudyRunStats clean = run_study(study(), options("clean"));
   EXPECT_EQ(report_without_provenance(path("clean/report.json")),
             report_without_provenance(path("out/report.json")));
+}
+
+// A disk that fills during a study: every write is checked before its
+// rename, so what stays is whole (each cache entry verifies, each preview
+// decodes), no temporary is left, and no render whose entry could not be
+// written is reported as rendered.
+class FullDisk : public Faults {
+ protected:
+  void SetUp() override {
+    Faults::SetUp();
+    if (::geteuid() != 0) GTEST_SKIP() << "mounting a small tmpfs needs root";
+    fs::create_directories(path("disk"));
+    if (::mount("tmpfs", path("disk").c_str(), "tmpfs", 0, "size=2m") != 0)
+      GTEST_SKIP() << "cannot mount a tmpfs here: " << std::strerror(errno);
+    mounted_ = true;
+  }
+  void TearDown() override {
+    if (mounted_) ::umount2(path("disk").c_str(), MNT_DETACH);
+    Faults::TearDown();
+  }
+  // Fills what is left of the disk.
+  std::string fill() const {
+    return "dd if=/dev/zero of='" + path("disk/filler") + "' bs=4k >/dev/null 2>&1";
+  }
+  bool mounted_ = false;
+};
+
+TEST_F(FullDisk, AStudyOnAFullDiskLeavesOnlyWholeFilesAndCountsTheRenderFailed) {
+  // The disk fills once the first render is cached: one worker, so the
+  // next render starts after this line and meets a full disk.
+  fake_blender(fake_blender_answer(rgba_exr("good.exr", 0.25f)));
+  StudyOptions o = options("disk/out");
+  std::vector<std::string> log;
+  o.log = [&](const std::string& line) {
+    log.push_back(line);
+    if (line.find("] rendered ") == std::string::npos || fs::exists(path("disk/filler"))) return;
+    [[maybe_unused]] const int dd = std::system(fill().c_str());  // "no space left": the point
+  };
+  try {
+    run_study(study(), o);
+  } catch (const std::exception& e) {  // the report cannot be written either
+    log.push_back(e.what());
+  }
+  ASSERT_TRUE(fs::exists(path("disk/filler"))) << "nothing was rendered";
+  std::size_t rendered = 0, failed = 0;
+  for (const std::string& line : log) {
+    rendered += line.find("] rendered ") != std::string::npos;
+    failed += line.find("] FAILED ") != std::string::npos;
+  }
+  EXPECT_GE(failed, 1u);
+  const RenderCache cache(path("disk/out/cache"));
+  std::size_t entries = 0;
+  for (const auto& e : fs::recursive_directory_iterator(path("disk/out"))) {
+    const std::string name = e.path().filename().string();
+    EXPECT_EQ(name.find("penumbra-tmp"), std::string::npos) << "left behind: " << e.path();
+    if (!e.is_regular_file()) continue;
+    if (e.path().extension() == ".exr" && e.path().parent_path() == cache.folder()) {
+      std::string why;
+      EXPECT_TRUE(cache.lookup(e.path().stem().string(), &why)) << e.path() << ": " << why;
+      ++entries;
+    } else if (e.path().extension() == ".exr" || e.path().extension() == ".png") {
+      EXPECT_NO_THROW(read_image(e.path().string())) << e.path();
+    }
+  }
+  EXPECT_EQ(rendered, entries) << "a render reported as rendered without its cache entry";
+}
+
+TEST_F(FullDisk, EveryWriteHelperFailsWithoutLeavingAFile) {
+  [[maybe_unused]] const int dd = std::system(fill().c_str());  // "no space left": the point
+  struct statvfs disk {};
+  ASSERT_EQ(::statvfs(path("disk").c_str(), &disk), 0);
+  ASSERT_EQ(disk.f_bavail, 0u) << "the disk is not full";
+  Image image;
+  image.width = image.height = 64;
+  image.channels = {"R", "G", "B"};
+  image.pixels.assign(64 * 64 * 3, 0.5f);
+  EXPECT_THROW(write_exr(image, path("disk/a.exr")), OutputError);
+  EXPECT_THROW(write_preview_png(image, path("disk/a.png")), OutputError);
+  EXPECT_THROW(write_text_file(path("disk/a.txt"), std::string(1 << 16, 'x')), OutputError);
+  // The figures: matplotlib through the harness's own writer.
+  const std::string script = "import sys; sys.path.insert(0, '" + kSource + "/harness')\n" +
+                             "import penumbra_plot as p\n" + "fig = p.plt.figure()\n" +
+                             "fig.gca().plot(range(10000))\n" + "p.save(fig, '" + path("disk") +
+                             "', 'figure')\n";
+  std::ofstream(path("draw.py")) << script;
+  EXPECT_NE(std::system(("/usr/bin/python3 '" + path("draw.py") + "' 2>/dev/null").c_str()), 0);
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(path("disk")))
+    if (e.path().filename() != "filler") left.push_back(e.path().filename().string());
+  EXPECT_TRUE(left.empty()) << "left on the full disk: " << left.front();
+}
+
+// Starts `penumbra ARGS...` as a real process, its output in DIR/LOG.
+pid_t start_penumbra(const std::string& log, std::vector<std::string> args) {
+  const pid_t penumbra = ::fork();
+  if (penumbra == 0) {
+    if (!std::freopen(log.c_str(), "w", stdout) || !std::freopen(log.c_str(), "a", stderr))
+      ::_exit(126);
+    std::vector<char*> argv{const_cast<char*>(PENUMBRA_BINARY)};
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::execv(PENUMBRA_BINARY, argv.data());
+    ::_exit(127);
+  }
+  return penumbra;
+}
+
+// Ctrl-C or SIGTERM while the figures are drawn leaves what an interrupt
+// while rendering leaves: the cache, no report, exit 128 + the signal.
+TEST_F(SignalledRun, AnInterruptWhileDrawingExits128PlusSignalAndLeavesNoReport) {
+  fake_blender(fake_blender_answer(rgba_exr("good.exr", 0.25f)));
+  const std::string python = path("fake-python");
+  std::ofstream(python) << "#!/bin/sh\necho $$ > '" << path("python.pid") << "'\nsleep 300\n";
+  ::chmod(python.c_str(), 0755);
+  study();
+  for (const int signal : {SIGINT, SIGTERM}) {
+    fs::remove(path("python.pid"));
+    ::setenv("PENUMBRA_PYTHON", python.c_str(), 1);
+    const pid_t penumbra = start_penumbra(
+        path("run.log"), {"run", path("study.json"), "-o", path("out"), "--jobs", "1"});
+    ::unsetenv("PENUMBRA_PYTHON");
+    ASSERT_TRUE(eventually([&] { return fs::exists(path("python.pid")); }, 120.0))
+        << read_text(path("run.log"));
+    ::kill(penumbra, signal);
+    int status = 0;
+    ::waitpid(penumbra, &status, 0);
+    ASSERT_TRUE(WIFEXITED(status)) << read_text(path("run.log"));
+    EXPECT_EQ(WEXITSTATUS(status), 128 + signal) << read_text(path("run.log"));
+    for (const char* name : {"report.json", "metrics.csv", "metrics-long.csv", "report.html"})
+      EXPECT_FALSE(fs::exists(path("out") + "/" + name)) << name;
+    const int fake = std::stoi(read_text(path("python.pid")));
+    EXPECT_TRUE(eventually([&] { return !alive(fake); })) << "the drawing outlived the run";
+  }
+}
+
+// A second run into a folder that a first is writing stops at once, saying
+// which process holds it, and renders nothing.
+TEST_F(SignalledRun, ASecondRunIntoABusyFolderExitsTwoNamingTheFirst) {
+  fake_blender("echo $$ > '" + path("fake.pid") + "'; sleep 300 & echo $! > '" + path("child.pid") +
+               "'; sleep 300");
+  study();
+  const pid_t first = start_run(dir_.string());
+  ASSERT_TRUE(eventually([&] { return fs::exists(path("child.pid")); }, 120.0))
+      << read_text(path("run.log"));
+  const std::size_t entries = cached_images("out");
+  const auto start = std::chrono::steady_clock::now();
+  // A short time-out: a second run that does render (the fault) ends soon.
+  const CliResult second = run_penumbra({"run", path("study.json"), "-o", path("out"), "--jobs",
+                                         "1", "--no-figures", "--timeout", "3"});
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(cached_images("out"), entries) << "the second run rendered";
+  ::kill(first, SIGTERM);
+  int status = 0;
+  ::waitpid(first, &status, 0);
+  EXPECT_EQ(second.code, 2) << second.err;
+  EXPECT_NE(second.err.find("pid " + std::to_string(first)), std::string::npos) << second.err;
+  EXPECT_LT(seconds, 30.0) << "the second run waited for the first";
+}
+
+// `penumbra report` bounds what it takes from report.json: a huge label is
+// bad input, named, before any drawing starts.
+TEST_F(Faults, AReportWithAHugeLabelIsBadInputNamingItsPointer) {
+  StudyOptions o = options("out");
+  o.figures = false;
+  fake_blender(fake_blender_answer(rgba_exr("good.exr", 0.25f)));
+  ASSERT_TRUE(run_study(study(), o).complete());
+  json report = read_json_file(path("out/report.json"));
+  report["variants"][0]["label"] = std::string(200 * 1024, 'L');
+  std::ofstream(path("out/report.json")) << report.dump(1);
+  const auto start = std::chrono::steady_clock::now();
+  const CliResult r = run_penumbra({"report", path("out")});
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find(path("out/report.json") + ": /variants/0/label"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("65536"), std::string::npos) << r.err;
+  EXPECT_LT(seconds, 10.0);
+  EXPECT_FALSE(fs::exists(path("out/report.html")));
 }
 
 }  // namespace

@@ -8,14 +8,23 @@
 // one-node cluster.)
 #include <gtest/gtest.h>
 
+#include "cli_test.h"
 #include "study/study_options.h"
 #include "temp_dir_test.h"
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <set>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -181,6 +190,223 @@ TEST_F(SlurmChains, AFailedCheckEndsItsChainUnconvergedAndEveryReportJobMovesOn)
     }
   }
   EXPECT_EQ(failed, 1u);
+}
+
+// sbatch that accepts the array but not what follows: whatever was submitted
+// is either cancelled or recorded, never shown as a phantom "array job ?",
+// and a rerun never submits a render that is still queued.
+class SlurmHalfSubmission : public TempDirTest {
+ protected:
+  void SetUp() override {
+    TempDirTest::SetUp();
+    fs::create_directories(dir_ / "bin");
+    old_path_ = std::getenv("PATH") ? std::getenv("PATH") : "";
+    ::setenv("PATH", (path("bin") + ":" + old_path_).c_str(), 1);
+  }
+  void TearDown() override {
+    ::setenv("PATH", old_path_.c_str(), 1);
+    TempDirTest::TearDown();
+  }
+  // A stand-in for a Slurm client: logs its arguments to NAME.log, then runs `body`.
+  void tool(const std::string& name, const std::string& body) const {
+    const fs::path file = dir_ / "bin" / name;
+    std::ofstream(file) << "#!/bin/sh\necho \"$@\" >> '" << path(name + ".log") << "'\n"
+                        << body << "\n";
+    fs::permissions(file, fs::perms::owner_all);
+  }
+  // sbatch's answer to its Nth call (1-based): `first` to the array, `then` after.
+  void sbatch(const std::string& first, const std::string& then) const {
+    tool("sbatch", "n=$(wc -l < '" + path("sbatch.log") + "')\nif [ \"$n\" -le 1 ]; then " + first +
+                       "; else " + then + "; fi");
+  }
+  ::penumbra::Study study(int size = 16, int spp = 1,
+                          const std::vector<std::string>& methods = {"none", "chiang2019"}) const {
+    const json j = {
+        {"version", 1},
+        {"name", "half"},
+        {"scenes", {kSource + "/scenes/calibration/sphere.json"}},
+        {"set", {{"/camera/width", size}, {"/camera/height", size}, {"/camera/spp", spp}}},
+        {"axes", {{{"pointer", "/height/amplitude"}, {"values", {0.01, 0.02}}}}},
+        {"methods", methods},
+        {"renderers", {"evaluator"}}};
+    std::ofstream(path("half.json")) << j.dump(2);
+    return load_study(path("half.json"));
+  }
+  StudyOptions options() const {
+    StudyOptions o = test_study_options(path("out"));
+    SlurmOptions s;
+    s.continue_argv = {"/bin/true"};
+    o.slurm = s;
+    return o;
+  }
+  std::size_t lines(const std::string& log) const {
+    std::istringstream in(read_text(path(log)));
+    std::size_t n = 0;
+    for (std::string line; std::getline(in, line);) ++n;
+    return n;
+  }
+  std::string old_path_;
+};
+
+TEST_F(SlurmHalfSubmission, ARefusedReportJobCancelsTheArrayAndLeavesNoPhantom) {
+  sbatch("echo 4242", "echo 'sbatch: error: QOSMaxSubmitJobPerUserLimit' >&2; exit 1");
+  tool("scancel", "exit 0");
+  tool("squeue", "exit 0");
+  const ::penumbra::Study s = study();
+  try {
+    run_study(s, options());
+    FAIL() << "a refused report job must fail the run";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("4242"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(read_text(path("scancel.log")), "4242\n") << "the array must be cancelled";
+  EXPECT_TRUE(slurm_status(path("out")).batches.empty()) << "nothing stays submitted";
+}
+
+TEST_F(SlurmHalfSubmission, AnArrayThatCannotBeCancelledIsRecordedAndNotSubmittedAgain) {
+  sbatch("echo 4242", "exit 1");
+  tool("scancel", "exit 1");
+  tool("squeue", "echo 4242");  // the array still runs
+  const ::penumbra::Study s = study();
+  EXPECT_THROW(run_study(s, options()), std::exception);
+  const SlurmStatus status = slurm_status(path("out"));
+  ASSERT_EQ(status.batches.size(), 1u);
+  EXPECT_EQ(status.batches[0].array_job, "4242");
+  const std::size_t calls = lines("sbatch.log");
+
+  const StudyRunStats rerun = run_study(s, options());
+  ASSERT_TRUE(rerun.slurm);
+  EXPECT_EQ(rerun.slurm->submitted, 0u) << "renders of the queued array submitted again";
+  EXPECT_GT(rerun.slurm->still_queued, 0u);
+  EXPECT_EQ(lines("sbatch.log"), calls);
+}
+
+TEST_F(SlurmHalfSubmission, AFailedArraySubmissionLeavesNoPhantom) {
+  tool("scancel", "exit 0");
+  tool("squeue", "exit 0");
+  const ::penumbra::Study s = study();
+  for (const std::string answer : {"exit 1", "echo 'no job id here'", "missing"}) {
+    SCOPED_TRACE(answer);
+    if (answer == "missing")
+      fs::remove(dir_ / "bin" / "sbatch");
+    else
+      sbatch(answer, answer);
+    EXPECT_THROW(run_study(s, options()), std::exception);
+    EXPECT_TRUE(slurm_status(path("out")).batches.empty());
+  }
+  // Once sbatch works, the renders are submitted exactly once.
+  fs::remove(path("sbatch.log"));
+  tool("sbatch", "echo 77");
+  const StudyRunStats ok = run_study(s, options());
+  ASSERT_TRUE(ok.slurm);
+  EXPECT_GT(ok.slurm->submitted, 0u);
+  ASSERT_EQ(slurm_status(path("out")).batches.size(), 1u);
+  EXPECT_EQ(slurm_status(path("out")).batches[0].array_job, "77");
+  EXPECT_EQ(slurm_status(path("out")).batches[0].report_job, "77");
+}
+
+// run-batch takes nothing from its batch file on trust: a key is the digest
+// of its scene (recomputed before anything is cached), never a path.
+class RunBatch : public SlurmHalfSubmission {
+ protected:
+  // A batch file from a submission, `edit` applied to its first render.
+  std::string batch(const std::function<void(json&)>& edit) {
+    tool("sbatch", "echo 77");
+    tool("squeue", "exit 0");
+    const StudyRunStats stats = run_study(study(), options());
+    EXPECT_TRUE(stats.slurm && stats.slurm->submitted > 0);
+    const std::string file = slurm_status(path("out")).batches.at(0).file;
+    json b = json::parse(read_text(file));
+    edit(b["jobs"][0]);
+    std::ofstream(file) << b.dump(1);
+    return file;
+  }
+  std::size_t cached() const {
+    std::size_t n = 0;
+    for (const auto& e : fs::recursive_directory_iterator(dir_))
+      n += e.path().extension() == ".exr" ? 1 : 0;
+    return n;
+  }
+};
+
+TEST_F(RunBatch, AnUntouchedBatchFileRenders) {
+  const std::string file = batch([](json&) {});
+  const CliResult r = run_penumbra({"run-batch", file, "--task", "0"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_GT(cached(), 0u);
+}
+
+TEST_F(RunBatch, AKeyThatIsNotADigestIsBadInputAndWritesNothing) {
+  for (const std::string key : {"../../PWNED", "zz", "0123456789abcdef0123456789ABCDEF"}) {
+    SCOPED_TRACE(key);
+    fs::remove_all(path("out"));
+    const std::string file = batch([&](json& job) { job["key"] = key; });
+    const CliResult r = run_penumbra({"run-batch", file, "--task", "0"});
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find(file + ": /jobs/0/key"), std::string::npos) << r.err;
+    EXPECT_EQ(cached(), 0u);
+    EXPECT_FALSE(fs::exists(path("PWNED.exr")));
+    EXPECT_FALSE(fs::exists(path("PWNED.failed")));
+  }
+}
+
+TEST_F(RunBatch, AnEditedSceneIsNotCachedUnderThePlannedKey) {
+  std::string planned;
+  const std::string file = batch([&](json& job) {
+    planned = job["key"];
+    job["scene"]["camera"]["spp"] = 3;
+  });
+  const CliResult r = run_penumbra({"run-batch", file, "--task", "0"});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find(file + ": /jobs/0/key"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(planned), std::string::npos) << r.err;
+  EXPECT_EQ(cached(), 0u);
+}
+
+// SIGTERM (scancel, a node's shutdown) stops a task as it stops `render`:
+// soon, with 128 + 15, and with nothing cached from the render it cut short.
+TEST_F(RunBatch, SigtermStopsTheRenderAndCachesNothing) {
+  tool("sbatch", "echo 77");
+  tool("squeue", "exit 0");
+  run_study(study(1024, 256, {"none"}), options());
+  const std::string file = slurm_status(path("out")).batches.at(0).file;
+  const pid_t child = ::fork();
+  if (child == 0) {
+    const int out = ::open(path("task.log").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(out, 1);
+    ::dup2(out, 2);
+    ::execl(PENUMBRA_BINARY, PENUMBRA_BINARY, "run-batch", file.c_str(), "--task", "0",
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // Well into its render: a second of CPU time (its signal handlers are set
+  // before it parses the batch file).
+  const auto cpu_ticks = [&] {
+    std::istringstream stat(read_text("/proc/" + std::to_string(child) + "/stat"));
+    std::string field;
+    long ticks = 0;
+    for (int i = 1; i <= 15 && stat >> field; ++i)
+      if (i >= 14) ticks += std::atol(field.c_str());
+    return ticks;
+  };
+  const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (cpu_ticks() < ::sysconf(_SC_CLK_TCK) && std::chrono::steady_clock::now() < limit)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_EQ(cached(), 0u) << "the render must still be running when the signal comes";
+  ::kill(child, SIGTERM);
+  const auto sent = std::chrono::steady_clock::now();
+  int status = 0;
+  while (::waitpid(child, &status, WNOHANG) == 0 &&
+         std::chrono::steady_clock::now() - sent < std::chrono::seconds(10))
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  if (::waitpid(child, &status, WNOHANG) == 0) {
+    ::kill(child, SIGKILL);
+    ::waitpid(child, &status, 0);
+    FAIL() << "still running 10 s after SIGTERM: " << read_text(path("task.log"));
+  }
+  ASSERT_TRUE(WIFEXITED(status)) << read_text(path("task.log"));
+  EXPECT_EQ(WEXITSTATUS(status), 143) << read_text(path("task.log"));
+  EXPECT_EQ(cached(), 0u);
 }
 
 // Renders that share a mesh go to one array task unless there are more of
