@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -174,6 +175,8 @@ void remove_empty_folders(const fs::path& out, bool out_existed) {
   std::error_code ec;
   for (const char* sub : {"cache", "images"})
     if (fs::is_empty(out / sub, ec) && !ec) fs::remove(out / sub, ec);
+  // The lock file of a folder this run made (its lock is released by now).
+  if (!out_existed) fs::remove(out / kFolderLockName, ec);
   if (!out_existed && fs::is_empty(out, ec) && !ec) fs::remove(out, ec);
 }
 
@@ -397,6 +400,10 @@ void fit_study_folder(const fs::path& out, const StudyOptions& options, StudyRun
     log(fmt::format("nothing to fit ({})", e.what()));
     return;
   }
+  if (!std::isfinite(result.study_floor.floor.value)) {
+    log("nothing to fit: no variant has raw-bump light in the terminator region's bins");
+    return;
+  }
   write_fit(result, out / "fit");
   write_fit_stamp(out / "fit", digest);
   stats.fit_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -494,8 +501,8 @@ StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   }
   const bool out_existed = fs::exists(out);
   prepare_folders(out, options, stats);
-  const FolderLock lock = lock_folder(out);
   try {
+    const FolderLock lock = lock_folder(out);
     return run_prepared(study, plan, renderers, *executor, options, stats, start);
   } catch (...) {
     remove_empty_folders(out, out_existed);

@@ -157,7 +157,7 @@ void write_atomically(const std::string& path, const std::function<void(CheckedF
 }
 
 FolderLock::FolderLock(const std::string& folder) {
-  const std::string path = (fs::path(folder) / ".penumbra-lock").string();
+  const std::string path = (fs::path(folder) / kFolderLockName).string();
   fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0)
     throw std::runtime_error(fmt::format("{}: cannot create: {}", path, std::strerror(errno)));

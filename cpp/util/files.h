@@ -66,6 +66,8 @@ class CheckedFile {
 // thrown as std::runtime_error. The one way Penumbra writes its outputs.
 void write_atomically(const std::string& path, const std::function<void(CheckedFile&)>& fill);
 
+inline constexpr const char* kFolderLockName = ".penumbra-lock";
+
 // An exclusive flock(2) on FOLDER/.penumbra-lock, held while the object
 // lives (and released by the kernel when the process dies, kill -9
 // included). The file says who holds it: "pid N on HOST".
