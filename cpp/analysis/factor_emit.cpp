@@ -119,8 +119,6 @@ std::string axis_code(const FactorGrid& grid, const Dialect& d, EmitLanguage lan
 
 std::string body(const FactorGrid& grid, const Dialect& d, EmitLanguage language) {
   const std::size_t k = grid.axes.size();
-  std::vector<double> cells;
-  for (const FactorAxis& a : grid.axes) cells.push_back(double(a.cells()));
   std::string code =
       fmt::format("{{\n  {i} lower[{k}]; {i} upper[{k}]; {r} t[{k}];\n", fmt::arg("i", d.int_type),
                   fmt::arg("k", k), fmt::arg("r", d.real));
