@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include "image/image_io.h"
 #include "scene/factor_table_file.h"
@@ -83,23 +84,22 @@ void assign_keys(Plan& plan, const std::vector<std::pair<RendererKind, RendererI
 
 void assign_keys(std::vector<Job>& jobs,
                  const std::vector<std::pair<RendererKind, RendererIdentity>>& ids) {
-  for (Job& job : jobs) {
+  // Each key is made from its job's scene alone: in parallel, the same keys.
+  tbb::parallel_for(std::size_t{0}, jobs.size(), [&](std::size_t i) {
+    Job& job = jobs[i];
     const auto it = std::find_if(ids.begin(), ids.end(),
                                  [&](const auto& entry) { return entry.first == job.renderer; });
     const RendererIdentity identity = it != ids.end() ? it->second : RendererIdentity{};
-    const auto& table = job.scene.terminator.method.table;
-    if (!job.scene.height.map && !table) {
-      job.key = render_key(job.scene_json, job.renderer, identity);
-      continue;
-    }
+    const Scene scene = job.scene();
+    const auto& table = scene.terminator.method.table;
+    nlohmann::json keyed = job.scene_json();
     // An image map or a fitted table enters the key by its content, not by
     // where it lies: a file edited in place re-renders, a moved one does not.
-    nlohmann::json keyed = job.scene_json;
-    if (job.scene.height.map) keyed["height"]["file"] = "content:" + job.scene.height.map->digest;
+    if (scene.height.map) keyed["height"]["file"] = "content:" + scene.height.map->digest;
     if (table)
       keyed["terminator"]["parameters"]["table"] = "content:" + factor_table_digest(*table);
     job.key = render_key(keyed, job.renderer, identity);
-  }
+  });
 }
 
 }  // namespace penumbra

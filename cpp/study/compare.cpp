@@ -22,7 +22,7 @@ RenderRow render_row(const Plan& plan, const RenderedImages& r,
                      const std::vector<std::uint64_t>& digests, std::size_t i,
                      PreviewFolder& pictures) {
   const Job& job = plan.jobs[i];
-  const double scale = radiance_scale(job.scene);
+  const double scale = radiance_scale(job.scene());
   RenderRow row;
   row.job = i;
   const std::string stem = file_safe(job.label);
@@ -74,7 +74,7 @@ void add_comparisons(const Plan& plan, const Measurer& measure, std::size_t i, C
       {job.renderer, plan.truth(job.variant, job.renderer)}};
   if (job.renderer != RendererKind::kEvaluator)
     refs.push_back({RendererKind::kEvaluator, plan.truth(job.variant, RendererKind::kEvaluator)});
-  const double scale = radiance_scale(job.scene);
+  const double scale = radiance_scale(job.scene());
   const ComparisonExtent extent =
       kind == SectionKind::kLowPoly ? ComparisonExtent::kFullShadows : ComparisonExtent::kFull;
   for (const auto& [ref_renderer, ref] : refs) {
@@ -107,7 +107,7 @@ void add_agreement(const Plan& plan, const Measurer& measure, std::size_t i, Com
         plan.jobs[k].method == job.method)
       ref = static_cast<long>(k);
   if (ref < 0 || !measure.renders.done[ref]) return;
-  const Measurement m = measure(i, static_cast<std::size_t>(ref), radiance_scale(job.scene),
+  const Measurement m = measure(i, static_cast<std::size_t>(ref), radiance_scale(job.scene()),
                                       ComparisonExtent::kProfileOnly);
   AgreementRow row;
   row.variant = job.variant, row.job = i, row.reference_job = static_cast<std::size_t>(ref);

@@ -28,15 +28,18 @@ struct Track {
   int spp() const { return spp0 << (2 * spp_steps); }
 };
 
+// The overrides that set the ground truth's edge length and samples.
+OverrideList sampling(double edge_length, int spp) {
+  return std::make_shared<const std::vector<Override>>(
+      std::vector<Override>{{"/displacement/edge_length", edge_length}, {"/camera/spp", spp}});
+}
+
 // The plan's truth job with other settings; nullopt (and why) when the scene
 // would need more memory than allowed.
 std::optional<Job> truth_at(const Job& truth, double edge_length, int spp, double max_memory_bytes,
                             std::string* why) {
   Job job = truth;
-  job.scene_json["displacement"]["edge_length"] = edge_length;
-  job.scene_json["camera"]["spp"] = spp;
-  job.scene = scene_from_json(job.scene_json, job.origin);
-  job.resources = estimate_resources(job.renderer, job.scene);
+  job.refine(sampling(edge_length, spp), nullptr);  // renders once: kept as its recipe
   job.label = fmt::format("{}-e{:g}-s{}", truth.label, edge_length, spp);
   if (job.resources.memory_bytes > max_memory_bytes) {
     *why = fmt::format("a check at edge length {:g} needs {:.1f} GiB, above the limit of {:.1f}",
@@ -49,8 +52,9 @@ std::optional<Job> truth_at(const Job& truth, double edge_length, int spp, doubl
 Track track_of(const Job& truth, int edge_steps, int spp_steps) {
   Track track;
   track.truth = &truth;
-  track.edge_length0 = truth.scene.displacement.edge_length;
-  track.spp0 = truth.scene.camera.spp;
+  const Scene scene = truth.scene();
+  track.edge_length0 = scene.displacement.edge_length;
+  track.spp0 = scene.camera.spp;
   track.edge_steps = edge_steps, track.spp_steps = spp_steps;
   return track;
 }
@@ -131,7 +135,7 @@ void run_round(std::vector<Track>& tracks, const GroundTruthSettings& s, double 
     const std::optional<Image>* current = c.current ? &images[next++] : nullptr;
     const std::optional<Image>* edge = c.edge ? &images[next++] : nullptr;
     const std::optional<Image>* spp = c.spp ? &images[next++] : nullptr;
-    const double scale = radiance_scale(t.truth->scene);
+    const double scale = radiance_scale(t.truth->scene());
     auto change = [&](const std::optional<Image>* refined) {
       return current && *current && refined && *refined ? truth_change(**current, **refined, scale)
                                                         : kNaN;
@@ -145,17 +149,18 @@ void run_round(std::vector<Track>& tracks, const GroundTruthSettings& s, double 
 
 // The variant's evaluator jobs at the settings reached.
 void apply(Plan& plan, const VariantConvergence& r) {
-  for (std::size_t j : plan.variants[r.variant].jobs) apply_convergence(plan.jobs[j], r);
+  const auto settings = sampling(r.edge_length, r.spp);
+  std::shared_ptr<const Scene> shared;  // one for the variant's evaluator jobs
+  for (std::size_t j : plan.variants[r.variant].jobs)
+    if (plan.jobs[j].renderer == RendererKind::kEvaluator) plan.jobs[j].refine(settings, &shared);
 }
 
 }  // namespace
 
 void apply_convergence(Job& job, const VariantConvergence& r) {
   if (job.renderer != RendererKind::kEvaluator) return;
-  job.scene_json["displacement"]["edge_length"] = r.edge_length;
-  job.scene_json["camera"]["spp"] = r.spp;
-  job.scene = scene_from_json(job.scene_json, job.origin);
-  job.resources = estimate_resources(job.renderer, job.scene);
+  std::shared_ptr<const Scene> shared;
+  job.refine(sampling(r.edge_length, r.spp), &shared);
 }
 
 VariantConvergence continue_chain(const Job& truth, int edge_steps, int spp_steps,

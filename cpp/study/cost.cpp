@@ -18,7 +18,7 @@ namespace {
 using Kind = std::tuple<RendererKind, Representation, bool>;
 
 Kind kind_of(const Job& job) {
-  return {job.renderer, job.representation, job.scene.tessellation.has_value()};
+  return {job.renderer, job.representation, job.scene().tessellation.has_value()};
 }
 
 double msamples(const Scene& scene) {
@@ -70,7 +70,7 @@ std::optional<double> measured_rate(const Job& job, const RenderCache& cache) {
   if (!wall || !threads || *threads < 1.0) return std::nullopt;
   const RenderCostModel m = model_for(kind_of(job));
   return std::max(0.0, *wall * *threads - m.fixed - m.per_mtriangle * mtriangles(job)) /
-         msamples(job.scene);
+         msamples(job.scene());
 }
 
 double median(std::vector<double> values) {
@@ -132,7 +132,7 @@ std::map<Kind, CostLine> price_lines(const Plan& plan, const RenderCache& cache,
 }
 
 double job_core_seconds(const Job& job, const RenderCostModel& m) {
-  return m.core_seconds(msamples(job.scene), mtriangles(job));
+  return m.core_seconds(msamples(job.scene()), mtriangles(job));
 }
 
 // The comparisons a cold run makes: each test render against its own
@@ -157,7 +157,7 @@ CostEstimate estimate_cost(const Plan& plan, const RenderCache& cache,
     if (!to_render[i]) continue;
     const Kind kind = kind_of(plan.jobs[i]);
     lines[kind].core_seconds += job_core_seconds(plan.jobs[i], lines[kind].model);
-    work[kind] += msamples(plan.jobs[i].scene);
+    work[kind] += msamples(plan.jobs[i].scene());
     renderers.insert(plan.jobs[i].renderer);
   }
   for (auto& [kind, line] : lines) {

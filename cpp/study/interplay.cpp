@@ -63,9 +63,9 @@ Job make_job(const json& base, const InterplaySection& s, const std::string& map
   job.method = spec.method;
   job.label = job.truth ? fmt::format("interplay-displacement-edge{}", spec.edge_length)
                         : fmt::format("interplay-{}-{}", spec.method, level_text(spec.level));
-  job.origin = s.scene + " (study /interplay, " + job.label + ")";
-  job.scene = scene_from_json(doc, job.origin);
-  job.scene_json = std::move(doc);
+  std::string origin = s.scene + " (study /interplay, " + job.label + ")";
+  Scene scene = scene_from_json(doc, origin);
+  job.set_scene(std::move(doc), std::move(scene), std::move(origin));
   return job;
 }
 
@@ -151,7 +151,7 @@ InterplayJobs plan_interplay_section(const InterplaySection& s, const StepContex
     for (const std::string& method : s.methods)
       work.push_back(make_job(base, s, map_path, {Representation::kBump, method, level, 0.0}));
   assign_keys(work, context.renderers.identities);
-  result.map_digest = work[0].scene.height.map->digest;
+  result.map_digest = work[0].scene().height.map->digest;
   result.truth_key = work[0].key;
   return planned;
 }
@@ -168,7 +168,7 @@ InterplayResult measure_interplay_section(const InterplaySection& s, const Inter
   const Image& truth = renders.images[0];
   // The terminator profile and its interval only.
   MeasureOptions profile;
-  profile.scale = radiance_scale(work[0].scene);
+  profile.scale = radiance_scale(work[0].scene());
   profile.image = profile.view = false;
   // The truth (as the test) against the truth at half its edge length.
   const Measurement check = measure(truth, renders.images[1], profile);

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <map>
 
 #include <fmt/format.h>
 
@@ -27,6 +28,81 @@ long Plan::truth(std::size_t v, RendererKind r) const {
   for (std::size_t i : variants[v].jobs)
     if (jobs[i].renderer == r && jobs[i].truth) return static_cast<long>(i);
   return -1;
+}
+
+JobResources job_resources(const ResourceEstimate& estimate) {
+  return {estimate.memory_bytes, estimate.output_bytes, estimate.triangles};
+}
+
+const std::string& Job::origin() const {
+  static const std::string none;
+  return source_ ? source_->origin : none;
+}
+
+// The document with its name (the reader keeps the name).
+json Job::compose() const {
+  json doc = *source_->document;
+  apply_overrides(doc, source_->overrides, source_->origin);
+  for (const OverrideList& list : overrides_)
+    if (list) apply_overrides(doc, *list, source_->origin);
+  if (!source_->scene_file.empty()) resolve_map_files(doc, source_->scene_file);
+  return doc;
+}
+
+json Job::scene_json() const {
+  json doc = compose();
+  if (!source_->scene_file.empty()) doc.erase("name");  // a name is not content
+  return doc;
+}
+
+Scene Job::scene() const {
+  if (!shared_) return scene_from_json(compose(), source_->origin);
+  Scene s = *shared_;
+  s.representation = parts_->representation;
+  s.terminator = parts_->terminator;
+  s.offset = parts_->offset;
+  s.tessellation = parts_->tessellation;
+  return s;
+}
+
+namespace {
+
+std::shared_ptr<const MethodParts> parts_of(const Scene& s) {
+  return std::make_shared<const MethodParts>(
+      MethodParts{s.representation, s.terminator, s.offset, s.tessellation});
+}
+
+}  // namespace
+
+void Job::set_scene(json canonical, Scene scene, std::string origin) {
+  source_ = std::make_shared<const SceneSource>(
+      SceneSource{std::make_shared<const json>(std::move(canonical)), "", {}, std::move(origin)});
+  overrides_ = {};
+  parts_ = parts_of(scene);
+  shared_ = std::make_shared<const Scene>(std::move(scene));
+  representation = parts_->representation;
+}
+
+void Job::set_scene(std::shared_ptr<const SceneSource> source, OverrideList method_overrides,
+                    OverrideList renderer_overrides, std::shared_ptr<const Scene> shared,
+                    std::shared_ptr<const MethodParts> parts) {
+  source_ = std::move(source);
+  overrides_ = {std::move(method_overrides), std::move(renderer_overrides), nullptr};
+  shared_ = std::move(shared);
+  parts_ = std::move(parts);
+  if (parts_) representation = parts_->representation;
+}
+
+void Job::refine(OverrideList settings, std::shared_ptr<const Scene>* shared) {
+  overrides_[2] = std::move(settings);
+  Scene s = scene_from_json(compose(), source_->origin);
+  resources = job_resources(estimate_resources(renderer, s));
+  if (!shared) {
+    shared_ = nullptr;
+    return;
+  }
+  if (!*shared) *shared = std::make_shared<const Scene>(std::move(s));
+  shared_ = *shared;
 }
 
 namespace {
@@ -129,33 +205,70 @@ std::string cannot_render_variant(RendererKind r, const json& scene) {
 
 // ---- expansion ------------------------------------------------------------------
 
-struct VariantContext {
-  const Section& section;
-  const json& base;
-  const std::vector<Override>& overrides;
-  const std::string& origin;
-  const std::string& scene_file;  // a relative /height/file is from its folder
-  int blender_spp;
+// The override lists a section shares between its variants: the truth's and
+// each method's (in the order of Section::methods), and the renderers'.
+struct SectionLists {
+  std::shared_ptr<const std::vector<Override>> truth;
+  std::vector<std::shared_ptr<const std::vector<Override>>> methods;
+  std::shared_ptr<const std::vector<Override>> blender;  // its samples per pixel
 };
 
-void add_job(const VariantContext& c, RendererKind r, const StudyMethod* m, Variant& v,
-             std::size_t variant_index, Plan& plan) {
-  json doc = c.base;
-  std::vector<Override> all = c.overrides;
-  for (Override& o : section_overrides(c.section.kind, m)) all.push_back(std::move(o));
-  if (r == RendererKind::kBlender) all.push_back({"/camera/spp", c.blender_spp});
-  apply_overrides(doc, all, c.origin);
-  resolve_map_files(doc, c.scene_file);
+SectionLists section_lists(const Section& section, int blender_spp) {
+  SectionLists lists;
+  lists.truth =
+      std::make_shared<const std::vector<Override>>(section_overrides(section.kind, nullptr));
+  for (const StudyMethod& m : section.methods)
+    lists.methods.push_back(
+        std::make_shared<const std::vector<Override>>(section_overrides(section.kind, &m)));
+  lists.blender = std::make_shared<const std::vector<Override>>(
+      std::vector<Override>{{"/camera/spp", blender_spp}});
+  return lists;
+}
+
+struct VariantContext {
+  const Section& section;
+  const SectionLists& lists;
+  std::shared_ptr<const SceneSource> source;
+  double max_memory_bytes;
+  // Method parts by what they are read from: equal parts are one object.
+  std::map<std::string, std::shared_ptr<const MethodParts>>& parts;
+};
+
+// What the method parts of `doc` are read from, as text.
+std::string parts_text(const json& doc) {
+  std::string text;
+  for (const char* pointer : {"/representation", "/terminator", "/offset", "/shape/tessellation"}) {
+    const json::json_pointer p(pointer);
+    text += doc.contains(p) ? doc[p].dump() : "-";
+    text += '\n';
+  }
+  return text;
+}
+
+// Adds the job of method `m` (an index into the section's methods; none: the
+// truth). Its scene is read in full, to check it, and kept as where it comes
+// from and its parts, the shared one in `shared` (one per variant and
+// renderer).
+void add_job(const VariantContext& c, RendererKind r, std::optional<std::size_t> m, Variant& v,
+             std::size_t variant_index, std::shared_ptr<const Scene>& shared, Plan& plan) {
   Job job;
   job.variant = variant_index;
   job.renderer = r;
-  job.truth = m == nullptr;
-  job.scene = scene_from_json(doc, c.origin);
-  job.representation = job.scene.representation;
-  job.method = m ? m->label : c.section.kind == SectionKind::kBump ? "none" : "analytic";
-  doc.erase("name");  // a name is not content
-  job.scene_json = std::move(doc);
-  job.origin = c.origin;
+  job.truth = !m;
+  const StudyMethod* method = m ? &c.section.methods[*m] : nullptr;
+  job.method = method ? method->label : c.section.kind == SectionKind::kBump ? "none" : "analytic";
+  job.set_scene(c.source, m ? c.lists.methods[*m] : c.lists.truth,
+                r == RendererKind::kBlender ? c.lists.blender : nullptr, nullptr, nullptr);
+  const json doc = job.scene_json();
+  Scene scene = scene_from_json(doc, c.source->origin);
+  const ResourceEstimate resources = estimate_resources(r, scene);
+  check_resources(resources, c.max_memory_bytes, c.source->origin);
+  job.resources = job_resources(resources);
+  std::shared_ptr<const MethodParts>& parts = c.parts[parts_text(doc)];
+  if (!parts) parts = parts_of(scene);
+  if (!shared) shared = std::make_shared<const Scene>(std::move(scene));
+  job.set_scene(c.source, m ? c.lists.methods[*m] : c.lists.truth,
+                r == RendererKind::kBlender ? c.lists.blender : nullptr, shared, parts);
   job.label = job_label(c.section.kind, v, job);
   v.jobs.push_back(plan.jobs.size());
   plan.jobs.push_back(std::move(job));
@@ -163,8 +276,8 @@ void add_job(const VariantContext& c, RendererKind r, const StudyMethod* m, Vari
 
 void add_renderer_jobs(const VariantContext& c, RendererKind r, Variant& v, std::size_t index,
                        Plan& plan) {
-  json scene = c.base;
-  apply_overrides(scene, c.overrides, c.origin);
+  json scene = *c.source->document;
+  apply_overrides(scene, c.source->overrides, c.source->origin);
   if (const std::string why = cannot_render(r, scene); !why.empty()) {
     const SkippedRenderer skipped{c.section.kind, r, v.scene, why, ""};
     if (std::find(plan.skipped.begin(), plan.skipped.end(), skipped) == plan.skipped.end())
@@ -175,32 +288,39 @@ void add_renderer_jobs(const VariantContext& c, RendererKind r, Variant& v, std:
     plan.skipped.push_back({c.section.kind, r, v.scene, why, v.id});
     return;
   }
-  add_job(c, r, nullptr, v, index, plan);
-  for (const StudyMethod& m : c.section.methods)
-    if (section_offers(c.section.kind, r, m)) add_job(c, r, &m, v, index, plan);
+  std::shared_ptr<const Scene> shared;
+  add_job(c, r, std::nullopt, v, index, shared, plan);
+  for (std::size_t m = 0; m < c.section.methods.size(); ++m)
+    if (section_offers(c.section.kind, r, c.section.methods[m]))
+      add_job(c, r, m, v, index, shared, plan);
 }
 
-void add_section(const Study& study, const Section& section, Plan& plan) {
+void add_section(const Study& study, const Section& section, double max_memory_bytes, Plan& plan) {
   const bool bump = section.kind == SectionKind::kBump;
+  const SectionLists lists = section_lists(section, study.blender_spp);
+  std::map<std::string, std::shared_ptr<const MethodParts>> parts;
   std::vector<Override> set;
   for (const auto& [pointer, value] : section.set.items()) set.push_back({pointer, value});
   std::size_t combinations = 1;
   for (const StudyAxis& a : section.axes) combinations *= a.values.size();
   std::size_t count = 0;
-  for (const std::string& scene_file : section.scenes) {
-    json base = read_json_file(scene_file);
-    resolve_map_files(base, scene_file);
-    const std::string scene_name = fs::path(scene_file).stem().string();
+  for (const std::string& file : section.scenes) {
+    auto document = std::make_shared<json>(read_json_file(file));
+    resolve_map_files(*document, file);
+    const std::string scene_name = fs::path(file).stem().string();
     for (std::size_t c = 0; c < combinations; ++c) {
       Variant v;
       v.section = section.kind;
       v.id = fmt::format("{}{:03d}", bump ? 'v' : 'l', count++);
       v.scene = scene_name;
       v.label = scene_name;
-      const std::vector<Override> overrides = axis_combination(set, section.axes, c, &v);
-      const std::string origin = fmt::format("{} (study {}, {} {})", scene_file, study.file,
-                                             bump ? "variant" : "low-poly variant", v.id);
-      const VariantContext context{section, base, overrides, origin, scene_file, study.blender_spp};
+      auto source = std::make_shared<SceneSource>();
+      source->document = document;
+      source->scene_file = file;
+      source->overrides = axis_combination(set, section.axes, c, &v);
+      source->origin = fmt::format("{} (study {}, {} {})", file, study.file,
+                                   bump ? "variant" : "low-poly variant", v.id);
+      const VariantContext context{section, lists, std::move(source), max_memory_bytes, parts};
       const std::size_t index = plan.variants.size();
       for (RendererKind r : section.renderers) add_renderer_jobs(context, r, v, index, plan);
       plan.variants.push_back(std::move(v));
@@ -218,12 +338,9 @@ Plan plan_study(const Study& study, double max_memory_bytes) {
                                  "(scenes x axis values x renderers x methods); split it",
                                  kMaxStudyRenders, count));
   Plan plan;
-  add_section(study, study.bump, plan);
-  if (study.lowpoly) add_section(study, *study.lowpoly, plan);
-  for (Job& job : plan.jobs) {
-    job.resources = estimate_resources(job.renderer, job.scene);
-    check_resources(job.resources, max_memory_bytes, job.origin);
-  }
+  plan.jobs.reserve(static_cast<std::size_t>(count));
+  add_section(study, study.bump, max_memory_bytes, plan);
+  if (study.lowpoly) add_section(study, *study.lowpoly, max_memory_bytes, plan);
   return plan;
 }
 
@@ -260,10 +377,10 @@ std::vector<std::string> axis_value_ids(const StudyAxis& axis) {
 
 std::string render_group_key(const Job& job) {
   if (job.renderer == RendererKind::kEvaluator &&
-      job.scene.representation == Representation::kDisplacement)
-    return "evaluator:" + displaced_mesh_key(job.scene);
+      job.representation == Representation::kDisplacement)
+    return "evaluator:" + displaced_mesh_key(job.scene());
   if (job.renderer != RendererKind::kBlender) return "";
-  json mesh = job.scene_json;
+  json mesh = job.scene_json();
   for (const char* part : {"light", "material", "terminator"}) mesh.erase(part);
   return "blender:" + mesh.dump();
 }

@@ -4,7 +4,10 @@
 // written or rendered.
 #pragma once
 
+#include <array>
 #include <cstddef>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +15,7 @@
 
 #include "renderers/renderers.h"
 #include "scene/scene.h"
+#include "scene/scene_json.h"
 #include "study/study_file.h"
 
 namespace penumbra {
@@ -20,18 +24,78 @@ namespace penumbra {
 // expansion (split them into several studies).
 inline constexpr long kMaxStudyRenders = 1000000;
 
+// Where the scenes of a variant's jobs come from: a document (a scene file
+// as read, shared by its variants, or a whole scene), the variant's
+// overrides, and the origin that error messages name. A study of 10^6
+// renders would otherwise hold 10^6 documents of a few KB each.
+struct SceneSource {
+  std::shared_ptr<const nlohmann::json> document;
+  // Relative map files are from its folder; empty: a whole scene, canonical.
+  std::string scene_file;
+  std::vector<Override> overrides;  // the study's set and the variant's axis values
+  std::string origin;               // "scenes/a.json (study s.json, variant v003)"
+};
+
+using OverrideList = std::shared_ptr<const std::vector<Override>>;
+
+// The fields of a scene that a section's method sets. The reader takes each
+// from its own keys (/representation, /terminator, /offset,
+// /shape/tessellation), so the rest of a scene reads the same for every method.
+struct MethodParts {
+  Representation representation = Representation::kBump;
+  TerminatorSettings terminator;
+  OffsetSettings offset;
+  std::optional<Tessellation> tessellation;
+};
+
+// What a job needs (ResourceEstimate without the explanation, which is only
+// read when a plan is refused, at planning).
+struct JobResources {
+  double memory_bytes = 0.0;
+  double output_bytes = 0.0;  // uncompressed EXR: the most the file can take
+  double triangles = 0.0;     // of the mesh the render builds (0: none)
+};
+JobResources job_resources(const ResourceEstimate& estimate);
+
 struct Job {
   std::size_t variant = 0;
   RendererKind renderer = RendererKind::kEvaluator;
   Representation representation = Representation::kBump;
-  bool truth = false;         // the section's ground truth (displacement, or the analytic surface)
-  std::string method;         // label: the method or offset, "none" or "analytic" for the truth
-  nlohmann::json scene_json;  // canonical: overrides applied, no name
-  Scene scene;
+  bool truth = false;  // the section's ground truth (displacement, or the analytic surface)
+  std::string method;  // label: the method or offset, "none" or "analytic" for the truth
   std::string label;   // "v003-blender-bump-chiang2019": file names, logs
-  std::string origin;  // the scene file and variant, for error messages
   std::string key;     // the cache key (RenderCache::assign_keys)
-  ResourceEstimate resources;
+  JobResources resources;
+
+  // The scene file and variant, for error messages.
+  const std::string& origin() const;
+  // The canonical scene: overrides applied, map files resolved, no name.
+  nlohmann::json scene_json() const;
+  // The scene as the reader gives it for scene_json().
+  Scene scene() const;
+
+  // A whole scene: `canonical` as scene_json() gives it, `scene` its reading.
+  void set_scene(nlohmann::json canonical, Scene scene, std::string origin);
+  // A planned scene: `source` with the method's and the renderer's overrides
+  // (null: none), read as `shared` (what every job of the source and renderer
+  // shares) with `parts`.
+  void set_scene(std::shared_ptr<const SceneSource> source, OverrideList method_overrides,
+                 OverrideList renderer_overrides, std::shared_ptr<const Scene> shared,
+                 std::shared_ptr<const MethodParts> parts);
+  // The scene with `settings` applied last (the ground truth's edge length
+  // and samples, which no method part depends on): read again and its
+  // resources estimated. `*shared` holds the shared part of jobs refined
+  // alike (null: this one's is taken); `shared` null: none is kept, and the
+  // scene is read again whenever asked for (checks, which render once).
+  void refine(OverrideList settings, std::shared_ptr<const Scene>* shared);
+
+ private:
+  nlohmann::json compose() const;
+
+  std::shared_ptr<const SceneSource> source_;
+  std::array<OverrideList, 3> overrides_;  // the method's, the renderer's, refine's
+  std::shared_ptr<const Scene> shared_;
+  std::shared_ptr<const MethodParts> parts_;
 };
 
 struct Variant {

@@ -94,9 +94,9 @@ MethodBatches::MethodBatches(const std::vector<Job>& jobs, const std::vector<std
   for (std::size_t i : todo) {
     const Job& job = jobs[i];
     if (job.renderer != RendererKind::kEvaluator || job.representation != Representation::kBump ||
-        !shares_samples(job.scene.terminator) || !keys.insert(job.key).second)
+        !shares_samples(job.scene().terminator) || !keys.insert(job.key).second)
       continue;
-    nlohmann::json scene = job.scene_json;
+    nlohmann::json scene = job.scene_json();
     scene.erase("terminator");
     groups[scene.dump()].push_back(i);
   }
@@ -134,9 +134,9 @@ std::optional<RendererRun> MethodBatches::take(const Job& job, const RenderSetti
   if (owner) {
     try {
       std::vector<TerminatorSettings> methods;
-      for (std::size_t i : batch.jobs) methods.push_back(jobs_[i].scene.terminator);
+      for (std::size_t i : batch.jobs) methods.push_back(jobs_[i].scene().terminator);
       promise.set_value(
-          render_evaluator_methods(jobs_[batch.jobs.front()].scene, methods, settings));
+          render_evaluator_methods(jobs_[batch.jobs.front()].scene(), methods, settings));
     } catch (...) {
       promise.set_exception(std::current_exception());
     }
@@ -178,7 +178,7 @@ Image render_into_cache(const Job& job, const RenderCache& cache, double timeout
   std::optional<RendererRun> shared;
   try {
     shared = batches ? batches->take(job, settings) : std::nullopt;
-    run = shared ? std::move(*shared) : render_with(job.renderer, job.scene, settings);
+    run = shared ? std::move(*shared) : render_with(job.renderer, job.scene(), settings);
   } catch (const RenderCancelled&) {
     throw TaskCancelled{};
   }
@@ -195,7 +195,7 @@ Image render_into_cache(const Job& job, const RenderCache& cache, double timeout
       {"penumbra:host", host_tag()},
       {"penumbra:renderer", to_string(job.renderer)},
       {"penumbra:renderer_version", renderers.versions.at(job.renderer)},
-      {"penumbra:scene", job.scene_json.dump()},
+      {"penumbra:scene", job.scene_json().dump()},
       {"penumbra:method", job.method},
       {"penumbra:representation", to_string(job.representation)},
       {"penumbra:radiance_unit", "W m^-2 sr^-1"}};

@@ -230,21 +230,21 @@ Columns key_columns(SectionKind kind) {
        [str](const CsvRow& r) {
          return str(r.c.reference_renderer == r.c.renderer ? "own" : "evaluator");
        }},
-      {"width_px", [](const CsvRow& r) { return count(r.test.scene.camera.width); }},
-      {"height_px", [](const CsvRow& r) { return count(r.test.scene.camera.height); }},
-      {"spp", [](const CsvRow& r) { return count(r.test.scene.camera.spp); }},
-      {"reference_spp", [](const CsvRow& r) { return count(r.reference.scene.camera.spp); }},
-      {"seed", [](const CsvRow& r) { return count(r.test.scene.camera.seed); }},
+      {"width_px", [](const CsvRow& r) { return count(r.test.scene().camera.width); }},
+      {"height_px", [](const CsvRow& r) { return count(r.test.scene().camera.height); }},
+      {"spp", [](const CsvRow& r) { return count(r.test.scene().camera.spp); }},
+      {"reference_spp", [](const CsvRow& r) { return count(r.reference.scene().camera.spp); }},
+      {"seed", [](const CsvRow& r) { return count(r.test.scene().camera.seed); }},
       {"light_elevation_deg",
-       [](const CsvRow& r) { return number(light_elevation_deg(r.test.scene)); }},
+       [](const CsvRow& r) { return number(light_elevation_deg(r.test.scene())); }},
       {"light_azimuth_deg",
-       [](const CsvRow& r) { return number(light_azimuth_deg(r.test.scene)); }},
+       [](const CsvRow& r) { return number(light_azimuth_deg(r.test.scene())); }},
       {"exr", [](const CsvRow& r) { return RenderCache::relative_exr(r.test.key); }},
       {"reference_exr",
        [](const CsvRow& r) { return RenderCache::relative_exr(r.reference.key); }}};
   if (kind == SectionKind::kLowPoly)
     out.push_back({"triangle_count", [](const CsvRow& r) {
-                     const Scene& s = r.test.scene;
+                     const Scene s = r.test.scene();
                      return s.tessellation
                                 ? count(tessellated_triangle_count(s.shape, *s.tessellation))
                                 : std::string();
@@ -516,10 +516,10 @@ json render_json(const ReportInputs& in, const RenderRow& r) {
     out["method"] = job.method;
   } else {
     out["offset"] = job.method;
-    out["triangles"] =
-        job.scene.tessellation
-            ? json(tessellated_triangle_count(job.scene.shape, *job.scene.tessellation))
-            : json();
+    const Scene scene = job.scene();
+    out["triangles"] = scene.tessellation
+                           ? json(tessellated_triangle_count(scene.shape, *scene.tessellation))
+                           : json();
   }
   return out;
 }

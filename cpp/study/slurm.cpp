@@ -47,9 +47,10 @@ std::string read_failure(const RenderCache& cache, const std::string& key) {
 // ---- batch files -------------------------------------------------------------------------
 
 json job_to_json(const Job& job) {
-  return {{"key", job.key},         {"label", job.label},     {"renderer", to_string(job.renderer)},
-          {"method", job.method},   {"origin", job.origin},   {"truth", job.truth},
-          {"variant", job.variant}, {"scene", job.scene_json}};
+  return {
+      {"key", job.key},         {"label", job.label},       {"renderer", to_string(job.renderer)},
+      {"method", job.method},   {"origin", job.origin()},   {"truth", job.truth},
+      {"variant", job.variant}, {"scene", job.scene_json()}};
 }
 
 json chain_to_json(const SlurmChain& c) {
@@ -414,15 +415,14 @@ Job job_from_json(const json& j, const std::string& file, const std::string& poi
   job.key = j.at("key");
   job.label = j.at("label");
   job.method = j.at("method");
-  job.origin = j.at("origin");
   job.truth = j.at("truth");
   job.variant = j.at("variant");
   const std::optional<RendererKind> r = renderer_from_id(j.at("renderer").get<std::string>());
   if (!r) throw InputError(file, pointer + "/renderer", "expected a renderer id");
   job.renderer = *r;
-  job.scene_json = j.at("scene");
-  job.scene = scene_from_json(job.scene_json, job.origin);
-  job.representation = job.scene.representation;
+  std::string origin = j.at("origin");
+  Scene scene = scene_from_json(j.at("scene"), origin);
+  job.set_scene(j.at("scene"), std::move(scene), std::move(origin));
   return job;
 }
 

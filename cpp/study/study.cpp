@@ -109,10 +109,12 @@ Order group_by_mesh(const std::vector<Job>& jobs, const std::vector<std::size_t>
     if (group == groups.end()) continue;  // placed with the first of its group
     std::vector<std::size_t>& members = group->second;
     const bool blender = jobs[members.front()].renderer == RendererKind::kBlender;
-    if (blender)
-      std::stable_sort(members.begin(), members.end(), [&](std::size_t a, std::size_t b) {
-        return jobs[a].scene_json["terminator"].dump() < jobs[b].scene_json["terminator"].dump();
-      });
+    if (blender) {
+      std::map<std::size_t, std::string> terminator;  // each member's, as text
+      for (std::size_t m : members) terminator[m] = jobs[m].scene_json()["terminator"].dump();
+      std::stable_sort(members.begin(), members.end(),
+                       [&](std::size_t a, std::size_t b) { return terminator[a] < terminator[b]; });
+    }
     for (std::size_t m = 0; m < members.size(); ++m) add(members[m], !blender || m == 0);
     groups.erase(group);
   }

@@ -505,8 +505,8 @@ TEST_F(ImageMaps, CacheKeysFollowTheMapsContentNotItsPath) {
   const std::string file = bake(path("h.exr"), MapKind::kHeight, 64);
   auto job_for = [&](const std::string& f) {
     Job job;
-    job.scene_json = {{"height", {{"type", "height-map"}, {"file", f}, {"amplitude", 1}}}};
-    job.scene = map_scene(job.scene_json["height"]);
+    const nlohmann::json height = {{"type", "height-map"}, {"file", f}, {"amplitude", 1}};
+    job.set_scene({{"height", height}}, map_scene(height), "test");
     return job;
   };
   std::filesystem::copy_file(file, path("moved.exr"));

@@ -96,7 +96,7 @@ class Convergence : public TempDirTest {
     return [this](const std::vector<Job>& jobs, const std::vector<ChainState>&,
                   std::vector<std::string>* errors) {
       std::vector<std::optional<Image>> out;
-      for (const Job& j : jobs) out.push_back(render(j.scene));
+      for (const Job& j : jobs) out.push_back(render(j.scene()));
       errors->assign(jobs.size(), "");
       renders += jobs.size();
       return out;
@@ -132,11 +132,11 @@ TEST_F(Convergence, StopsAtTheFirstSettingsWhoseChangesAreBelowTheTolerance) {
   for (std::size_t j : q.variants[0].jobs) {
     const Job& job = q.jobs[j];
     if (job.renderer == RendererKind::kEvaluator) {
-      EXPECT_EQ(job.scene.camera.spp, c.spp);
-      EXPECT_EQ(job.scene.displacement.edge_length, c.edge_length);
+      EXPECT_EQ(job.scene().camera.spp, c.spp);
+      EXPECT_EQ(job.scene().displacement.edge_length, c.edge_length);
     } else {
-      EXPECT_EQ(job.scene.camera.spp, 1);
-      EXPECT_EQ(job.scene.displacement.edge_length, 0.04);
+      EXPECT_EQ(job.scene().camera.spp, 1);
+      EXPECT_EQ(job.scene().displacement.edge_length, 0.04);
     }
   }
 }
@@ -155,7 +155,7 @@ TEST_F(Convergence, AChainContinuedElsewhereLeavesWhatTheRoundsNeed) {
                                           std::vector<std::string>* errors) {
     EXPECT_EQ(chains.size(), 1u);
     std::vector<std::optional<Image>> out;
-    for (const Job& j : jobs) out.push_back(rendered[j.scene_json.dump()] = render(j.scene));
+    for (const Job& j : jobs) out.push_back(rendered[j.scene_json().dump()] = render(j.scene()));
     errors->assign(jobs.size(), "");
     return out;
   };
@@ -164,7 +164,7 @@ TEST_F(Convergence, AChainContinuedElsewhereLeavesWhatTheRoundsNeed) {
                                     std::vector<std::string>* errors) {
     std::vector<std::optional<Image>> out;
     for (const Job& j : jobs) {
-      const auto it = rendered.find(j.scene_json.dump());
+      const auto it = rendered.find(j.scene_json().dump());
       missing += it == rendered.end();
       out.push_back(it == rendered.end() ? std::nullopt : std::optional<Image>(it->second));
     }
@@ -192,8 +192,8 @@ TEST_F(Convergence, AChainContinuedElsewhereLeavesWhatTheRoundsNeed) {
   // Continued from the second check's state, it has the steps from there on.
   const ConvergenceStep& second = rounds[0].steps[1];
   const int edge_steps =
-      int(std::lround(std::log2(truth.scene.displacement.edge_length / second.edge_length)));
-  const int spp_steps = int(std::lround(std::log2(second.spp / truth.scene.camera.spp) / 2));
+      int(std::lround(std::log2(truth.scene().displacement.edge_length / second.edge_length)));
+  const int spp_steps = int(std::lround(std::log2(second.spp / truth.scene().camera.spp) / 2));
   const VariantConvergence later =
       continue_chain(truth, edge_steps, spp_steps, tight, 8.0 * kGiB, kept_only);
   EXPECT_EQ(missing, 0u);
@@ -207,7 +207,7 @@ TEST_F(Convergence, AChainContinuedElsewhereLeavesWhatTheRoundsNeed) {
   for (std::size_t j : p.variants[0].jobs) {
     Job job = fresh.jobs[j];
     apply_convergence(job, chain);
-    EXPECT_EQ(job.scene_json, p.jobs[j].scene_json) << job.label;
+    EXPECT_EQ(job.scene_json(), p.jobs[j].scene_json()) << job.label;
   }
 }
 

@@ -109,7 +109,9 @@ TEST_F(Cost, TheConvergenceChecksArePricedFromTheirFirstRound) {
   Job truth = p.jobs[static_cast<std::size_t>(p.truth(0, RendererKind::kEvaluator))];
   Job finer = truth, more = truth;
   finer.resources.triangles *= 4;
-  more.scene.camera.spp *= 4;
+  more.refine(std::make_shared<const std::vector<Override>>(
+                  std::vector<Override>{{"/camera/spp", 4 * truth.scene().camera.spp}}),
+              nullptr);
   const CostEstimate none = estimate_cost(p, cache, std::vector<char>(p.jobs.size(), 1));
   const CostEstimate with =
       estimate_cost(p, cache, std::vector<char>(p.jobs.size(), 1), {finer, more});

@@ -626,7 +626,7 @@ TEST(ShippedStudies, EachPlansAndTheQuickStudyIsASampleOfTheDefault) {
   ASSERT_TRUE(plans.count("default") && plans.count("quick"));
   auto identity = [](const Job& j) {
     return fmt::format("{} {} {} {}", static_cast<int>(j.renderer),
-                       static_cast<int>(j.representation), j.method, j.scene_json.dump());
+                       static_cast<int>(j.representation), j.method, j.scene_json().dump());
   };
   std::set<std::string> in_default;
   for (const Job& j : plans.at("default").jobs) in_default.insert(identity(j));
