@@ -7,7 +7,7 @@
 namespace penumbra {
 namespace {
 
-constexpr std::array<NormalAdjustmentInfo, 8> kAdjustments{{
+constexpr std::array<NormalAdjustmentInfo, 9> kAdjustments{{
     {NormalAdjustment::kNone, "none", "-", "Ns as the bump makes it", true, true},
     {NormalAdjustment::kCycles34, "cycles34",
      "blender/cycles v3.4.0 (df60698dd147) src/kernel/closure/bsdf_util.h "
@@ -27,6 +27,12 @@ constexpr std::array<NormalAdjustmentInfo, 8> kAdjustments{{
      "the glossy lobe's normal Nc as cycles-glossy; each lobe dropped where "
      "<Ni,wi><Ni,Nc><Nc,wi> < 0 with its own normal Nc (Ns for the diffuse lobe)",
      true, false},
+    {NormalAdjustment::kCycles50NoCorrection, "cycles50-no-correction",
+     "blender/cycles 3b1e329ac808 src/kernel/closure/bsdf.h bump_shadowing_term (the hemisphere "
+     "test before the SD_USE_BUMP_MAP_CORRECTION return) and bsdf_util.h "
+     "maybe_ensure_valid_specular_reflection (N unchanged without that flag)",
+     "Ns unchanged on every lobe; each lobe dropped where <Ni,wi><Ni,Ns><Ns,wi> < 0", true,
+     false},
     {NormalAdjustment::kMitsuba3Flip, "mitsuba3-flip",
      "mitsuba-renderer/mitsuba3 e32d71807c2c src/bsdfs/normalmap_helpers.h "
      "(flip_invalid_normals), normalmap.cpp, bumpmap.cpp",
@@ -213,6 +219,11 @@ AdjustedNormals adjust_normal(NormalAdjustment adjustment, const AdjustVectors& 
       out.ns_specular = cycles_valid_specular_normal(v.ng, v.wo, v.ns);
       out.reject_diffuse = cycles_hemisphere_rejects(v.ni, v.ns, v.wi);
       out.reject_specular = cycles_hemisphere_rejects(v.ni, out.ns_specular, v.wi);
+      break;
+    case NormalAdjustment::kCycles50NoCorrection:
+      // Without the material's flag every closure keeps N = Ns, and the
+      // hemisphere test still runs before bump_shadowing_term returns 1.
+      out.reject_diffuse = out.reject_specular = cycles_hemisphere_rejects(v.ni, v.ns, v.wi);
       break;
     case NormalAdjustment::kMitsuba3Flip:
       out.ns_diffuse = out.ns_specular = mitsuba3_flipped_normal(v.ni, v.ns, v.wo);

@@ -23,6 +23,7 @@ enum class NormalAdjustment {
   kCycles34,
   kCyclesGlossy,
   kCycles50,
+  kCycles50NoCorrection,
   kMitsuba3Flip,
   kIray2017,
   kUnityHdrp,

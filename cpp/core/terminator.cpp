@@ -13,7 +13,7 @@ constexpr std::array<MethodParameter, 1> kShadingOffsetParameters{{
      "f = 1/(1 - s/2)"},
 }};
 
-constexpr std::array<MethodInfo, 21> kMethods{{
+constexpr std::array<MethodInfo, 22> kMethods{{
     {TerminatorMethod::kNone,
      "none",
      "-",
@@ -124,6 +124,22 @@ constexpr std::array<MethodInfo, 21> kMethods{{
      {},
      MethodKind::kFactorAndAdjustment,
      NormalAdjustment::kCycles50,
+     FactorLobes::kDiffuse,
+     true,
+     true,
+     ""},
+    {TerminatorMethod::kCycles50NoCorrection,
+     "cycles50-no-correction",
+     "Blender Cycles 5.0+ with the material's Bump Map Correction off (use_bump_map_correction, "
+     "Blender 4.2+, blender/blender cb94c5b83, PR 113480): blender/cycles 3b1e329ac808 "
+     "src/kernel/closure/bsdf.h bump_shadowing_term and bsdf_util.h "
+     "maybe_ensure_valid_specular_reflection, both returning early without "
+     "SD_USE_BUMP_MAP_CORRECTION",
+     "no softening term and no glossy normal adjustment; the hemisphere test "
+     "<Ni,wi><Ni,Ns><Ns,wi> < 0 kept on every lobe (the cycles50-no-correction adjustment)",
+     {},
+     MethodKind::kAdjustment,
+     NormalAdjustment::kCycles50NoCorrection,
      FactorLobes::kDiffuse,
      true,
      true,
@@ -445,6 +461,7 @@ double terminator_factor(const MethodSettings& settings, const Vec3& ng, const V
       return cycles45_conty(ng, ns, wi);
     case TerminatorMethod::kMitsuba3:
       return mitsuba3_conty(ng, ns, wi);
+    case TerminatorMethod::kCycles50NoCorrection:
     case TerminatorMethod::kMitsuba3Flip:
     case TerminatorMethod::kIray2017:
     case TerminatorMethod::kUnityHdrp:

@@ -37,6 +37,7 @@ enum class TerminatorMethod {
   kCycles34,
   kCycles45,
   kCycles50,
+  kCycles50NoCorrection,
   kMitsuba3,
   kMitsuba3Flip,
   kIray2017,

@@ -29,7 +29,7 @@ Vec3 mirror(const Vec3& w, const Vec3& n) {
 }
 
 TEST(NormalAdjust, TableIsCompleteAndIdsRoundTrip) {
-  EXPECT_EQ(all_normal_adjustments().size(), 8u);
+  EXPECT_EQ(all_normal_adjustments().size(), 9u);
   for (const NormalAdjustmentInfo& info : all_normal_adjustments()) {
     EXPECT_EQ(normal_adjustment_from_id(info.id), info.adjustment);
     EXPECT_EQ(&normal_adjustment_info(info.adjustment), &info);
@@ -233,6 +233,29 @@ TEST(NormalAdjust, Cycles50RejectsEachLobeAsTheSourceDoes) {
     if (cycles50_source_drops(v.ni, n.diffuse, v.wi) && !a.reject_specular) ++glossy_kept_below_ns;
   }
   EXPECT_GT(glossy_kept_below_ns, 100);
+}
+
+// Bump Map Correction off (the material's use_bump_map_correction,
+// Blender 4.2+): maybe_ensure_valid_specular_reflection returns N unchanged
+// without SD_USE_BUMP_MAP_CORRECTION (bsdf_util.h, same commit), so every
+// closure's N is Ns, and bump_shadowing_term still runs its hemisphere test
+// before the flag's early return. Each lobe is dropped exactly where the
+// source drops a closure whose N is Ns.
+TEST(NormalAdjust, Cycles50WithoutCorrectionKeepsNsAndTestsEveryLobeWithIt) {
+  Pcg32 rng(51);
+  int dropped = 0;
+  for (int i = 0; i < 200'000; ++i) {
+    const Vec3 ni = random_unit(rng);
+    const AdjustVectors v{ni, ni, upper(rng, ni), random_unit(rng), upper(rng, ni)};
+    const AdjustedNormals a = adjust_normal(NormalAdjustment::kCycles50NoCorrection, v);
+    ASSERT_EQ(a.ns_diffuse, v.ns) << i;
+    ASSERT_EQ(a.ns_specular, v.ns) << i;
+    const bool drops = cycles50_source_drops(v.ni, v.ns, v.wi);
+    ASSERT_EQ(a.reject_diffuse, drops) << i;
+    ASSERT_EQ(a.reject_specular, drops) << i;
+    dropped += drops;
+  }
+  EXPECT_GT(dropped, 1000);
 }
 
 TEST(NormalAdjust, UnitAndFiniteOnRandomAndDegenerateInputs) {

@@ -77,6 +77,31 @@ TEST(Shade, Cycles50KeepsTheGlossyLobeAboveItsOwnNormal) {
               1e-14);
 }
 
+// The same point with Bump Map Correction off: the glossy closure keeps Ns,
+// so the light below Ns drops both lobes; where the test passes, no
+// softening term scales the diffuse lobe (bump_shadowing_term returns 1
+// without SD_USE_BUMP_MAP_CORRECTION): raw bump's value exactly.
+TEST(Shade, Cycles50WithoutCorrectionDropsBothLobesAndNeverSoftens) {
+  const Material m = glossy();
+  const ShadingPoint p{kZ, kZ, in_plane(40.0 * kPi / 180.0), in_plane(-60.0 * kPi / 180.0),
+                       in_plane(-88.0 * kPi / 180.0)};
+  EXPECT_EQ(shade(settings_for(TerminatorMethod::kCycles50NoCorrection), m, p, nullptr).value,
+            0.0);
+  Pcg32 rng(52);
+  int compared = 0;
+  for (int i = 0; i < 20'000; ++i) {
+    const ShadingPoint q{kZ, kZ, random_unit(rng), random_unit(rng), random_unit(rng)};
+    if (q.ns.z <= 0.0 || q.wo.z <= 0.0 || dot(q.ns, q.wo) <= 0.0) continue;
+    if (cycles_hemisphere_rejects(kZ, q.ns, q.wi)) continue;
+    const double raw = shade(settings_for(TerminatorMethod::kNone), m, q, nullptr).value;
+    EXPECT_EQ(shade(settings_for(TerminatorMethod::kCycles50NoCorrection), m, q, nullptr).value,
+              raw)
+        << i;
+    compared += raw > 0.0;
+  }
+  EXPECT_GT(compared, 1000);
+}
+
 // With Ns == Ng every method is the plain BSDF, except the two documented
 // exceptions (deshmukh2020, shading-offset with s > 0).
 TEST(Shade, EveryMethodIsThePlainBsdfWithoutDeviation) {
