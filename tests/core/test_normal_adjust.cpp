@@ -217,6 +217,13 @@ TEST(NormalAdjust, Cycles50TestsEachClosureWithItsOwnNormal) {
   EXPECT_FALSE(a.reject_specular);
 }
 
+// A smooth frame Ni = Ng, a bump Ns and a viewer above it, any light.
+AdjustVectors random_bumped_frame(Pcg32& rng) {
+  const Vec3 ni = random_unit(rng);
+  const Vec3 ns = upper(rng, ni), wi = random_unit(rng), wo = upper(rng, ni);
+  return {ni, ni, ns, wi, wo};
+}
+
 // The same rule on random bumped frames: each lobe is dropped exactly where
 // the source drops its closure, and the sweep does reach the case where the
 // glossy normal decides otherwise than Ns.
@@ -224,8 +231,7 @@ TEST(NormalAdjust, Cycles50RejectsEachLobeAsTheSourceDoes) {
   Pcg32 rng(50);
   int glossy_kept_below_ns = 0;
   for (int i = 0; i < 200'000; ++i) {
-    const Vec3 ni = random_unit(rng);
-    const AdjustVectors v{ni, ni, upper(rng, ni), random_unit(rng), upper(rng, ni)};
+    const AdjustVectors v = random_bumped_frame(rng);
     const CyclesClosureNormals n = cycles50_closure_normals(v);
     const AdjustedNormals a = adjust_normal(NormalAdjustment::kCycles50, v);
     ASSERT_EQ(a.reject_diffuse, cycles50_source_drops(v.ni, n.diffuse, v.wi)) << i;
@@ -245,8 +251,7 @@ TEST(NormalAdjust, Cycles50WithoutCorrectionKeepsNsAndTestsEveryLobeWithIt) {
   Pcg32 rng(51);
   int dropped = 0;
   for (int i = 0; i < 200'000; ++i) {
-    const Vec3 ni = random_unit(rng);
-    const AdjustVectors v{ni, ni, upper(rng, ni), random_unit(rng), upper(rng, ni)};
+    const AdjustVectors v = random_bumped_frame(rng);
     const AdjustedNormals a = adjust_normal(NormalAdjustment::kCycles50NoCorrection, v);
     ASSERT_EQ(a.ns_diffuse, v.ns) << i;
     ASSERT_EQ(a.ns_specular, v.ns) << i;
