@@ -158,12 +158,20 @@ def render(scene, *, method=None, width=None, height=None, spp=None, representat
     ``penumbra render SCENE -o out.exr`` with the same options; the image is
     the same whatever ``threads`` (0: all cores).
 
-    scene     a scene file path or a dict (see ``load_scene``)
-    method, width, height, spp, representation, set
-              as ``load_scene`` (``penumbra render``'s shortcuts and --set)
-    renderer  "evaluator" (default), "povray" or "blender"
+    scene           a scene file path or a dict (see ``load_scene``)
+    method          terminator method id (``pn.methods()``), /terminator/method
+    width, height   image size in pixels, integers >= 1 (/camera/width, /camera/height)
+    spp             samples per pixel, integer >= 1 (/camera/spp)
+    representation  "smooth", "bump" or "displacement" (the ground truth)
+    set             ``{"/json/pointer": value}`` or ``["POINTER=VALUE", ...]``, as --set
+    renderer        "evaluator" (default), "povray" or "blender"
+    threads         worker threads, 0 for all cores; the GIL is released meanwhile
 
-    Raises SceneError for a bad scene, RuntimeError when the renderer fails.
+    Returns a ``Render``: ``img["R"]`` etc., (height, width) float32 arrays;
+    R, G, B radiance in W m^-2 sr^-1, A coverage in [0, 1], analysis.theta,
+    analysis.deviation, analysis.view in degrees, analysis.G the factor
+    (dimensionless). Raises SceneError for a bad scene (the CLI's exit-2
+    message), RuntimeError when the renderer fails.
     """
     path, document = _scene_source(scene)
     options = _scene_options(method, width, height, spp, representation, set)
