@@ -6,6 +6,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <tbb/global_control.h>
 
 #include <memory>
 #include <sstream>
@@ -129,10 +130,15 @@ py::tuple render_arrays(const std::string& path, const std::string& document_jso
   const LoadedScene loaded = load(path, document_json, options);
   check_offered(*renderer, loaded.scene);
   RenderSettings settings;
-  settings.threads = threads;
+  settings.threads = threads;  // external renderers
   RendererRun run;
   {
     py::gil_scoped_release release;
+    // The evaluator's limit, as the command line's --threads sets it (cli.cpp).
+    std::unique_ptr<tbb::global_control> limit;
+    if (threads > 0)
+      limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    std::size_t(threads));
     run = render_with(*renderer, loaded.scene, settings);
   }
   const py::tuple image = image_to_python(std::move(run.image));
