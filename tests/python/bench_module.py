@@ -1,6 +1,6 @@
 """The module's costs, measured in one run on this machine (docs/python.md).
 
-  PYTHONPATH=build/python /usr/bin/python3 python/bench.py [--threads 2]
+  PYTHONPATH=build/python /usr/bin/python3 tests/python/bench_module.py [--threads 2]
 
 1. pn.render against `penumbra render` of the same scene (the binary in
    the build folder), best of 3 each, the image's bits checked equal.
@@ -21,7 +21,7 @@ import numpy as np
 import penumbra as pn
 from penumbra import _build
 
-SCENE = os.path.join(os.path.dirname(__file__), "..", "scenes", "cylinder-grating.json")
+SCENE = os.path.join(os.path.dirname(__file__), "..", "..", "scenes", "cylinder-grating.json")
 
 
 def best(f, repeat=3):
