@@ -97,6 +97,17 @@ struct LoadedScene {
   Scene scene;
 };
 LoadedScene read_scene(const std::string& path, const SceneArgs& a);
+// The same for a document already read from `path` (the Python module's
+// scenes as dicts; `path` resolves relative map files and names the origin).
+LoadedScene read_scene_document(nlohmann::json document, const std::string& path,
+                                const SceneArgs& a);
+
+// The EXR attributes `penumbra render` writes with a render of `loaded`.
+std::vector<std::pair<std::string, std::string>> render_attributes(const LoadedScene& loaded,
+                                                                   RendererKind renderer);
+
+// `penumbra methods --json`: every method, adjustment, offset and filter.
+nlohmann::json methods_json();
 
 // Refuses, before anything runs, a method or offset the renderer does not
 // ship (the exporters refuse them too, but only after the mesh is built).

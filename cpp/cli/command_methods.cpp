@@ -52,6 +52,8 @@ std::string method_family_text(const MethodInfo& m) {
   return "";
 }
 
+}  // namespace
+
 json methods_json() {
   json list = json::array();
   for (const MethodInfo& m : all_methods())
@@ -90,6 +92,8 @@ json methods_json() {
                                                          : "bump and roughness pyramid"}});
   return list;
 }
+
+namespace {
 
 // "-", or the domain of the last parameter (every method has at most one).
 std::string parameters_text(std::span<const MethodParameter> parameters) {

@@ -78,8 +78,12 @@ std::vector<Override> collect_overrides(const SceneArgs& a) {
 }  // namespace
 
 LoadedScene read_scene(const std::string& path, const SceneArgs& a) {
+  return read_scene_document(read_json_file(path), path, a);
+}
+
+LoadedScene read_scene_document(nlohmann::json document, const std::string& path,
+                                const SceneArgs& a) {
   const std::vector<Override> overrides = collect_overrides(a);
-  nlohmann::json document = read_json_file(path);
   const std::string origin = overrides.empty() ? path : path + " (after --set)";
   apply_overrides(document, overrides, origin);
   resolve_map_files(document, path);  // after --set: its /height/file too

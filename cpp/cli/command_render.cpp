@@ -141,20 +141,25 @@ int render(const RenderArgs& a, const CommandContext& c) {
   const RendererRun run = render_with(*renderer, scene, settings);
   progress.finish();
 
-  write_exr(run.image, a.output,
-            {{"penumbra:version", kPenumbraVersion},
-             {"penumbra:renderer", to_string(*renderer)},
-             {"penumbra:scene", loaded.document.dump()},
-             {"penumbra:method", std::string(method_info(scene.terminator.method.method).id)},
-             {"penumbra:offset", std::string(offset_method_info(scene.offset.method).id)},
-             {"penumbra:representation", to_string(scene.representation)},
-             {"penumbra:radiance_unit", "W m^-2 sr^-1"}});
+  write_exr(run.image, a.output, render_attributes(loaded, *renderer));
   if (!a.preview.empty()) write_preview_png(run.image, a.preview);
   if (!a.quiet) print_summary(a, *renderer, scene, run, c.out);
   return kExitOk;
 }
 
 }  // namespace
+
+std::vector<std::pair<std::string, std::string>> render_attributes(const LoadedScene& loaded,
+                                                                   RendererKind renderer) {
+  const Scene& scene = loaded.scene;
+  return {{"penumbra:version", kPenumbraVersion},
+          {"penumbra:renderer", to_string(renderer)},
+          {"penumbra:scene", loaded.document.dump()},
+          {"penumbra:method", std::string(method_info(scene.terminator.method.method).id)},
+          {"penumbra:offset", std::string(offset_method_info(scene.offset.method).id)},
+          {"penumbra:representation", to_string(scene.representation)},
+          {"penumbra:radiance_unit", "W m^-2 sr^-1"}};
+}
 
 Command add_render_command(CLI::App& app, SharedOptions&) {
   auto a = std::make_shared<RenderArgs>();

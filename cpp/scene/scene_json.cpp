@@ -462,6 +462,10 @@ void check_maps(const Scene& s, const std::string& origin) {
 
 }  // namespace
 
+TerminatorSettings terminator_from_json(const json& j, const std::string& origin) {
+  return read_terminator(Reader(j, "/terminator", origin));
+}
+
 void resolve_map_files(json& document, const std::string& scene_path) {
   for (const char* pointer : {"/height/file", "/terminator/parameters/table"}) {
     const json::json_pointer file(pointer);

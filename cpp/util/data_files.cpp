@@ -8,6 +8,7 @@ namespace penumbra {
 namespace fs = std::filesystem;
 
 std::string executable_folder() {
+  if (const char* dir = std::getenv("PENUMBRA_EXECUTABLE_DIR"); dir && *dir) return dir;
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   return ec ? std::string(".") : exe.parent_path().string();

@@ -4,7 +4,9 @@
 // and a `cmake --install` prefix both work:
 //   <dir of the executable>/share/penumbra/RELATIVE      (build folder)
 //   <dir of the executable>/../share/penumbra/RELATIVE   (installed: bin/, share/)
-// PENUMBRA_DATA_DIR, when set, is looked in first.
+// PENUMBRA_DATA_DIR, when set, is looked in first. A process that is not
+// the penumbra binary (the Python module, python/) sets
+// PENUMBRA_EXECUTABLE_DIR to the folder the binary lies in.
 #pragma once
 
 #include <string>
@@ -15,7 +17,8 @@ namespace penumbra {
 // candidate when none exists (the caller reports it as missing).
 std::string data_file(const std::string& relative);
 
-// The folder of the running executable (from /proc/self/exe).
+// The folder of the running executable (from /proc/self/exe), or
+// PENUMBRA_EXECUTABLE_DIR when set.
 std::string executable_folder();
 
 }  // namespace penumbra

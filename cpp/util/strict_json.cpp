@@ -155,7 +155,8 @@ InputError::InputError(const std::string& file, const std::string& pointer,
                                                        printable(pointer, kMaxPointerChars),
                                                        printable(message, kMaxMessageChars))),
       file_(file),
-      pointer_(pointer) {}
+      pointer_(pointer),
+      reason_(message) {}
 
 std::string printable(std::string_view text, std::size_t max_chars) {
   std::string out;

@@ -31,9 +31,12 @@ class InputError : public std::runtime_error {
   InputError(const std::string& file, const std::string& pointer, const std::string& message);
   const std::string& file() const { return file_; }
   const std::string& pointer() const { return pointer_; }
+  // What was expected, without the file and pointer (the Python module's
+  // SceneError carries the three apart).
+  const std::string& reason() const { return reason_; }
 
  private:
-  std::string file_, pointer_;
+  std::string file_, pointer_, reason_;
 };
 
 // `text` with control characters, DEL and bytes that are not UTF-8 written as
