@@ -5,9 +5,12 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
+#include "image/image_io.h"
 #include "study/fit.h"
 #include "study/study.h"
 #include "study_options.h"
@@ -105,6 +108,87 @@ TEST_F(Fit, RefittingEstevez2019OnItsOwnTermRecoversItsConstant) {
       synthetic.push_back({v.id, v.data.tally, v.data.tally.profile(estevez2019_table(r.grid, k))});
     EXPECT_NEAR(fit_estevez2019_k(synthetic, r.grid) / k, 1.0, 2e-3) << k;
   }
+}
+
+// The fitted method in a study: its table named relative to the study file,
+// rendered as the table says (a table of constants 0.5 halves a Lambertian
+// raw-bump render exactly: Tally.FittedTablesOfConstantsAreExact), entered in
+// the cache key by content: editing the table re-renders that job alone;
+// the same content under another name renders nothing.
+class FittedStudy : public TempDirTest {
+ protected:
+  void write_table(const std::string& name, double g) const {
+    std::filesystem::create_directories(path("tables"));
+    const json table{
+        {"grid",
+         {{{"input", "light"}, {"min_deg", 0}, {"max_deg", 90}, {"step_deg", 30}},
+          {{"input", "deviation"}, {"min_deg", 0}, {"max_deg", 60}, {"step_deg", 30}}}},
+        {"values", json::array({g, g, g, g, g, g})}};
+    std::ofstream(path("tables/" + name)) << table.dump();
+  }
+  StudyRunStats run(const std::string& table) const {
+    const json study{{"version", 1},
+                     {"name", "fitted"},
+                     {"scenes", {kSource + "/scenes/sphere-grating.json"}},
+                     {"set", {{"/camera/width", 16}, {"/camera/height", 16}, {"/camera/spp", 1}}},
+                     {"methods", {"none", {{"id", "fitted"}, {"parameters", {{"table", table}}}}}},
+                     {"renderers", {"evaluator"}},
+                     {"ground_truth", {{"max_edge_refinements", 0}, {"max_spp_refinements", 0}}}};
+    std::ofstream(path("study.json")) << study.dump();
+    StudyOptions o = test_study_options(path("out"));
+    o.fit = false;
+    const StudyRunStats stats = run_study(load_study(path("study.json")), o);
+    EXPECT_TRUE(stats.complete());
+    return stats;
+  }
+  // The bump renders of the study by method, read from the cache entries
+  // metrics.csv names.
+  std::map<std::string, Image> bump_renders() const {
+    std::ifstream csv(path("out/metrics.csv"));
+    std::string line;
+    std::getline(csv, line);
+    std::vector<std::string> header;
+    std::stringstream h(line);
+    for (std::string cell; std::getline(h, cell, ',');) header.push_back(cell);
+    const auto column = [&](const std::string& name) {
+      return std::size_t(std::find(header.begin(), header.end(), name) - header.begin());
+    };
+    std::map<std::string, Image> out;
+    while (std::getline(csv, line)) {
+      std::vector<std::string> cells;
+      std::stringstream row(line);
+      for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+      if (cells.at(column("representation")) == "bump")
+        out[cells.at(column("method"))] = read_image(path("out/" + cells.at(column("exr"))));
+    }
+    return out;
+  }
+};
+
+TEST_F(FittedStudy, RendersItsTableAndReRendersWhenTheTableChanges) {
+  write_table("half.json", 0.5);
+  run("tables/half.json");
+  std::map<std::string, Image> renders = bump_renders();
+  ASSERT_EQ(renders.size(), 2u);
+  const Image& none = renders.at("none");
+  const Image& fitted = renders.at("fitted");
+  ASSERT_EQ(none.pixels.size(), fitted.pixels.size());
+  int lit = 0;
+  for (int y = 0; y < none.height; ++y)
+    for (int x = 0; x < none.width; ++x) {
+      const float raw = none.at(x, y, 0);
+      EXPECT_EQ(fitted.at(x, y, 0), 0.5f * raw) << x << " " << y;
+      lit += raw > 0.0f;
+    }
+  EXPECT_GT(lit, 20);
+
+  write_table("half.json", 1.0);  // edited in place: only the fitted job renders again
+  EXPECT_EQ(run("tables/half.json").rendered, 1u);
+  renders = bump_renders();
+  EXPECT_EQ(renders.at("fitted").pixels, renders.at("none").pixels);
+
+  write_table("copy.json", 1.0);  // the same content under another name
+  EXPECT_EQ(run("tables/copy.json").rendered, 0u);
 }
 
 }  // namespace
