@@ -212,6 +212,18 @@ StudyOptions study_options(const RunArgs& a, const Study& study, const CommandCo
   return o;
 }
 
+// The run's wall time against the least its renders allow on the cores
+// they had (issue 45's efficiency figure); what is left is the fit, the
+// comparisons, the figures and the waiting.
+void print_efficiency(const StudyRunStats& stats, int cores, std::ostream& out) {
+  if (stats.render_core_seconds <= 0.0 || cores < 1) return;
+  const double bound = stats.render_core_seconds / cores;
+  out << fmt::format(
+      "time: renders {:.1f} core-s on {} cores (at least {:.1f} s of wall time), the run {:.1f} s: "
+      "{:.2f}x that bound (the fit {:.1f} s; comparisons, figures and waiting make the rest)\n",
+      stats.render_core_seconds, cores, bound, stats.seconds, stats.seconds / bound, stats.fit_s);
+}
+
 int run(const RunArgs& a, const CommandContext& c) {
   // A study writes PNG previews after its renders: a missing image module
   // (a binary copied without lib/penumbra/) is found now, not mid-run.
@@ -232,6 +244,7 @@ int run(const RunArgs& a, const CommandContext& c) {
       study.name, stats.renders, stats.rendered, stats.cached, stats.failed, stats.not_started,
       stats.seconds);
   for (const std::string& f : stats.failures) c.out << "  failed: " << f << "\n";
+  print_efficiency(stats, o.parallelism.threads(), c.out);
   if (stats.slurm && stats.not_started > 0)
     return print_submission(*stats.slurm, o.output_dir, c.out);
   if (stats.not_started > 0) {

@@ -25,19 +25,20 @@ class LocalExecutor : public Executor {
     if (options_.log && batches.batches() > 0)
       options_.log(fmt::format("{} of them in {} passes that render several methods of one variant",
                                batches.members(), batches.batches()));
+    std::vector<double> core_seconds(todo.size(), 0.0);  // one slot per task: no lock
     const ExecuteResult result = execute_tasks(
         todo.size(), execute_options(round),
         [&](std::size_t t) {
-          r.images.images[todo[t]] =
-              render_into_cache(jobs[todo[t]], round.cache, options_.timeout_s,
-                                options_.parallelism.threads_per_render, round.renderers, &batches);
+          r.images.images[todo[t]] = render_into_cache(
+              jobs[todo[t]], round.cache, options_.timeout_s,
+              options_.parallelism.threads_per_render, round.renderers, &batches, &core_seconds[t]);
         },
         [&](std::size_t t) { return jobs[todo[t]].label; });
     for (std::size_t t = 0; t < todo.size(); ++t) {
       const std::size_t i = todo[t];
       r.images.done[i] = result.done[t], r.attempted[i] = result.attempted[t];
       r.errors[i] = result.errors[t];
-      if (result.done[t]) ++stats.rendered;
+      if (result.done[t]) ++stats.rendered, stats.render_core_seconds += core_seconds[t];
       if (result.attempted[t] && !result.done[t]) count_failure(jobs[i], r.errors[i], stats);
     }
   }

@@ -157,7 +157,7 @@ std::optional<RendererRun> MethodBatches::take(const Job& job, const RenderSetti
 }
 
 Image render_into_cache(const Job& job, const RenderCache& cache, double timeout_s, int threads,
-                        const Renderers& renderers, MethodBatches* batches) {
+                        const Renderers& renderers, MethodBatches* batches, double* core_seconds) {
   if (const auto missing = renderers.unavailable.find(job.renderer);
       missing != renderers.unavailable.end())
     throw RendererError(missing->second);
@@ -186,12 +186,14 @@ Image render_into_cache(const Job& job, const RenderCache& cache, double timeout
   const double wall_seconds =
       shared ? run.seconds
              : std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const unsigned used_threads = threads > 0 && !shared
+                                    ? static_cast<unsigned>(threads)
+                                    : std::max(1u, std::thread::hardware_concurrency());
+  if (core_seconds) *core_seconds = wall_seconds * used_threads;
   std::vector<std::pair<std::string, std::string>> attributes{
       {"penumbra:version", kPenumbraVersion},
       {kCostWallAttribute, fmt::format("{:.3f}", wall_seconds)},
-      {kCostThreadsAttribute,
-       std::to_string(threads > 0 && !shared ? threads
-                                             : std::max(1u, std::thread::hardware_concurrency()))},
+      {kCostThreadsAttribute, std::to_string(used_threads)},
       {"penumbra:host", host_tag()},
       {"penumbra:renderer", to_string(job.renderer)},
       {"penumbra:renderer_version", renderers.versions.at(job.renderer)},

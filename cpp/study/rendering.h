@@ -63,8 +63,11 @@ class MethodBatches {
 // Renders `job` with `threads` threads and writes it into the cache; returns
 // the image. Throws RendererError (or ExportError), TaskCancelled when
 // interrupted. With `batches`, a job in a batch takes its image from the
-// batch's shared pass.
+// batch's shared pass. `core_seconds`, when given, receives the render's cost
+// as its cache entry records it: wall seconds times threads (a batch
+// member: its share of the pass).
 Image render_into_cache(const Job& job, const RenderCache& cache, double timeout_s, int threads,
-                        const Renderers& renderers, MethodBatches* batches = nullptr);
+                        const Renderers& renderers, MethodBatches* batches = nullptr,
+                        double* core_seconds = nullptr);
 
 }  // namespace penumbra

@@ -64,6 +64,10 @@ struct StudyRunStats {
   std::size_t not_started = 0;        // interrupted or --max-renders
   std::vector<std::string> failures;  // "label: error"
   double seconds = 0.0;
+  // The renders this run did on this machine (local executor; ground-truth
+  // checks included): wall seconds times threads, as their cache entries
+  // record; with the cores they had, the least wall time they allow.
+  double render_core_seconds = 0.0;
   std::string report_html;                     // path, when written
   std::map<std::string, std::size_t> planned;  // dry run: renders per renderer
   // Dry run: ground-truth convergence checks the cache lacks, in the rounds

@@ -442,6 +442,30 @@ TEST_F(Study, LowPolyStudyComparesEveryOffsetWithTheAnalyticSurface) {
 
 // The bump section's keys in a study without its scenes would sweep
 // nothing: refused as unused, naming the key.
+// The efficiency figure's render cost (StudyRunStats::render_core_seconds)
+// is what the cache entries this run wrote record: wall seconds times
+// threads, summed, within the rounding of their 3-decimal wall seconds.
+TEST_F(Study, RenderCostIsTheSumOfWhatTheNewCacheEntriesRecord) {
+  const StudyRunStats stats =
+      run_study(load_study(write("cost.json", tiny_evaluator("chiang2019"))),
+                test_study_options(path("out")));
+  ASSERT_TRUE(stats.complete());
+  double recorded = 0.0, rounding = 0.0;
+  std::size_t entries = 0;
+  for (const fs::directory_entry& e : fs::directory_iterator(path("out/cache"))) {
+    if (e.path().extension() != ".exr") continue;
+    std::map<std::string, std::string> attributes;
+    read_image(e.path().string(), &attributes);
+    const double threads = std::stod(attributes.at("penumbra:threads"));
+    recorded += std::stod(attributes.at("penumbra:wall_seconds")) * threads;
+    rounding += 0.0005 * threads;
+    ++entries;
+  }
+  ASSERT_EQ(entries, stats.rendered);  // a fresh folder: every entry is this run's
+  EXPECT_GT(stats.render_core_seconds, 0.0);
+  EXPECT_NEAR(stats.render_core_seconds, recorded, rounding);
+}
+
 TEST_F(Study, BumpKeysWithoutScenesAreUnused) {
   const json lowpoly_only = {
       {"version", 1},
