@@ -40,7 +40,7 @@ const std::string& Job::origin() const {
 }
 
 // The document with its name (the reader keeps the name).
-json Job::compose() const {
+json Job::document() const {
   json doc = *source_->document;
   apply_overrides(doc, source_->overrides, source_->origin);
   for (const OverrideList& list : overrides_)
@@ -50,13 +50,13 @@ json Job::compose() const {
 }
 
 json Job::scene_json() const {
-  json doc = compose();
+  json doc = document();
   if (!source_->scene_file.empty()) doc.erase("name");  // a name is not content
   return doc;
 }
 
 Scene Job::scene() const {
-  if (!shared_) return scene_from_json(compose(), source_->origin);
+  if (!shared_) return scene_from_json(document(), source_->origin);
   Scene s = *shared_;
   s.representation = parts_->representation;
   s.terminator = parts_->terminator;
@@ -95,7 +95,7 @@ void Job::set_scene(std::shared_ptr<const SceneSource> source, OverrideList meth
 
 void Job::refine(OverrideList settings, std::shared_ptr<const Scene>* shared) {
   overrides_[2] = std::move(settings);
-  Scene s = scene_from_json(compose(), source_->origin);
+  Scene s = scene_from_json(document(), source_->origin);
   resources = job_resources(estimate_resources(renderer, s));
   if (!shared) {
     shared_ = nullptr;
@@ -257,9 +257,10 @@ void add_job(const VariantContext& c, RendererKind r, std::optional<std::size_t>
   job.truth = !m;
   const StudyMethod* method = m ? &c.section.methods[*m] : nullptr;
   job.method = method ? method->label : c.section.kind == SectionKind::kBump ? "none" : "analytic";
-  job.set_scene(c.source, m ? c.lists.methods[*m] : c.lists.truth,
-                r == RendererKind::kBlender ? c.lists.blender : nullptr, nullptr, nullptr);
-  const json doc = job.scene_json();
+  const OverrideList method_list = m ? c.lists.methods[*m] : c.lists.truth;
+  const OverrideList renderer_list = r == RendererKind::kBlender ? c.lists.blender : nullptr;
+  job.set_scene(c.source, method_list, renderer_list, nullptr, nullptr);
+  const json doc = job.document();
   Scene scene = scene_from_json(doc, c.source->origin);
   const ResourceEstimate resources = estimate_resources(r, scene);
   check_resources(resources, c.max_memory_bytes, c.source->origin);
@@ -267,8 +268,7 @@ void add_job(const VariantContext& c, RendererKind r, std::optional<std::size_t>
   std::shared_ptr<const MethodParts>& parts = c.parts[parts_text(doc)];
   if (!parts) parts = parts_of(scene);
   if (!shared) shared = std::make_shared<const Scene>(std::move(scene));
-  job.set_scene(c.source, m ? c.lists.methods[*m] : c.lists.truth,
-                r == RendererKind::kBlender ? c.lists.blender : nullptr, shared, parts);
+  job.set_scene(c.source, method_list, renderer_list, shared, parts);
   job.label = job_label(c.section.kind, v, job);
   v.jobs.push_back(plan.jobs.size());
   plan.jobs.push_back(std::move(job));

@@ -71,6 +71,9 @@ struct Job {
   const std::string& origin() const;
   // The canonical scene: overrides applied, map files resolved, no name.
   nlohmann::json scene_json() const;
+  // scene_json() with the scene file's name: what the reader reads (the
+  // name enters Scene::name, which exports show, not the cache key).
+  nlohmann::json document() const;
   // The scene as the reader gives it for scene_json().
   Scene scene() const;
 
@@ -90,8 +93,6 @@ struct Job {
   void refine(OverrideList settings, std::shared_ptr<const Scene>* shared);
 
  private:
-  nlohmann::json compose() const;
-
   std::shared_ptr<const SceneSource> source_;
   std::array<OverrideList, 3> overrides_;  // the method's, the renderer's, refine's
   std::shared_ptr<const Scene> shared_;

@@ -36,9 +36,10 @@ std::string vec_text(const Vec3& v) {
 // its address: the same object, shared, or not).
 std::string scene_text(const Scene& s) {
   const Camera& c = s.camera;
-  std::string t = fmt::format("camera {} {} {} {} {} {}x{} {} {} {}\n", int(c.projection),
-                              vec_text(c.position), vec_text(c.direction), vec_text(c.right),
-                              vec_text(c.up), c.width, c.height, c.spp, c.seed, c.jitter);
+  std::string t = "name " + s.name + "\n";
+  t += fmt::format("camera {} {} {} {} {} {}x{} {} {} {}\n", int(c.projection),
+                   vec_text(c.position), vec_text(c.direction), vec_text(c.right), vec_text(c.up),
+                   c.width, c.height, c.spp, c.seed, c.jitter);
   t += fmt::format("light {} {} {:.17g} {} {:.17g}\n", int(s.light.type),
                    vec_text(s.light.direction), s.light.irradiance, vec_text(s.light.position),
                    s.light.intensity);
@@ -75,7 +76,7 @@ TEST(Plan, EveryJobsSceneIsItsOwnDocumentReadInFull) {
     const Plan plan = plan_study(load_study(e.path().string()), 8.0 * (1ull << 30));
     for (const Job& job : plan.jobs) {
       Scene kept = job.scene();
-      Scene read = scene_from_json(job.scene_json(), job.origin());
+      Scene read = scene_from_json(job.document(), job.origin());
       // The reader reads a map or a table anew each time: compare them by
       // content digest, then let the addresses agree.
       ASSERT_EQ(bool(kept.height.map), bool(read.height.map)) << job.label;
@@ -104,7 +105,7 @@ TEST(Plan, ARefinedJobReadsAsItsRefinedDocument) {
     Job& job = plan.jobs[j];
     apply_convergence(job, reached);
     const Scene kept = job.scene();
-    Scene read = scene_from_json(job.scene_json(), job.origin());
+    Scene read = scene_from_json(job.document(), job.origin());
     EXPECT_EQ(scene_text(kept), scene_text(read)) << job.label;
     const bool evaluator = job.renderer == RendererKind::kEvaluator;
     EXPECT_EQ(kept.camera.spp == 64, evaluator) << job.label;
