@@ -119,8 +119,17 @@ SCHEMA = {
                              **{"sensor_width?": POSITIVE}),
         "perspective": dict(CAMERA, sensor_width=POSITIVE, lens=POSITIVE)}),
     "render": {"samples": ("int", 1, 1 << 24), "seed": ("int", 0, INT32)},
-    "light": {"type": ("enum", "sun"), "direction": ("unit",),
-              "strength": ("num", 0.0, None)},
+    "light": ("switch", "type", {
+        "sun": {"type": ("enum", "sun"), "direction": ("unit",),
+                "strength": ("num", 0.0, None)},
+        "sphere": {"type": ("enum", "sphere"), "center": ("vec", 3),
+                   "radius": POSITIVE, "radiance": ("num", 0.0, None)},
+        "quad": {"type": ("enum", "quad"),
+                 "vertices": ("list", 4, ("vec", 3)), "normal": ("unit",),
+                 "radiance": ("num", 0.0, None)},
+        "environment": {"type": ("enum", "environment"), "file": ("file",),
+                        "rotation_deg": ("num", -360.0, 360.0),
+                        "strength": ("num", 0.0, None)}}),
     "mesh": {"positions": ("file",), "normals": ("file",),
              "triangles": ("file",), "vertex_count": ("int", 3, INT32),
              "triangle_count": ("int", 1, INT32 // 3),
@@ -486,13 +495,19 @@ def attribute_normal(nt):
     return unit.outputs["Vector"]
 
 
-def build_material(job, ob, folder):
-    mat = bpy.data.materials.new("penumbra_material")
+def cycles_material(name):
+    """(material, node tree, output node): an empty node material for Cycles."""
+    mat = bpy.data.materials.new(name)
     mat.use_nodes = True
     nt = mat.node_tree
     nt.nodes.clear()
     out = nt.nodes.new("ShaderNodeOutputMaterial")
     out.target = "CYCLES"
+    return mat, nt, out
+
+
+def build_material(job, ob, folder):
+    mat, nt, out = cycles_material("penumbra_material")
     bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
     a = job["material"]["albedo"]
     bsdf.inputs["Color"].default_value = (a, a, a, 1.0)
@@ -560,6 +575,10 @@ def clear_all_but(ob, keep_material):
         if o != ob:
             bpy.data.objects.remove(o, do_unlink=True)
     kinds = [bpy.data.cameras, bpy.data.lights, bpy.data.worlds]
+    for blocks in (bpy.data.meshes, bpy.data.materials, bpy.data.images):
+        for block in list(blocks):
+            if block.name.startswith(LIGHT_PREFIX):
+                blocks.remove(block)
     if not keep_material:
         kinds += [bpy.data.materials, bpy.data.images, bpy.data.node_groups]
         ob.data.materials.clear()
@@ -586,6 +605,132 @@ def build_sun(lj):
     if (lo.rotation_quaternion.to_matrix().col[2] - d).length > 1e-5:
         raise JobError("internal: sun orientation check failed")
     return lo
+
+
+LIGHT_PREFIX = "penumbra_light"
+# The emitting sphere's segments round and from pole to pole: its outline,
+# an inscribed 256-gon, spans 1 - (2 pi / 256)^2 / 6 = 1 - 1.0e-4 of the
+# sphere's solid angle, far below the noise of any test.
+SPHERE_SEGMENTS, SPHERE_RINGS = 256, 128
+
+
+def emission_material(radiance):
+    """Emission of the given radiance (a strength S shows the camera S,
+    Emission node), on front faces only: backfacing, it emits nothing."""
+    mat, nt, out = cycles_material(LIGHT_PREFIX + "_material")
+    front = nt.nodes.new("ShaderNodeEmission")
+    front.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    front.inputs["Strength"].default_value = radiance
+    back = nt.nodes.new("ShaderNodeEmission")
+    back.inputs["Strength"].default_value = 0.0
+    mix = nt.nodes.new("ShaderNodeMixShader")
+    geometry = nt.nodes.new("ShaderNodeNewGeometry")
+    nt.links.new(geometry.outputs["Backfacing"], mix.inputs["Fac"])
+    nt.links.new(front.outputs["Emission"], mix.inputs[1])
+    nt.links.new(back.outputs["Emission"], mix.inputs[2])
+    nt.links.new(mix.outputs["Shader"], out.inputs["Surface"])
+    # 3.4 names the switch sample_as_light; 3.5 replaced it by
+    # emission_sampling (3.5 API change log, CyclesMaterialSettings).
+    if hasattr(mat.cycles, "emission_sampling"):
+        configure(mat.cycles, "Material.cycles", emission_sampling="FRONT")
+    else:
+        configure(mat.cycles, "Material.cycles", sample_as_light=True)
+    return mat
+
+
+def light_mesh(lj):
+    """(vertices, faces) of an area light, faces turned so that their
+    normals point where it emits (outwards for a sphere)."""
+    if lj["type"] == "quad":
+        v = [Vector(p) for p in lj["vertices"]]
+        if (v[1] - v[0]).cross(v[3] - v[0]).dot(Vector(lj["normal"])) < 0:
+            v.reverse()
+        return [tuple(p) for p in v], [(0, 1, 2, 3)]
+    c, r = Vector(lj["center"]), lj["radius"]
+    verts = [tuple(c + Vector((0, 0, r)))]
+    for i in range(1, SPHERE_RINGS):
+        theta = math.pi * i / SPHERE_RINGS
+        for j in range(SPHERE_SEGMENTS):
+            phi = 2 * math.pi * j / SPHERE_SEGMENTS
+            verts.append(tuple(c + r * Vector((math.sin(theta) * math.cos(phi),
+                                               math.sin(theta) * math.sin(phi),
+                                               math.cos(theta)))))
+    verts.append(tuple(c - Vector((0, 0, r))))
+    last, n = len(verts) - 1, SPHERE_SEGMENTS
+
+    def ring(i, j):  # vertex j of ring i (1-based rings)
+        return 1 + (i - 1) * n + j % n
+    faces = [(0, ring(1, j), ring(1, j + 1)) for j in range(n)]
+    for i in range(1, SPHERE_RINGS - 1):
+        faces += [(ring(i, j), ring(i + 1, j), ring(i + 1, j + 1), ring(i, j + 1))
+                  for j in range(n)]
+    faces += [(last, ring(SPHERE_RINGS - 1, j + 1), ring(SPHERE_RINGS - 1, j))
+              for j in range(n)]
+    return verts, faces
+
+
+def build_area_light(lj):
+    """An area light as an emissive mesh that only shadow rays and light
+    sampling see (Cycles 3.4's point light of a radius is a disk facing
+    the shading point, not a sphere); returns its (unlinked) object."""
+    verts, faces = light_mesh(lj)
+    me = bpy.data.meshes.new(LIGHT_PREFIX)
+    me.from_pydata(verts, [], faces)
+    me.update()
+    if lj["type"] == "sphere":  # outward normals, checked at the first face
+        f = me.polygons[0]
+        if f.normal.dot(f.center - Vector(lj["center"])) < 0:
+            me.flip_normals()
+    me.materials.append(emission_material(lj["radiance"]))
+    lo = bpy.data.objects.new(LIGHT_PREFIX, me)
+    # Cycles samples an emissive object as a light only if diffuse or
+    # glossy rays can see it (scene/light.cpp, object_usable_as_light); no
+    # such ray is traced (no bounces), so only the camera must not see it.
+    configure(lo, "Object", visible_camera=False, visible_diffuse=True,
+              visible_glossy=True, visible_transmission=False,
+              visible_volume_scatter=False, visible_shadow=False)
+    return lo
+
+
+def build_environment(world, lj, folder):
+    """The world as the job's environment map: the ray's direction turned by
+    a Mapping node's Z rotation, then the map read per texel ("Closest",
+    as the evaluator reads it), times the strength. The camera does not see
+    it (the film is transparent)."""
+    path = os.path.join(folder, lj["file"])
+    try:
+        img = bpy.data.images.load(path, check_existing=False)
+    except RuntimeError as e:
+        raise JobError(f"/light/file: Blender cannot read it ({e})")
+    img.name = LIGHT_PREFIX + "_environment"
+    img.colorspace_settings.name = "Non-Color"
+    world.use_nodes = True
+    nt = world.node_tree
+    nt.nodes.clear()
+    coord = nt.nodes.new("ShaderNodeTexCoord")
+    mapping = nt.nodes.new("ShaderNodeMapping")
+    configure(mapping, "ShaderNodeMapping", vector_type="POINT")
+    mapping.inputs["Rotation"].default_value = (
+        0.0, 0.0, math.radians(lj["rotation_deg"]))
+    env = nt.nodes.new("ShaderNodeTexEnvironment")
+    env.image = img
+    configure(env, "ShaderNodeTexEnvironment", interpolation="Closest",
+              projection="EQUIRECTANGULAR")
+    bg = nt.nodes.new("ShaderNodeBackground")
+    bg.inputs["Strength"].default_value = lj["strength"]
+    out = nt.nodes.new("ShaderNodeOutputWorld")
+    nt.links.new(coord.outputs["Generated"], mapping.inputs["Vector"])
+    nt.links.new(mapping.outputs["Vector"], env.inputs["Vector"])
+    nt.links.new(env.outputs["Color"], bg.inputs["Color"])
+    nt.links.new(bg.outputs["Background"], out.inputs["Surface"])
+
+
+def build_light(lj, world, folder):
+    """The job's light; None for an environment (it is the world)."""
+    if lj["type"] == "environment":
+        build_environment(world, lj, folder)
+        return None
+    return build_sun(lj) if lj["type"] == "sun" else build_area_light(lj)
 
 
 def build_scene(job, folder, threads, keep=None, keep_material=False):
@@ -657,12 +802,13 @@ def build_scene(job, folder, threads, keep=None, keep_material=False):
     co.matrix_world = Matrix(cam["matrix_world"])
     scene.camera = co
 
-    lo = build_sun(job["light"])
+    lo = build_light(job["light"], scene.world, folder)
     ob = build_mesh(job, folder) if keep is None else keep
     if not (keep is not None and keep_material):
         build_material(job, ob, folder)
     for o in (co, lo) if keep is not None else (co, lo, ob):
-        scene.collection.objects.link(o)
+        if o is not None:
+            scene.collection.objects.link(o)
     return ob
 
 

@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "core/light_sampling.h"
+
 namespace penumbra {
 namespace {
 
@@ -86,11 +88,33 @@ double ssim_in_mask(const Image& test, const Image& reference, const int trgb[3]
 
 }  // namespace
 
+double light_irradiance(const Light& light, const Vec3& at) {
+  switch (light.type) {
+    case LightType::kDistant:
+      return light.irradiance;
+    case LightType::kPoint:
+      return light.intensity / length_squared(light.position - at);
+    case LightType::kSphere:
+      // pi L sin^2 theta_max: the cap's projected solid angle, facing it.
+      return light.radiance * kPi *
+             std::min(1.0, light.radius * light.radius / length_squared(light.position - at));
+    case LightType::kQuad: {
+      const Vec3 centre = light.corner + (light.edge_u + light.edge_v) * 0.5;
+      if (!(dot(cross(light.edge_u, light.edge_v), at - centre) > 0.0)) return 0.0;  // behind
+      const Vec3 v[4] = {light.corner, light.corner + light.edge_u,
+                         light.corner + light.edge_u + light.edge_v, light.corner + light.edge_v};
+      return polygon_irradiance(v, 4, at, normalize(light_axis(light, at)), light.radiance);
+    }
+    case LightType::kEnvironment:
+      return light.environment
+                 ? light.scale * light.environment->irradiance(light.environment->mean_direction())
+                 : 0.0;
+  }
+  return light.irradiance;
+}
+
 double radiance_scale(const Scene& scene) {
-  double e = scene.light.irradiance;
-  if (scene.light.type == LightType::kPoint)
-    e = scene.light.intensity / length_squared(scene.light.position - scene.shape.center);
-  return scene.material.albedo * e / kPi;
+  return scene.material.albedo * light_irradiance(scene.light, scene.shape.center) / kPi;
 }
 
 Profile terminator_profile(const Image& image, double radiance_scale,

@@ -30,8 +30,15 @@ struct ProfileOptions {
   std::uint64_t min_count = 4;
 };
 
+// The irradiance (W/m^2) the light gives at `at` on a plane facing it
+// (light_axis), shadows aside: exact for the delta lights and for an area
+// light wholly in front of that plane (a quad by Lambert's polygon formula);
+// an environment's on a plane facing its mean direction, summed over its
+// texels' centres.
+double light_irradiance(const Light& light, const Vec3& at);
+
 // albedo * E / pi in W m^-2 sr^-1: the radiance of a Lambertian surface facing
-// the light. Point lights: E at the shape's centre.
+// the light. Point and area lights: E at the shape's centre.
 double radiance_scale(const Scene& scene);
 
 // `radiance_scale` = albedo * E / pi of the scene (W m^-2 sr^-1).

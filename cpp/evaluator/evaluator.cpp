@@ -15,6 +15,7 @@
 
 #include <fmt/format.h>
 
+#include "core/light_sampling.h"
 #include "core/random.h"
 #include "core/ray_packet.h"
 #include "core/shading.h"
@@ -39,13 +40,56 @@ struct LightSample {
   double distance = 0.0;    // to the light; infinite for a distant light
 };
 
-LightSample sample_light(const Light& light, const Vec3& p) {
-  if (light.type == LightType::kDistant)
-    return {light.direction, light.irradiance, std::numeric_limits<double>::infinity()};
-  const Vec3 to_light = light.position - p;
-  const double d2 = length_squared(to_light);
-  const double d = std::sqrt(d2);
-  return {to_light / d, light.intensity / d2, d};
+// Where an area light is sampled for one camera sample, in [0,1)^2.
+struct LightUniforms {
+  double u1 = 0.5, u2 = 0.5;
+};
+
+// `u` picks the point of an area light; delta lights ignore it. The
+// sample's irradiance is radiance / pdf (core/light_sampling.h); a sample
+// that reaches no emitter has irradiance 0.
+LightSample sample_light(const Light& light, const Vec3& p, const LightUniforms& u) {
+  switch (light.type) {
+    case LightType::kDistant:
+      return {light.direction, light.irradiance, std::numeric_limits<double>::infinity()};
+    case LightType::kPoint: {
+      const Vec3 to_light = light.position - p;
+      const double d2 = length_squared(to_light);
+      const double d = std::sqrt(d2);
+      return {to_light / d, light.intensity / d2, d};
+    }
+    case LightType::kEnvironment: {
+      double radiance = 0.0;
+      const LightDirectionSample s = light.environment->sample(u.u1, u.u2, &radiance);
+      if (!(s.pdf > 0.0)) return {Vec3{0, 0, 1}, 0.0, 0.0};
+      return {s.wi, radiance * light.scale / s.pdf, s.distance};
+    }
+    case LightType::kSphere:
+    case LightType::kQuad:
+      break;
+  }
+  const LightDirectionSample s =
+      light.type == LightType::kSphere
+          ? sample_sphere_light(light.position, light.radius, p, u.u1, u.u2)
+          : sample_quad_light(light.corner, light.edge_u, light.edge_v, p, u.u1, u.u2);
+  if (!(s.pdf > 0.0)) return {Vec3{0, 0, 1}, 0.0, 0.0};
+  return {s.wi, light.radiance / s.pdf, s.distance};
+}
+
+// The area-light point of sample s of a pixel: the pixel's samples fall in
+// the same nx x ny strata as its camera samples, shuffled (permute_index)
+// so that a sample's light stratum does not follow its camera stratum, and
+// jittered within, counter-based from the pixel's key like the camera's.
+LightUniforms light_uniforms(const Scene& scene, std::uint64_t pixel_key, int s, int nx, int ny) {
+  if (!is_area_light(scene.light)) return {};
+  const Camera& camera = scene.camera;
+  constexpr std::uint64_t kLightStream = 0x6c69676874ull;  // "light"
+  const std::uint64_t key = mix64(pixel_key ^ kLightStream);
+  const std::uint32_t stratum = permute_index(std::uint32_t(s), std::uint32_t(camera.spp),
+                                              static_cast<std::uint32_t>(key >> 32u));
+  const int sx = int(stratum) % nx, sy = int(stratum) / nx;
+  return {(sx + splitmix_double(key, 2 * std::uint64_t(s))) / nx,
+          (sy + splitmix_double(key, 2 * std::uint64_t(s) + 1)) / ny};
 }
 
 // What a camera ray sees: the surface point to shade and how to leave it.
@@ -418,14 +462,16 @@ class SampleShader {
   bool bumps() const { return displaced_shading_ && perturbed_; }
 
   // `tally`: where the one pass's unblocked light goes as well (render_tallied).
-  void shade(const Ray& ray, const SurfaceHit& hit, Material* material, Pcg32* rng, PixelSums* sums,
-             std::uint64_t* shadow_rays, const TallySink* tally = nullptr) const;
+  void shade(const Ray& ray, const SurfaceHit& hit, const LightUniforms& u, Material* material,
+             Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays,
+             const TallySink* tally = nullptr) const;
   // shade() but for the radiance of the passes the light reaches, which
   // waits for the shadow ray's verdict: its contributions are appended to
   // *lit, and the ray to trace is returned (nullopt: no pass needs it).
   // Adding them later, in the order of the samples, gives shade()'s sums.
   std::optional<PendingShadow> shade_deferred(const Ray& ray, const SurfaceHit& hit,
-                                              Material* material, Pcg32* rng, PixelSums* sums,
+                                              const LightUniforms& u, Material* material,
+                                              Pcg32* rng, PixelSums* sums,
                                               std::vector<LitPass>* lit) const;
   // Lane k of a packet on the analytic base (BaseTracer, no props): what
   // shade() does with the packet's values, read straight from its arrays.
@@ -447,7 +493,8 @@ class SampleShader {
     ShadingPoint point;
     SampleAngles angles;
   };
-  Prepared prepare(const Ray& ray, const SurfaceHit& hit, Material* material) const;
+  Prepared prepare(const Ray& ray, const SurfaceHit& hit, const LightUniforms& u,
+                   Material* material) const;
   ShadowRay shadow_ray(const SurfaceHit& hit, const Prepared& p) const {
     return hit.on_prop ? ShadowRay{hit.shading_point}
                        : tracer_.shadow_ray(hit, p.facing, p.light.wi);
@@ -466,6 +513,7 @@ class SampleShader {
 template <typename Tracer>
 typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray& ray,
                                                                       const SurfaceHit& hit,
+                                                                      const LightUniforms& u,
                                                                       Material* material) const {
   const SurfaceGeometry& g = hit.geometry;
   const Vec3 wo = -ray.direction;
@@ -487,7 +535,7 @@ typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray&
     facing.backfacing = true;
   }
   const Vec3& ns = facing.ns;
-  const LightSample light = sample_light(scene_.light, hit.shading_point);
+  const LightSample light = sample_light(scene_.light, hit.shading_point, u);
   // On the displaced surface the true normal is Ns itself; on the
   // analytic base Ng and Ni coincide with the base normal.
   ShadingPoint point = is_ground_truth_ && !hit.on_prop
@@ -505,10 +553,10 @@ typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray&
 }
 
 template <typename Tracer>
-void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, Material* material,
-                                 Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays,
-                                 const TallySink* tally) const {
-  const Prepared p = prepare(ray, hit, material);
+void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const LightUniforms& u,
+                                 Material* material, Pcg32* rng, PixelSums* sums,
+                                 std::uint64_t* shadow_rays, const TallySink* tally) const {
+  const Prepared p = prepare(ray, hit, u, material);
   int is_blocked = -1;  // the shadow ray, traced for the first pass that needs it
   shade_passes(*material, p.point, p.light, p.angles, rng, sums, [&](std::size_t k, double value) {
     if (is_blocked < 0) {
@@ -524,12 +572,10 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, Material
 }
 
 template <typename Tracer>
-std::optional<PendingShadow> SampleShader<Tracer>::shade_deferred(const Ray& ray,
-                                                                  const SurfaceHit& hit,
-                                                                  Material* material, Pcg32* rng,
-                                                                  PixelSums* sums,
-                                                                  std::vector<LitPass>* lit) const {
-  const Prepared p = prepare(ray, hit, material);
+std::optional<PendingShadow> SampleShader<Tracer>::shade_deferred(
+    const Ray& ray, const SurfaceHit& hit, const LightUniforms& u, Material* material, Pcg32* rng,
+    PixelSums* sums, std::vector<LitPass>* lit) const {
+  const Prepared p = prepare(ray, hit, u, material);
   const std::size_t first = lit->size();
   shade_passes(*material, p.point, p.light, p.angles, rng, sums, [&](std::size_t k, double value) {
     lit->push_back({k, value});
@@ -572,7 +618,7 @@ void SampleShader<Tracer>::shade_packed(const HitPacket& hits, const RayPacket& 
   const bool backfacing = dot(n, wo) < 0.0;
   if (backfacing) n = -n, ns = -ns;
   const Vec3 p{hits.px[k], hits.py[k], hits.pz[k]};
-  const LightSample light = sample_light(scene_.light, p);
+  const LightSample light = sample_light(scene_.light, p, {});  // a delta light (traces_packets)
   ShadingPoint point{n, n, ns, light.wi, wo};
   const double amplitude = scene_.height.amplitude;
   if (needs_visibility_ && displaced_shading_ && amplitude != 0.0)
@@ -595,7 +641,7 @@ template <typename Tracer>
 bool traces_packets(const Scene& scene, const SampleShader<Tracer>& shader,
                     const std::vector<TerminatorSettings>& passes, const RenderOptions& options) {
   if (!std::is_same_v<Tracer, BaseTracer> || !options.packets || !scene.props.empty() ||
-      !packet_supports(scene.shape))
+      is_area_light(scene.light) || !packet_supports(scene.shape))
     return false;
   const BumpNormals& bump = shader.bump();
   if (bump.filtered || bump.normal_map || bump.height_map) return false;
@@ -725,6 +771,7 @@ PacketSetup packet_setup(const Scene& scene, const Tracer& tracer) {
                   double(setup.nx),
                   double(ny)};
   PacketLighting& lighting = setup.lighting;
+  // Only delta lights reach packets (traces_packets).
   lighting.distant = scene.light.type == LightType::kDistant;
   lighting.light = lighting.distant ? scene.light.direction : scene.light.position;
   if constexpr (std::is_same_v<Tracer, BaseTracer>) lighting.shadow_t_min = tracer.shadow_t_min();
@@ -765,8 +812,9 @@ void shade_pixel_packets(const Scene& scene, const Tracer& tracer, const Props& 
       hits[k].on_prop = false;
       material.filtered.active = false;
       if (!(props.nearer(rays[k], found[k], &hits[k]) || found[k])) continue;
+      const LightUniforms u = light_uniforms(scene, pixel.key, first + int(k), nx, ny);
       if (const auto p =
-              shader.shade_deferred(rays[k], hits[k], &material, pixel.rng, pixel.sums, &lit)) {
+              shader.shade_deferred(rays[k], hits[k], u, &material, pixel.rng, pixel.sums, &lit)) {
         shadow_rays[waiting] = {p->ray.origin, p->wi};
         distances[waiting] = p->distance;
         pending[waiting++] = *p;
@@ -808,7 +856,8 @@ void shade_pixel(const Scene& scene, const Tracer& tracer, const Props& props,
       material.filtered.active = false;
       const bool found = tracer.primary(ray, &hit);
       if (!(props.nearer(ray, found, &hit) || found)) continue;
-      shader.shade(ray, hit, &material, pixel.rng, pixel.sums, pixel.shadow_rays, pixel.tally);
+      shader.shade(ray, hit, light_uniforms(scene, pixel.key, sy * nx + sx, nx, ny), &material,
+                   pixel.rng, pixel.sums, pixel.shadow_rays, pixel.tally);
     }
   }
 }

@@ -59,9 +59,13 @@ std::string read(const std::string& path, Image* image,
   image->pixels.resize(std::size_t(spec.width) * spec.height * spec.nchannels);
   if (!input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image->pixels.data()))
     return input->geterror();
-  if (attributes)
+  if (attributes) {
     for (const OIIO::ParamValue& p : spec.extra_attribs)
       if (p.type() == OIIO::TypeDesc::STRING) (*attributes)[p.name().string()] = p.get_string();
+    // How the file stores its texels ("half", "float", "uint8", ...):
+    // environment maps refuse display values (image/environment_file.h).
+    (*attributes)["penumbra:format"] = spec.format.c_str();
+  }
   return {};
 }
 

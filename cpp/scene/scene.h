@@ -12,6 +12,7 @@
 
 #include "core/bsdf.h"
 #include "core/enum_names.h"
+#include "core/environment.h"
 #include "core/filtered_map.h"
 #include "core/height.h"
 #include "core/shading.h"
@@ -69,17 +70,66 @@ inline void strata(int spp, int* nx, int* ny) {
   *ny = spp / best;
 }
 
-enum class LightType { kDistant, kPoint };
+// Delta lights (distant, point), area lights (sphere, quad) of uniform
+// radiance and a captured environment at infinity, which the evaluator
+// samples per camera sample (core/light_sampling.h, core/environment.h);
+// the camera sees none of them (the background stays black).
+enum class LightType { kDistant, kPoint, kSphere, kQuad, kEnvironment };
 inline constexpr EnumName<LightType> kLightTypeNames[] = {{"distant", LightType::kDistant},
-                                                          {"point", LightType::kPoint}};
+                                                          {"point", LightType::kPoint},
+                                                          {"sphere", LightType::kSphere},
+                                                          {"quad", LightType::kQuad},
+                                                          {"environment", LightType::kEnvironment}};
 
 struct Light {
   LightType type = LightType::kDistant;
   Vec3 direction{-1, 0, 0};  // distant: unit vector towards the light
   double irradiance = kPi;   // distant: W/m^2 on a plane facing the light, >= 0
-  Vec3 position;             // point: scene units
+  Vec3 position;             // point: scene units; sphere: its centre
   double intensity = 0.0;    // point: W/sr, >= 0
+  double radius = 0.0;       // sphere: scene units, > 0
+  // quad: the parallelogram corner + a edge_u + b edge_v, (a, b) in [0,1]^2,
+  // emitting on the side edge_u x edge_v points to (scene units).
+  Vec3 corner, edge_u, edge_v;
+  // sphere and quad: emitted radiance, W/(m^2 sr), >= 0. A power P (W) in
+  // the JSON becomes P / (4 pi^2 radius^2) for a sphere (pi L times its
+  // area) and P / (pi area) for a one-sided quad.
+  double radiance = 0.0;
+  // environment: the map's radiance (the Rec. 709 luminance of its R, G, B;
+  // W/(m^2 sr) per unit of the file's values) times `scale` (>= 0), the
+  // lookup direction turned by `rotation_deg` about the up axis
+  // (core/environment.h). `map_file` is the file as resolved, `map_digest`
+  // its texels' content digest (what the cache key holds).
+  std::shared_ptr<const EnvironmentMap> environment;
+  std::string map_file, map_digest;
+  double rotation_deg = 0.0;
+  double scale = 1.0;
 };
+
+// Lights sampled per camera sample (all but the delta lights).
+inline bool is_area_light(const Light& light) {
+  return light.type == LightType::kSphere || light.type == LightType::kQuad ||
+         light.type == LightType::kEnvironment;
+}
+
+// Where the light is seen from `at`, for the angles a study states per
+// variant: towards a distant light, or towards a point light's position, a
+// sphere's centre or a quad's centre; an environment's radiance-weighted
+// mean direction.
+inline Vec3 light_axis(const Light& light, const Vec3& at) {
+  switch (light.type) {
+    case LightType::kDistant:
+      return light.direction;
+    case LightType::kPoint:
+    case LightType::kSphere:
+      return light.position - at;
+    case LightType::kQuad:
+      return light.corner + (light.edge_u + light.edge_v) * 0.5 - at;
+    case LightType::kEnvironment:
+      return light.environment ? light.environment->mean_direction() : Vec3{0, 1, 0};
+  }
+  return light.direction;
+}
 
 enum class Representation {
   kSmooth,        // base geometry, Ns = base normal

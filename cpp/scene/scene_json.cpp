@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -15,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "image/bump_maps.h"
+#include "image/environment_file.h"
 #include "scene/factor_table_file.h"
 #include "util/json_reader.h"
 
@@ -114,15 +116,95 @@ Camera read_camera(Reader r) {
   return c;
 }
 
+// An area light's radiance: "radiance" (W/(m^2 sr)) or "power" (W), one of
+// the two; a power is spread over `emitting_area` (m^2) of a Lambertian
+// emitter, whose exitance is pi L.
+double read_radiance(Reader& r, double emitting_area) {
+  const bool has_radiance = r.has("radiance"), has_power = r.has("power");
+  if (has_radiance == has_power)
+    r.fail("", has_radiance ? "expected one of \"radiance\" and \"power\", got both"
+                            : "expected \"radiance\" (W/(m^2 sr)) or \"power\" (W)");
+  if (has_radiance) return r.number("radiance", radiant_range, "in [0, 1e9] (W/(m^2 sr))");
+  return r.number("power", radiant_range, "in [0, 1e9] (W)") / (kPi * emitting_area);
+}
+
+void read_quad(Reader& r, Light* l) {
+  l->corner = vec3(r, "corner");
+  l->edge_u = vec3(r, "edge_u");
+  l->edge_v = vec3(r, "edge_v");
+  const double eu = length(l->edge_u), ev = length(l->edge_v);
+  if (!(eu >= kMinLength)) r.fail("edge_u", fmt::format("expected a length >= {:g}", kMinLength));
+  if (!(ev >= kMinLength)) r.fail("edge_v", fmt::format("expected a length >= {:g}", kMinLength));
+  // Parallel edges span no area: sin of their angle below 1e-6.
+  if (!(length(cross(l->edge_u, l->edge_v)) > 1e-6 * eu * ev))
+    r.fail("edge_v", "expected an edge not parallel to edge_u (the quad has no area)");
+}
+
+// Where "blender:PATH" points: PATH under the installed Blender's data
+// folder (datafiles/), looked for where Debian's blender-data puts it and in
+// versioned folders of other installs; PENUMBRA_BLENDER_DATAFILES first.
+std::string blender_data_file(Reader& r, const std::string& key, const std::string& relative) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> folders;
+  if (const char* env = std::getenv("PENUMBRA_BLENDER_DATAFILES")) folders.emplace_back(env);
+  folders.emplace_back("/usr/share/blender/datafiles");
+  std::error_code error;
+  for (const auto& entry : fs::directory_iterator("/usr/share/blender", error))
+    if (entry.is_directory(error)) folders.push_back(entry.path() / "datafiles");
+  std::string tried;
+  for (const fs::path& folder : folders) {
+    if (fs::is_regular_file(folder / relative, error)) return (folder / relative).string();
+    if (!tried.empty()) tried += ", ";
+    tried += folder.string();
+  }
+  r.fail(key, fmt::format("\"{}{}\" names a file of Blender's data folder, not found under {} "
+                          "(install Debian's blender-data, or set PENUMBRA_BLENDER_DATAFILES)",
+                          kBlenderDataPrefix, relative, tried));
+}
+
+void read_environment(Reader& r, Light* l) {
+  std::string file = r.string("map");
+  if (file.empty()) r.fail("map", "expected the path of an OpenEXR or HDR file, got \"\"");
+  if (file.starts_with(kBlenderDataPrefix))
+    file = blender_data_file(r, "map", file.substr(std::string_view(kBlenderDataPrefix).size()));
+  l->rotation_deg = r.number_or(
+      "rotation_deg", 0.0, [](double x) { return std::abs(x) <= 360.0; },
+      "in [-360, 360] (degrees about the up axis)");
+  l->scale = r.number_or("scale", 1.0, radiant_range, "in [0, 1e9] (times the map's values)");
+  try {
+    const LoadedEnvironment loaded = load_environment_map(file, radians(l->rotation_deg));
+    l->environment = loaded.map;
+    l->map_digest = loaded.digest;
+  } catch (const InputError& e) {
+    r.fail("map", e.what());
+  }
+  l->map_file = file;
+}
+
 Light read_light(Reader r) {
   Light l;
   l.type = r.choice<LightType>("type", kLightTypeNames);
-  if (l.type == LightType::kDistant) {
-    l.direction = direction(r, "direction");
-    l.irradiance = r.number("irradiance", radiant_range, "in [0, 1e9] (W/m^2)");
-  } else {
-    l.position = vec3(r, "position");
-    l.intensity = r.number("intensity", radiant_range, "in [0, 1e9] (W/sr)");
+  switch (l.type) {
+    case LightType::kDistant:
+      l.direction = direction(r, "direction");
+      l.irradiance = r.number("irradiance", radiant_range, "in [0, 1e9] (W/m^2)");
+      break;
+    case LightType::kPoint:
+      l.position = vec3(r, "position");
+      l.intensity = r.number("intensity", radiant_range, "in [0, 1e9] (W/sr)");
+      break;
+    case LightType::kSphere:
+      l.position = vec3(r, "position");
+      l.radius = r.number("radius", length_scale, "in [1e-6, 1e6] (scene units)");
+      l.radiance = read_radiance(r, 4.0 * kPi * l.radius * l.radius);
+      break;
+    case LightType::kQuad:
+      read_quad(r, &l);
+      l.radiance = read_radiance(r, length(cross(l.edge_u, l.edge_v)));
+      break;
+    case LightType::kEnvironment:
+      read_environment(r, &l);
+      break;
   }
   r.finish();
   return l;
@@ -467,10 +549,12 @@ TerminatorSettings terminator_from_json(const json& j, const std::string& origin
 }
 
 void resolve_map_files(json& document, const std::string& scene_path) {
-  for (const char* pointer : {"/height/file", "/terminator/parameters/table"}) {
+  for (const char* pointer : {"/height/file", "/terminator/parameters/table", "/light/map"}) {
     const json::json_pointer file(pointer);
     if (!document.is_object() || !document.contains(file) || !document[file].is_string()) continue;
-    const std::filesystem::path path(document[file].get<std::string>());
+    const std::string text = document[file].get<std::string>();
+    if (text.starts_with(kBlenderDataPrefix)) continue;  // resolved when read
+    const std::filesystem::path path(text);
     if (path.empty() || path.is_absolute()) continue;
     // A bare file name has no parent: its folder is the working directory.
     const std::filesystem::path folder = std::filesystem::path(scene_path).parent_path();

@@ -27,10 +27,14 @@ Override parse_override(const std::string& text);
 void apply_overrides(nlohmann::json& document, const std::vector<Override>& overrides,
                      const std::string& origin);
 
-// Makes a relative /height/file and /terminator/parameters/table relative
-// to the folder of the scene file `scene_path` (as Mitsuba resolves scene
-// resources), so that a scene finds its maps and tables from any working
-// directory. load_scene does this.
+// A file name of this prefix ("blender:studiolights/world/forest.exr") is
+// read from the installed Blender's data folder, found when the scene is
+// read; resolve_map_files leaves it as it is.
+inline constexpr char kBlenderDataPrefix[] = "blender:";
+// Makes a relative /height/file, /terminator/parameters/table and
+// /light/map relative to the folder of the scene file `scene_path` (as
+// Mitsuba resolves scene resources), so that a scene finds its maps and
+// tables from any working directory. load_scene does this.
 void resolve_map_files(nlohmann::json& document, const std::string& scene_path);
 
 // /terminator alone, `j` being its object: what pn.factor (python/) reads

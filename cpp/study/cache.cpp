@@ -96,6 +96,7 @@ void assign_keys(std::vector<Job>& jobs,
     // An image map or a fitted table enters the key by its content, not by
     // where it lies: a file edited in place re-renders, a moved one does not.
     if (scene.height.map) keyed["height"]["file"] = "content:" + scene.height.map->digest;
+    if (scene.light.environment) keyed["light"]["map"] = "content:" + scene.light.map_digest;
     if (table)
       keyed["terminator"]["parameters"]["table"] = "content:" + factor_table_digest(*table);
     job.key = render_key(keyed, job.renderer, identity);

@@ -187,11 +187,9 @@ Columns lowpoly_columns() {
   return out;
 }
 
-// The direction towards the light: a distant light's, or a point light's
-// position seen from the shape's centre.
+// The direction towards the light seen from the shape's centre.
 Vec3 towards_light(const Scene& s) {
-  return s.light.type == LightType::kDistant ? s.light.direction
-                                             : s.light.position - s.shape.center;
+  return light_axis(s.light, s.shape.center);
 }
 
 // Angles of the direction towards the light (study/light_angles.h).

@@ -128,6 +128,49 @@ TEST(Scene, BadInputIsRejectedWithFilePointerAndExpectation) {
       {"albedo above 1", [](json& j) { j["material"]["albedo"] = 1.5; }, "/material/albedo",
        "in [0, 1]"},
       {"wrong version", [](json& j) { j["version"] = 2; }, "/version", "version 1"},
+      {"sphere light of radius 0",
+       [](json& j) {
+         j["light"] = {{"type", "sphere"}, {"position", {-3, 0, 0}}, {"radius", 0}, {"power", 1}};
+       },
+       "/light/radius", "in [1e-6, 1e6]"},
+      {"area light with radiance and power",
+       [](json& j) {
+         j["light"] = {{"type", "sphere"},
+                       {"position", {-3, 0, 0}},
+                       {"radius", 0.5},
+                       {"power", 1},
+                       {"radiance", 1}};
+       },
+       "/light", "got both"},
+      {"area light without radiance or power",
+       [](json& j) {
+         j["light"] = {{"type", "sphere"}, {"position", {-3, 0, 0}}, {"radius", 0.5}};
+       },
+       "/light", "\"radiance\" (W/(m^2 sr)) or \"power\" (W)"},
+      {"quad with parallel edges",
+       [](json& j) {
+         j["light"] = {{"type", "quad"},
+                       {"corner", {-3, 0, 0}},
+                       {"edge_u", {0, 1, 0}},
+                       {"edge_v", {0, -2, 0}},
+                       {"radiance", 1}};
+       },
+       "/light/edge_v", "not parallel to edge_u"},
+      {"quad with a zero edge",
+       [](json& j) {
+         j["light"] = {{"type", "quad"},
+                       {"corner", {-3, 0, 0}},
+                       {"edge_u", {0, 0, 0}},
+                       {"edge_v", {0, 1, 0}},
+                       {"radiance", 1}};
+       },
+       "/light/edge_u", "expected a length >= 1e-06"},
+      {"negative power",
+       [](json& j) {
+         j["light"] = {
+             {"type", "sphere"}, {"position", {-3, 0, 0}}, {"radius", 0.5}, {"power", -1}};
+       },
+       "/light/power", "in [0, 1e9] (W)"},
       {"not an object", [](json& j) { j["camera"] = 3; }, "/camera", "expected an object"},
       {"too fine a tessellation",
        [](json& j) {

@@ -30,6 +30,9 @@ struct BlenderExport {
   // (kBlenderUvsFile, 2 floats a corner) and the map itself (kBlenderMapFile).
   std::vector<float> uvs;
   Image map;  // empty without a map
+  // An environment light's radiance as Blender's world reads it
+  // (kBlenderEnvironmentFile, R = G = B), before its scale.
+  Image environment;
 };
 
 // Methods Blender provides for each representation: smooth and displacement
@@ -50,6 +53,7 @@ inline constexpr const char* kBlenderNormalsFile = "normals.f32";
 inline constexpr const char* kBlenderTrianglesFile = "triangles.u32";
 inline constexpr const char* kBlenderUvsFile = "uvs.f32";
 inline constexpr const char* kBlenderMapFile = "map.exr";
+inline constexpr const char* kBlenderEnvironmentFile = "environment.exr";
 
 // Writes an export's files into `folder` (which must exist): the job, the
 // mesh, and for image maps the UVs and the map.

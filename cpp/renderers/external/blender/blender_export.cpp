@@ -78,10 +78,10 @@ void check_blender_scene(const Scene& scene) {
     throw ExportError(
         "Cycles applies chiang2019 to diffuse lobes only: set /terminator/lobes to "
         "\"diffuse\"");
-  if (scene.light.type != LightType::kDistant)
+  if (scene.light.type == LightType::kPoint)
     throw ExportError(
-        "Blender export supports distant lights only (a sun with angle 0); point lights carry "
-        "Blender's own power convention, which the evaluator does not model");
+        "Blender export supports distant, sphere, quad and environment lights; a point light "
+        "carries Blender's own power convention, which the evaluator does not model");
   if (scene.material.specular_weight > 0.0)
     throw ExportError("Blender export supports Lambertian materials only (specular_weight 0)");
   if (!scene.props.empty())
@@ -225,6 +225,19 @@ std::vector<float> corner_uvs(const Scene& scene, const TriangleMesh& mesh) {
   return uvs;
 }
 
+// An environment's radiance as the grey image Blender's world reads, row 0
+// the top (the zenith), as the evaluator reads its texels.
+Image environment_image(const EnvironmentMap& map) {
+  Image image;
+  image.width = map.width(), image.height = map.height();
+  image.channels = {"R", "G", "B"};
+  image.pixels.resize(std::size_t(image.width) * image.height * 3);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x)
+      for (int c = 0; c < 3; ++c) image.at(x, y, c) = float(map.texel(x, y));
+  return image;
+}
+
 // The map's texels as the image Blender loads (row 0 the top, as in the file).
 Image map_image(const SurfaceMap& map) {
   Image image;
@@ -233,6 +246,44 @@ Image map_image(const SurfaceMap& map) {
                                                 : std::vector<std::string>{"R", "G", "B"};
   image.pixels = map.texels;
   return image;
+}
+
+// The light for harness/blender_render.py. Area lights become emissive
+// meshes of the scene's radiance (an Emission shader's strength is the
+// radiance the camera would see), one-sided, seen by shadow rays only:
+// Cycles 3.4's own point light of a radius is a disk facing each shading
+// point (kernel/light/point.h), not a sphere, and a mesh keeps the
+// radiance exact. The quad's emitting normal is given, since the y <-> z
+// swap to Blender's frame reverses the sense of the edges' cross product.
+json light_json(const Light& light) {
+  switch (light.type) {
+    case LightType::kDistant:
+      return {{"type", "sun"},
+              {"direction", to_json(to_blender(normalize(light.direction)))},
+              {"strength", light.irradiance}};
+    case LightType::kSphere:
+      return {{"type", "sphere"},
+              {"center", to_json(to_blender(light.position))},
+              {"radius", light.radius},
+              {"radiance", light.radiance}};
+    case LightType::kQuad: {
+      const Vec3 c = light.corner, u = light.edge_u, v = light.edge_v;
+      return {
+          {"type", "quad"},
+          {"vertices", json::array({to_json(to_blender(c)), to_json(to_blender(c + u)),
+                                    to_json(to_blender(c + u + v)), to_json(to_blender(c + v))})},
+          {"normal", to_json(to_blender(normalize(cross(u, v))))},
+          {"radiance", light.radiance}};
+    }
+    case LightType::kEnvironment:
+      return {{"type", "environment"},
+              {"file", kBlenderEnvironmentFile},
+              {"rotation_deg", light.rotation_deg},
+              {"strength", light.scale}};
+    case LightType::kPoint:
+      break;
+  }
+  throw ExportError("Blender export: a point light cannot be exported");
 }
 
 json job_json(const Scene& scene, const BlenderExport& out, bool has_height) {
@@ -247,10 +298,7 @@ json job_json(const Scene& scene, const BlenderExport& out, bool has_height) {
       {"version", 2},
       {"camera", camera_json(scene.camera)},
       {"render", {{"samples", scene.camera.spp}, {"seed", scene.camera.seed % 2147483647u}}},
-      {"light",
-       {{"type", "sun"},
-        {"direction", to_json(to_blender(normalize(scene.light.direction)))},
-        {"strength", scene.light.irradiance}}},
+      {"light", light_json(scene.light)},
       {"mesh",
        {{"positions", kBlenderPositionsFile},
         {"normals", kBlenderNormalsFile},
@@ -292,6 +340,7 @@ BlenderExport export_blender(const Scene& scene) {
         {"kind", scene.height.normal_map() ? "normal" : "height"},
         {"extension", scene.height.map->edge == MapEdge::kWrap ? "REPEAT" : "EXTEND"}};
   }
+  if (scene.light.environment) out.environment = environment_image(*scene.light.environment);
   out.job_json = job.dump(2) + "\n";
   return out;
 }
@@ -309,6 +358,8 @@ void write_blender_files(const BlenderExport& job, const std::string& folder) {
     write_binary_file((dir / kBlenderUvsFile).string(), job.uvs.data(),
                       job.uvs.size() * sizeof(float));
   if (!job.map.pixels.empty()) write_exr(job.map, (dir / kBlenderMapFile).string());
+  if (!job.environment.pixels.empty())
+    write_exr(job.environment, (dir / kBlenderEnvironmentFile).string());
   write_text_file((dir / kBlenderJobFile).string(), job.job_json);
 }
 

@@ -125,10 +125,19 @@ void check_povray_scene(const Scene& scene) {
     throw ExportError(
         fmt::format("POV-Ray has no shadow-terminator method; it renders only `none` (got `{}`)",
                     method_info(scene.terminator.method.method).id));
-  if (scene.light.type != LightType::kDistant)
+  if (scene.light.type == LightType::kPoint)
     throw ExportError(
         "POV-Ray export supports distant lights only (POV-Ray's point-light fade is "
         "2/(1+(d/D)^2), not the inverse-square law the evaluator uses)");
+  if (scene.light.type == LightType::kSphere || scene.light.type == LightType::kQuad)
+    throw ExportError(
+        "POV-Ray export supports distant lights only: its area_light is a grid of point "
+        "lights that emit equally in every direction, not a Lambertian sphere or quad");
+  if (scene.light.type == LightType::kEnvironment)
+    throw ExportError(
+        "POV-Ray export supports distant lights only: an environment lights a POV-Ray scene "
+        "only through radiosity, which is not the same estimator as the evaluator's direct "
+        "light");
   if (scene.material.specular_weight > 0.0)
     throw ExportError("POV-Ray export supports Lambertian materials only (specular_weight 0)");
   if (!scene.props.empty())

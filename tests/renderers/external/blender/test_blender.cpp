@@ -371,6 +371,53 @@ TEST_F(Renderers, BlenderDisplacementNormalsAttributeShadesAsCustomNormals) {
 
 // The exporter refuses what the fixed Blender script would refuse, with the
 // same limit: read from the script, not restated here.
+// Cycles renders the evaluator's area and environment lights: the smooth
+// calibration sphere under a sphere light, a quad light, and Blender's own
+// forest environment (its sun included), 48 x 48 at 64 samples in both.
+// Per covered pixel d = Cycles - evaluator; the mean of d over ~1,400
+// pixels must be within 4 of its standard errors plus 0.5 % of the mean
+// radiance (the emitting sphere's 256-gon outline and float texels: below
+// 1e-3). A light off by a convention (the quad's side, the map's rotation
+// or a factor pi in the emission strength) is off by far more.
+TEST_F(Renderers, CyclesMatchesTheEvaluatorUnderAreaAndEnvironmentLights) {
+  const std::vector<std::pair<std::string, std::string>> lights = {
+      {"sphere", R"({"type": "sphere", "position": [-2.5, 1, -2], "radius": 0.6, "power": 300})"},
+      {"quad", R"({"type": "quad", "corner": [-3, -1, -3], "edge_u": [0, 2, 0],
+                  "edge_v": [1, 0, 2], "radiance": 3})"},
+      {"environment", R"({"type": "environment", "map": "blender:studiolights/world/forest.exr",
+                         "rotation_deg": 40, "scale": 1.5})"}};
+  for (const auto& [name, light] : lights) {
+    json doc = calibration_scene("sphere");
+    doc["camera"]["width"] = doc["camera"]["height"] = 48;
+    doc["camera"]["spp"] = 64;
+    doc["camera"]["jitter"] = true;
+    doc["light"] = json::parse(light);
+    const Scene scene = scene_from_json(doc, "<" + name + ">");
+    RenderSettings settings;
+    settings.log_path = path(name + ".log");
+    settings.timeout_s = 300;
+    const Image cycles = render_with(RendererKind::kBlender, scene, settings).image;
+    const Image evaluator = render(scene);
+    double sum = 0.0, sum2 = 0.0, reference = 0.0;
+    int n = 0;
+    for (int j = 0; j < 48; ++j)
+      for (int i = 0; i < 48; ++i) {
+        if (cycles.at(i, j, 3) < 1.0f || evaluator.at(i, j, 3) < 1.0f) continue;
+        const double d = double(cycles.at(i, j, 0)) - evaluator.at(i, j, 0);
+        sum += d, sum2 += d * d, reference += evaluator.at(i, j, 0), ++n;
+      }
+    ASSERT_GT(n, 1000) << name;
+    const double mean = sum / n, reference_mean = reference / n;
+    const double standard_error = std::sqrt((sum2 / n - mean * mean) / (n - 1));
+    std::printf(
+        "[ lights   ] %s: Cycles - evaluator = %.5f (standard error %.5f) of mean %.5f "
+        "W m^-2 sr^-1 over %d pixels\n",
+        name.c_str(), mean, standard_error, reference_mean, n);
+    EXPECT_GT(reference_mean, 0.01) << name;
+    EXPECT_LT(std::abs(mean), 4.0 * standard_error + 0.005 * reference_mean) << name;
+  }
+}
+
 TEST(BlenderExport, HeightTermLimitIsTheScriptsAndIsCheckedBeforeBlenderRuns) {
   std::ifstream in(kSource + "/harness/blender_render.py");
   const std::string script((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -1,0 +1,103 @@
+#include "core/light_sampling.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace penumbra {
+
+namespace {
+
+// 1 - cos theta_max without the cancellation of 1 - sqrt(1 - s2) for a
+// small or distant sphere (s2 = sin^2 theta_max).
+double one_minus_cos_max(double sin2_max) {
+  const double cos_max = std::sqrt(std::max(0.0, 1.0 - sin2_max));
+  return sin2_max / (1.0 + cos_max);
+}
+
+}  // namespace
+
+double sphere_solid_angle(const Vec3& centre, double radius, const Vec3& p) {
+  const double d2 = length_squared(centre - p);
+  const double r2 = radius * radius;
+  if (d2 <= r2) return 0.0;
+  return 2.0 * kPi * one_minus_cos_max(r2 / d2);
+}
+
+LightDirectionSample sample_sphere_light(const Vec3& centre, double radius, const Vec3& p,
+                                         double u1, double u2) {
+  const Vec3 to_centre = centre - p;
+  const double d2 = length_squared(to_centre);
+  const double r2 = radius * radius;
+  if (d2 <= r2) return {};
+  const double d = std::sqrt(d2);
+  const double cap = one_minus_cos_max(r2 / d2);  // 1 - cos theta_max
+  // cos theta uniform in [cos theta_max, 1]: 1 - cos theta = u1 cap, and
+  // sin^2 theta = (1 - cos)(1 + cos), both without cancellation.
+  const double one_minus_cos = u1 * cap;
+  const double cos_theta = 1.0 - one_minus_cos;
+  const double sin_theta = std::sqrt(std::max(0.0, one_minus_cos * (2.0 - one_minus_cos)));
+  const double phi = 2.0 * kPi * u2;
+  const Frame frame = Frame::from_z(to_centre / d);
+  const Vec3 wi =
+      normalize(frame.to_world({sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta}));
+  // The nearer root of |p + t wi - centre| = radius; the discriminant is
+  // r^2 - d^2 sin^2 theta >= 0 inside the cone (clamped for rounding).
+  const double b = dot(wi, to_centre);
+  const double distance = b - std::sqrt(std::max(0.0, r2 - (d2 - b * b)));
+  return {wi, 1.0 / (2.0 * kPi * cap), std::max(distance, 0.0)};
+}
+
+LightDirectionSample sample_quad_light(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
+                                       const Vec3& p, double u1, double u2) {
+  const Vec3 normal_area = cross(edge_u, edge_v);  // |.| = area
+  const double area = length(normal_area);
+  const Vec3 to_light = corner + edge_u * u1 + edge_v * u2 - p;
+  const double d2 = length_squared(to_light);
+  if (!(area > 0.0) || !(d2 > 0.0)) return {};
+  const double d = std::sqrt(d2);
+  const Vec3 wi = to_light / d;
+  const double cos_light = -dot(normal_area, wi) / area;
+  if (!(cos_light > 0.0)) return {};
+  return {wi, d2 / (area * cos_light), d};
+}
+
+double polygon_irradiance(const Vec3* vertices, int count, const Vec3& p, const Vec3& n,
+                          double radiance) {
+  double sum = 0.0;
+  for (int i = 0; i < count; ++i) {
+    const Vec3 a = normalize(vertices[i] - p);
+    const Vec3 b = normalize(vertices[(i + 1) % count] - p);
+    const Vec3 c = cross(a, b);
+    const double sin_gamma = length(c);
+    if (!(sin_gamma > 0.0)) continue;
+    const double gamma = std::atan2(sin_gamma, dot(a, b));
+    sum += gamma * dot(n, c) / sin_gamma;
+  }
+  return 0.5 * radiance * std::abs(sum);
+}
+
+std::uint32_t permute_index(std::uint32_t i, std::uint32_t n, std::uint32_t seed) {
+  if (n <= 1) return 0;
+  std::uint32_t mask = n - 1;
+  mask |= mask >> 1, mask |= mask >> 2, mask |= mask >> 4, mask |= mask >> 8, mask |= mask >> 16;
+  // Each step is a bijection of [0, mask]: xor with a constant, a
+  // multiplication by an odd number and a right xor-shift modulo a power
+  // of two. Walking the cycle from i until it falls below n keeps it a
+  // bijection of [0, n).
+  do {
+    i ^= seed;
+    i *= 0xe170893du;
+    i &= mask;
+    i ^= i >> 4;
+    i ^= seed >> 16;
+    i *= 0x0929eb3fu;
+    i &= mask;
+    i ^= i >> 7;
+    i *= 0x6935fa69u | 1u;
+    i &= mask;
+    i ^= i >> 11;
+  } while (i >= n);
+  return (i + seed) % n;
+}
+
+}  // namespace penumbra
