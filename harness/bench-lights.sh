@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Benchmark: the evaluator's camera samples per second under each light type
 # against the sun, in one run: the sphere weave (A = 0.01) bumped with
-# estevez2019 and its displaced truth, 128x128 at 16 spp on all cores, each
+# estevez2019 and its displaced truth, 256x256 at 64 spp on all cores, each
 # light type rendered N times in turn (sun, sphere, quad, environment) and
 # the median wall time kept. An area light's sample is drawn per camera
 # sample (docs/evaluator.md#area-and-environment-lights); the sun's path is
@@ -20,8 +20,8 @@ declare -A light=(
   [quad]='{"type": "quad", "corner": [-3, -1, -1.5], "edge_u": [0, 2, 0], "edge_v": [0.3, 0, 1.5], "radiance": 3}'
   [environment]='{"type": "environment", "map": "blender:studiolights/world/forest.exr"}'
 )
-samples=$((128 * 128 * 16))
-echo "penumbra render, 128x128, 16 spp ($samples camera samples), $(nproc) cores; $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //')"
+samples=$((256 * 256 * 64))
+echo "penumbra render, 256x256, 64 spp ($samples camera samples), $(nproc) cores; $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //')"
 printf '%-14s %-12s %12s %16s %10s\n' representation light "median s" "samples/s" "vs sun"
 for rep in bump displacement; do
   sun=""
@@ -30,7 +30,7 @@ for rep in bump displacement; do
     for i in $(seq "$n"); do
       start=$(date +%s.%N)
       "$penumbra" render "$root/scenes/sphere-weave.json" -o "$work/out.exr" -q \
-        --representation "$rep" --method estevez2019 --width 128 --height 128 --spp 16 \
+        --representation "$rep" --method estevez2019 --width 256 --height 256 --spp 64 \
         --set "/light=${light[$name]}" --set /displacement/edge_length=0.006
       times+=("$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { print b - a }')")
     done
