@@ -142,7 +142,10 @@ def constant_of(c, e, p):
             'fitted': c.interval(e, p, 'fitted'),
             'error_published': number('error_published'),
             'error_in_sample': number('error_fitted_in_sample'),
-            'error_held_out': number('error_fitted_held_out')}
+            'error_held_out': number('error_fitted_held_out'),
+            # null or absent (a fit.json before it): inside the range
+            'at_bound': (c.get(e, p, 'at_bound', str, 'a string or null')
+                         if e.get('at_bound') is not None else None)}
 
 
 def pictures_of(c, pic, p):

@@ -117,24 +117,79 @@ def held_out_table(fit):
     return table(head, rows)
 
 
+def symbol(c):
+    """A constant's symbol: the first word of its description ('k in
+    alpha^2 = k tan^2(delta)')."""
+    return c['constant'].split(' ', 1)[0]
+
+
+def inside(c):
+    lo, hi = c['fitted'][1:]
+    return math.isfinite(lo + hi) and lo <= c['published'] <= hi
+
+
+def constant_sentence(group):
+    """One sentence for a method's constants: fitted values with their
+    intervals against the published ones, and whether those lie inside.
+    A method with several constants fits them together."""
+    bound = group[0]['at_bound']
+    edge = (f' The fit reached the edge of its range ({bound}): E would '
+            'fall further beyond it, and the intervals hold within it.'
+            if bound else '')
+    if len(group) == 1:
+        c = group[0]
+        return (f'{c["method"]}: fitted {c["constant"]}: {symbol(c)} = '
+                f'{frac(c["fitted"], 3)} (dimensionless; 95 % bootstrap '
+                f'interval over variants) against the published '
+                f'{fmt(c["published"], digits=4)}; the published constant '
+                'lies ' + ('inside' if inside(c) else 'outside') +
+                ' the interval.' + edge)
+    names = [symbol(c) for c in group]
+    where = [n for n, c in zip(names, group) if inside(c)]
+    if len(where) == len(group):
+        verdict = 'every published constant lies inside its interval'
+    elif not where:
+        verdict = 'no published constant lies inside its interval'
+    else:
+        verdict = ('the published ' + ' and '.join(where) + ' lie'
+                   + ('s' if len(where) == 1 else '') + ' inside '
+                   + ('its interval' if len(where) == 1 else 'their intervals')
+                   + ', the published '
+                   + ' and '.join(n for n in names if n not in where)
+                   + ' outside')
+    form = group[0]['constant'].split(' in ', 1)[-1]
+    return (f'{group[0]["method"]}: fitted together in {form}: '
+            + ', '.join(f'{symbol(c)} = {frac(c["fitted"], 4)}'
+                        for c in group)
+            + ' (dimensionless; 95 % bootstrap intervals over variants) '
+            'against the published '
+            + ', '.join(f'{symbol(c)} = {fmt(c["published"], digits=4)}'
+                        for c in group)
+            + f'; {verdict}.' + edge)
+
+
 def constants_context(fit):
-    """A sentence per fitted constant: fitted value with its interval, the
-    published one, whether it lies inside; and a table of the errors."""
-    sentences, rows = [], []
+    """A sentence per method with fitted constants: fitted values with their
+    intervals, the published ones, whether they lie inside; and a table of
+    the errors (a method's constants share them: they are fitted
+    together)."""
+    groups = {}
     for c in fit['constants']:
-        lo, hi = c['fitted'][1:]
-        inside = math.isfinite(lo + hi) and lo <= c['published'] <= hi
-        sentences.append(
-            f'{c["method"]}: fitted {c["constant"]}: k = '
-            f'{frac(c["fitted"], 3)} (dimensionless; 95 % bootstrap '
-            f'interval over variants) against the published '
-            f'{fmt(c["published"], digits=4)}; the published constant lies '
-            + ('inside' if inside else 'outside') + ' the interval.')
-        rows.append([c['method'], (c['published'], 1),
-                     frac_cell(c['fitted'], 3), 'yes' if inside else 'no',
-                     pct_value(c['error_published']),
-                     pct_value(c['error_held_out']),
-                     pct_value(c['error_in_sample'])])
+        groups.setdefault(c['method'], []).append(c)
+    sentences = [constant_sentence(g) for g in groups.values()]
+    rows = []
+    for group in groups.values():
+        for c in group:
+            digits = 3 if len(group) == 1 else 4
+            rows.append([c['method'] + ('' if len(group) == 1
+                                        else f' {symbol(c)}'),
+                         {'text': fmt(c['published'], digits=5),
+                          'cls': 'n'},
+                         frac_cell(c['fitted'], digits),
+                         'yes' if inside(c) else 'no',
+                         pct_value(c['error_published']),
+                         pct_value(c['error_held_out']),
+                         pct_value(c['error_in_sample'])])
     head = ['method', 'published (dimensionless)',
             'fitted [95 % interval] (dimensionless)',
             'published inside', f'E at published ({PCT})',

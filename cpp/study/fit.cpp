@@ -1,13 +1,16 @@
 #include "study/fit.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <random>
 #include <set>
 #include <stdexcept>
+#include <tuple>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -125,25 +128,42 @@ std::vector<std::size_t> all_of(std::size_t n) {
   return index;
 }
 
+// Percentile-bootstrap intervals over a set of variants of N statistics
+// computed together: `statistics` is given the indices of one resample and
+// returns std::array<double, N>. nullopt for a statistic with no finite draw.
+template <std::size_t N, typename Statistics>
+std::array<std::optional<Interval>, N> bootstrap_intervals(const std::vector<std::size_t>& index,
+                                                           int resamples, std::uint64_t seed,
+                                                           Statistics&& statistics) {
+  std::mt19937_64 rng(seed);
+  std::array<std::vector<double>, N> draws;
+  std::vector<std::size_t> sample(index.size());
+  for (int r = 0; r < resamples; ++r) {
+    for (std::size_t& s : sample) s = index[uniform_index(rng, index.size())];
+    const std::array<double, N> d = statistics(sample);
+    for (std::size_t n = 0; n < N; ++n)
+      if (std::isfinite(d[n])) draws[n].push_back(d[n]);
+  }
+  std::array<std::optional<Interval>, N> intervals;
+  for (std::size_t n = 0; n < N; ++n) {
+    if (draws[n].empty()) continue;
+    std::sort(draws[n].begin(), draws[n].end());
+    intervals[n] = Interval{quantile(draws[n], 0.5 * (1.0 - kConfidence)),
+                            quantile(draws[n], 0.5 * (1.0 + kConfidence))};
+  }
+  return intervals;
+}
+
 // A statistic of a set of variants and its percentile-bootstrap interval
 // over them: `statistic` is given the indices of one resample.
 template <typename Statistic>
 PooledError bootstrap(const std::vector<std::size_t>& index, int resamples, std::uint64_t seed,
                       Statistic&& statistic) {
-  PooledError e{statistic(index), {}};
-  std::mt19937_64 rng(seed);
-  std::vector<double> draws;
-  std::vector<std::size_t> sample(index.size());
-  for (int r = 0; r < resamples; ++r) {
-    for (std::size_t& s : sample) s = index[uniform_index(rng, index.size())];
-    const double d = statistic(sample);
-    if (std::isfinite(d)) draws.push_back(d);
-  }
-  if (draws.empty()) return {e.value, {e.value, e.value}};
-  std::sort(draws.begin(), draws.end());
-  e.interval = {quantile(draws, 0.5 * (1.0 - kConfidence)),
-                quantile(draws, 0.5 * (1.0 + kConfidence))};
-  return e;
+  const double value = statistic(index);
+  const auto [interval] = bootstrap_intervals<1>(
+      index, resamples, seed,
+      [&](const std::vector<std::size_t>& s) { return std::array<double, 1>{statistic(s)}; });
+  return {value, interval.value_or(Interval{value, value})};
 }
 
 PooledError pooled_error(const std::vector<double>& values, const std::vector<std::size_t>& index,
@@ -210,6 +230,181 @@ struct GridMethod {
 };
 constexpr GridMethod kGridMethods[] = {{"estevez2019", estevez2019},
                                        {"deshmukh2020", deshmukh2020}};
+
+}  // namespace
+
+namespace {
+
+// Nelder-Mead (reflection 1, expansion 2, contraction 1/2, shrink 1/2) on
+// f(x, y) over the box [lo, hi]^2, trial points projected into it, from a
+// right triangle of legs `step` at `start` (legs turned inwards at the box's
+// edge), until every vertex lies within `tolerance` of the best on both
+// axes or `max_evaluations` is spent. The best vertex's f never rises, so
+// the result is never worse than `start`.
+template <typename F>
+std::array<double, 2> nelder_mead(F&& f, std::array<double, 2> start, double step, double lo,
+                                  double hi, double tolerance, int max_evaluations) {
+  using Point = std::array<double, 2>;
+  struct Vertex {
+    Point x;
+    double f;
+  };
+  int evaluations = 0;
+  const auto at = [&](Point x) {
+    for (double& c : x) c = std::clamp(c, lo, hi);
+    ++evaluations;
+    return Vertex{x, f(x[0], x[1])};
+  };
+  const auto leg = [&](double c) { return c + step <= hi ? c + step : c - step; };
+  std::array<Vertex, 3> v{at(start), at({leg(start[0]), start[1]}), at({start[0], leg(start[1])})};
+  const auto along = [](const Point& from, const Point& to, double t) {
+    return Point{from[0] + t * (to[0] - from[0]), from[1] + t * (to[1] - from[1])};
+  };
+  while (evaluations < max_evaluations) {
+    std::sort(v.begin(), v.end(), [](const Vertex& a, const Vertex& b) { return a.f < b.f; });
+    double spread = 0.0;
+    for (const Vertex& w : v)
+      for (int k = 0; k < 2; ++k) spread = std::max(spread, std::abs(w.x[k] - v[0].x[k]));
+    if (spread < tolerance) break;
+    const Point centroid = along(v[0].x, v[1].x, 0.5);
+    const Vertex reflected = at(along(v[2].x, centroid, 2.0));
+    if (reflected.f < v[0].f) {
+      const Vertex expanded = at(along(v[2].x, centroid, 3.0));
+      v[2] = expanded.f < reflected.f ? expanded : reflected;
+    } else if (reflected.f < v[1].f) {
+      v[2] = reflected;
+    } else {
+      const Vertex contracted = reflected.f < v[2].f ? at(along(v[2].x, centroid, 1.5))
+                                                     : at(along(v[2].x, centroid, 0.5));
+      if (contracted.f < std::min(reflected.f, v[2].f)) {
+        v[2] = contracted;
+      } else {
+        for (int k = 1; k < 3; ++k) v[k] = at(along(v[0].x, v[k].x, 0.5));
+      }
+    }
+  }
+  std::sort(v.begin(), v.end(), [](const Vertex& a, const Vertex& b) { return a.f < b.f; });
+  return v[0].x;
+}
+
+// deshmukh2020 (core/terminator.cpp) with its constants as arguments, the
+// same operations in the same order, so that the published pair gives its
+// bits (core/terminator.* is in every render's cache key: not edited there).
+double deshmukh2020_with(const Vec3& ng, const Vec3& ns, const Vec3& wi,
+                         const Deshmukh2020Constants& c) {
+  const double cos_x = std::clamp(dot(ns, ng), 0.0, 1.0);
+  const double d = c.d0 + (c.d1 - c.d0) * cos_x;
+  const double t = std::clamp(dot(ng, wi) / d, 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
+}
+
+// fit_deshmukh2020 on any multiset of a fixed set of variants (every
+// variant, a bootstrap resample, the variants without a family).
+//
+// G enters E only on the grid, so d only over its deviations: the search
+// runs on d at the deviation axis' two ends, d1 at 0 and d_e at its end e
+// (60 degrees on the default grid), d0 = (d_e - d1 cos e) / (1 - cos e), and
+// on them as angles w = asin(d) in degrees, the width of light before the
+// terminator that the smoothstep darkens, so that its steps compare with the
+// light axis'. Range (0, 90] degrees, d in (0, 1] over the whole grid (d is
+// linear in cos delta): d > 0 for the smoothstep to be defined, and at d = 1
+// it already spans the whole lit hemisphere. d0 itself, d at 90 degrees, is
+// an extrapolation the grid does not see, so it is not bounded.
+//
+// The coarse step is half the light axis' step: G is taken at the light
+// cells' centres, where E changes how it bends (d crossing a centre's
+// cosine), and every interval between two centres' angles then holds a
+// node. Each variant's squared RMSE at the nodes is computed once; a
+// resample's coarse search is then a weighted sum.
+class Deshmukh2020Search {
+ public:
+  Deshmukh2020Search(std::vector<const TallyVariant*> variants, const FactorGrid& grid)
+      : variants_(std::move(variants)),
+        grid_(grid),
+        step_(0.5 * grid.axes[0].step_deg),
+        cos_end_(std::cos(radians(grid.axes[1].max_deg))) {
+    n_ = int(std::floor(90.0 / step_ + 1e-9));
+    coarse_.resize(std::size_t(n_) * std::size_t(n_));
+    for (int i = 0; i < n_; ++i)
+      for (int j = 0; j < n_; ++j) {
+        const std::vector<double> g = deshmukh2020_table(grid_, constants(node(i), node(j)));
+        for (const TallyVariant* v : variants_) coarse(i, j).push_back(squared(tally_rmse(*v, g)));
+      }
+  }
+
+  // Where `c` lies on the edge of the search's range (within 1e-3 degrees):
+  // which d and which bound, "" where it does not.
+  std::string bound_reached(const Deshmukh2020Constants& c) const {
+    std::string bounds;
+    const double d_end = c.d0 + (c.d1 - c.d0) * cos_end_;
+    for (const auto& [d, where] :
+         {std::pair{c.d1, std::string("at deviation 0")},
+          std::pair{d_end, fmt::format("at deviation {:g} degrees", grid_.axes[1].max_deg)}}) {
+      const double w = angle(std::clamp(d, 0.0, 1.0));
+      if (w < 1e-3 || w > 90.0 - 1e-3)
+        bounds += (bounds.empty() ? "" : "; ") + fmt::format("d {} = {}", where, w < 1e-3 ? 0 : 1);
+    }
+    return bounds;
+  }
+
+  // `sample`: indices into the variants, each counted as often as it occurs.
+  Deshmukh2020Constants fit(const std::vector<std::size_t>& sample) const {
+    std::vector<double> weight(variants_.size(), 0.0);
+    for (std::size_t k : sample) weight[k] += 1.0;
+    const Deshmukh2020Constants p = kDeshmukh2020Published;
+    std::array<double, 2> start{angle(p.d1), angle(p.d0 + (p.d1 - p.d0) * cos_end_)};
+    double best = error(weight, start[0], start[1]);
+    for (int i = 0; i < n_; ++i)
+      for (int j = 0; j < n_; ++j)
+        if (const double e = mean(weight, coarse(i, j)); e < best)
+          best = e, start = {node(i), node(j)};
+    // 1e-6 degrees: d to about 2e-8, far below any difference the
+    // bootstrap shows.
+    const std::array<double, 2> w =
+        nelder_mead([&](double w1, double w_end) { return error(weight, w1, w_end); }, start, step_,
+                    1e-6, 90.0, 1e-6, 2000);
+    return constants(w[0], w[1]);
+  }
+
+ private:
+  static double squared(double e) { return e * e; }
+  static double angle(double d) { return degrees(std::asin(d)); }
+  // The constants of angles w1 = asin(d1), w_e = asin(d at the deviation
+  // axis' end).
+  Deshmukh2020Constants constants(double w1, double w_end) const {
+    const double d1 = std::sin(radians(w1)), d_end = std::sin(radians(w_end));
+    return {(d_end - d1 * cos_end_) / (1.0 - cos_end_), d1};
+  }
+  double node(int i) const { return step_ * double(i + 1); }
+  std::vector<double>& coarse(int i, int j) {
+    return coarse_[std::size_t(i) * std::size_t(n_) + std::size_t(j)];
+  }
+  const std::vector<double>& coarse(int i, int j) const {
+    return coarse_[std::size_t(i) * std::size_t(n_) + std::size_t(j)];
+  }
+  // The mean of squared RMSEs e over the variants with weight, NaNs left
+  // out (as fit_estevez2019_k leaves them out).
+  static double mean(const std::vector<double>& weight, const std::vector<double>& e) {
+    double sum = 0.0, n = 0.0;
+    for (std::size_t k = 0; k < e.size(); ++k)
+      if (weight[k] > 0.0 && std::isfinite(e[k])) sum += weight[k] * e[k], n += weight[k];
+    return n > 0.0 ? sum / n : 0.0;
+  }
+  double error(const std::vector<double>& weight, double w1, double w_end) const {
+    const std::vector<double> g = deshmukh2020_table(grid_, constants(w1, w_end));
+    std::vector<double> e(variants_.size(), 0.0);
+    for (std::size_t k = 0; k < variants_.size(); ++k)
+      if (weight[k] > 0.0) e[k] = squared(tally_rmse(*variants_[k], g));
+    return mean(weight, e);
+  }
+
+  std::vector<const TallyVariant*> variants_;
+  FactorGrid grid_;
+  double step_;     // degrees, of the coarse grid and the first simplex
+  double cos_end_;  // cos of the deviation axis' end
+  int n_ = 0;       // coarse nodes per axis: step_, 2 step_, ..., 90 degrees
+  std::vector<std::vector<double>> coarse_;  // per node (w1 slowest), per variant
+};
 
 }  // namespace
 
@@ -362,8 +557,7 @@ void fit_shares(const FitOptions& o, const std::vector<double>& none,
 // estevez2019's 1/8 refitted: on every variant, per bootstrap resample
 // (refitted each time; fewer resamples, each is a search), and per family
 // held out.
-void fit_constants(const FitOptions& o, FitResult* r) {
-  if (!light_deviation_grid(r->grid)) return;
+void fit_estevez2019_constant(const FitOptions& o, FitResult* r) {
   say(o, "fitting estevez2019's constant");
   const std::vector<std::size_t> index = all_of(r->variants.size());
   FittedConstant c;
@@ -371,6 +565,9 @@ void fit_constants(const FitOptions& o, FitResult* r) {
   c.constant = "k in alpha^2 = k tan^2(delta)";
   c.published = 1.0 / 8.0;
   c.fitted = fit_estevez2019_k(data_of(r->variants, index), r->grid);
+  // The golden section's range, [1e-3, 10], to its 1e-4 in log k.
+  for (const double end : {1e-3, 10.0})
+    if (std::abs(std::log(c.fitted / end)) < 1e-3) c.at_bound = fmt::format("k = {:g}", end);
   c.in_sample = pooled(rmse_of(r->variants, estevez2019_table(r->grid, c.fitted)), index);
   c.at_published = pooled(rmse_of(r->variants, estevez2019_table(r->grid, c.published)), index);
   const int resamples = std::min(o.resamples, 200);
@@ -386,6 +583,50 @@ void fit_constants(const FitOptions& o, FitResult* r) {
   }
   c.held_out = pooled(held, index);
   r->constants.push_back(c);
+}
+
+// deshmukh2020's pair refitted as estevez2019's k is (the same resamples:
+// same count and seed), one entry per constant; the errors are the pair's.
+void fit_deshmukh2020_constants(const FitOptions& o, FitResult* r) {
+  say(o, "fitting deshmukh2020's constants");
+  const std::vector<std::size_t> index = all_of(r->variants.size());
+  std::vector<const TallyVariant*> data;
+  for (const FitVariant& v : r->variants) data.push_back(&v.data);
+  const Deshmukh2020Search search(data, r->grid);
+  const Deshmukh2020Constants fitted = search.fit(index), published = kDeshmukh2020Published;
+  const auto pair_of = [&](const std::vector<std::size_t>& k) {
+    const Deshmukh2020Constants c = search.fit(k);
+    return std::array<double, 2>{c.d0, c.d1};
+  };
+  const auto intervals = bootstrap_intervals<2>(index, std::min(o.resamples, 200), o.seed, pair_of);
+  std::vector<double> held(r->variants.size(), std::numeric_limits<double>::quiet_NaN());
+  for (const auto& [family, members] : families(r->variants)) {
+    const std::vector<double> g =
+        deshmukh2020_table(r->grid, search.fit(without(r->variants, {family})));
+    for (std::size_t i : members) held[i] = tally_rmse(r->variants[i].data, g);
+  }
+  FittedConstant c;
+  c.method = "deshmukh2020";
+  c.in_sample = pooled(rmse_of(r->variants, deshmukh2020_table(r->grid, fitted)), index);
+  c.at_published = pooled(rmse_of(r->variants, deshmukh2020_table(r->grid, published)), index);
+  c.held_out = pooled(held, index);
+  c.at_bound = search.bound_reached(fitted);
+  // No comma: fit.csv writes this as its unit column.
+  const char* lerp = " in d = d0 + (d1 - d0) cos(delta)";
+  for (const auto& [symbol, p, f, interval] :
+       {std::tuple{"d0", published.d0, fitted.d0, intervals[0]},
+        std::tuple{"d1", published.d1, fitted.d1, intervals[1]}}) {
+    c.constant = std::string(symbol) + lerp;
+    c.published = p, c.fitted = f;
+    c.interval = interval.value_or(Interval{f, f});
+    r->constants.push_back(c);
+  }
+}
+
+void fit_constants(const FitOptions& o, FitResult* r) {
+  if (!light_deviation_grid(r->grid)) return;
+  fit_estevez2019_constant(o, r);
+  fit_deshmukh2020_constants(o, r);
 }
 
 }  // namespace
@@ -417,6 +658,19 @@ double fit_estevez2019_k(const std::vector<TallyVariant>& variants, const Factor
       a = c, c = d, fc = fd, d = a + phi * (b - a), fd = error(d);
   }
   return std::exp(0.5 * (a + b));
+}
+
+std::vector<double> deshmukh2020_table(const FactorGrid& grid, const Deshmukh2020Constants& c) {
+  return table_of(grid, [&c](const Vec3& ng, const Vec3& ns, const Vec3& wi) {
+    return deshmukh2020_with(ng, ns, wi, c);
+  });
+}
+
+Deshmukh2020Constants fit_deshmukh2020(const std::vector<TallyVariant>& variants,
+                                       const FactorGrid& grid) {
+  std::vector<const TallyVariant*> data;
+  for (const TallyVariant& v : variants) data.push_back(&v);
+  return Deshmukh2020Search(data, grid).fit(all_of(variants.size()));
 }
 
 FitResult fit_study(const FitOptions& o) {
@@ -571,7 +825,8 @@ json result_json(const FitResult& r) {
                               {"fitted", {c.fitted, c.interval.low, c.interval.high}},
                               {"error_fitted_in_sample", c.in_sample},
                               {"error_published", c.at_published},
-                              {"error_fitted_held_out", c.held_out}});
+                              {"error_fitted_held_out", c.held_out},
+                              {"at_bound", c.at_bound.empty() ? json() : json(c.at_bound)}});
   return j;
 }
 
@@ -593,8 +848,15 @@ std::string result_csv(const FitResult& r) {
     row("error:" + s.method, "study", s.error, unit);
     row("share:" + s.method, "study", s.share, "fraction of the floor's improvement on raw bump");
   }
-  for (const FittedConstant& c : r.constants)
-    row("constant:" + c.method, "study", {c.fitted, c.interval}, c.constant);
+  // A method with several constants names each by its symbol (the first
+  // word of `constant`): constant:deshmukh2020:d0.
+  std::map<std::string, int> per_method;
+  for (const FittedConstant& c : r.constants) ++per_method[c.method];
+  for (const FittedConstant& c : r.constants) {
+    const std::string symbol = c.constant.substr(0, c.constant.find(' '));
+    row("constant:" + c.method + (per_method[c.method] > 1 ? ":" + symbol : ""), "study",
+        {c.fitted, c.interval}, c.constant);
+  }
   return csv;
 }
 
@@ -612,9 +874,15 @@ void write_fit(const FitResult& r, const std::filesystem::path& out) {
   write_text_file((out / "table.json").string(), table.dump(1) + "\n");
 }
 
+// What fit.json holds, raised when it gains a quantity, so that a study's
+// fit step redoes a fit written without it (2: deshmukh2020's constants).
+constexpr const char* kFitContents = "2";
+
 std::string fit_inputs_digest(const std::filesystem::path& study) {
   std::uint64_t h = fnv1a(without_run_keys(read_file((study / "report.json").string())));
-  h = fnv1a(std::string(build_code_digests().evaluator) + "\n" + kPenumbraVersion, h);
+  h = fnv1a(std::string(build_code_digests().evaluator) + "\n" + kPenumbraVersion + "\nfit.json " +
+                kFitContents,
+            h);
   return fmt::format("{:016x}", h);
 }
 

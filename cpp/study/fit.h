@@ -89,13 +89,20 @@ struct MethodShare {
   double grid_error = 0.0, resolution_error = 0.0;
 };
 
+// One constant of a method, refitted. A method with several constants (deshmukh2020's d0
+// and d1) has an entry for each, fitted together: the errors are those of the set, the
+// interval each constant's own over the same resamples.
 struct FittedConstant {
-  std::string method, constant;
+  std::string method, constant;  // constant: its symbol first, then where it enters
   double published = 0.0, fitted = 0.0;
   Interval interval;          // bootstrap over variants, refitted per resample
   double in_sample = 0.0;     // E at the fitted value, all variants
   double at_published = 0.0;  // E at the published value, all variants
   double held_out = 0.0;      // E with the value fitted without each family, pooled
+  // Which edge of the search's range the fit on every variant reached
+  // ("d at deviation 60 degrees = 1"), "" where none: E would fall further
+  // outside the range, and the interval holds within it.
+  std::string at_bound;
 };
 
 struct FitResult {
@@ -126,13 +133,34 @@ std::vector<double> estevez2019_table(const FactorGrid& grid, double k);
 // over `variants` (golden section on log k in [1e-3, 10]).
 double fit_estevez2019_k(const std::vector<TallyVariant>& variants, const FactorGrid& grid);
 
+// deshmukh2020's two constants: its smoothstep of <Ng,wi>/d darkens light
+// from <Ng,wi> = d down to the terminator, with d = d0 + (d1 - d0) <Ns,Ng>
+// (dimensionless cosines; published d0 = 0.14922, d1 = 0.01999).
+struct Deshmukh2020Constants {
+  double d0 = 0.0, d1 = 0.0;
+};
+inline constexpr Deshmukh2020Constants kDeshmukh2020Published{0.14922, 0.01999};
+// deshmukh2020's factor with constants `c` on a light,deviation grid, at the
+// cells' centres (at the published constants, core/terminator's
+// deshmukh2020 to the bit).
+std::vector<double> deshmukh2020_table(const FactorGrid& grid, const Deshmukh2020Constants& c);
+// The (d0, d1) minimising the mean squared terminator RMSE of
+// deshmukh2020_table over `variants`, with d in (0, 1] over the grid's
+// deviations (d0, at 90 degrees, is not bounded): a coarse grid in the
+// angles asin(d) at the deviation axis' two ends, at half the light axis'
+// step, then Nelder-Mead from the best of it and the published pair (so E
+// at the fit is never above E at the published constants).
+Deshmukh2020Constants fit_deshmukh2020(const std::vector<TallyVariant>& variants,
+                                       const FactorGrid& grid);
+
 // fit.json (everything), fit.csv (one row per number) and table.json (the
 // fitted table) in `out`.
 void write_fit(const FitResult& result, const std::filesystem::path& out);
 
 // What a fit of the study folder `study` is made from: report.json less its
 // provenance (it names every render by its content key), the evaluator's
-// code digest (the fit re-traces raw bump) and Penumbra's version.
+// code digest (the fit re-traces raw bump), Penumbra's version and the
+// version of fit.json's contents.
 std::string fit_inputs_digest(const std::filesystem::path& study);
 // Whether `fit_dir` holds fit.json, fit.csv and table.json of a fit from
 // `digest` (its .inputs stamp), and writing that stamp after a fit.

@@ -10,7 +10,8 @@ Checks that
   - the section appears iff STUDY/fit/fit.json exists, and without it the
     page says in one line how to get it;
   - the numbers on the page are fit.json's, formatted (% of albedo·E/π
-    with intervals, shares and k as fractions);
+    with intervals, shares, k and deshmukh2020's d0, d1 as fractions, with
+    whether each published constant lies inside its interval);
   - the fitted table's column is the held-out error, the in-sample one only
     in its labelled column;
   - the tie sentence and the per-family verdicts follow the interval rule:
@@ -118,6 +119,28 @@ class Section(unittest.TestCase):
         self.assertIn('k = {:.3f} [{:.3f}, {:.3f}]'.format(*k), page)
         self.assertIn('against the published 0.125; the published constant '
                       'lies outside the interval.', page)
+
+    def test_deshmukh2020_line_is_fit_json(self):
+        page, d = self.pages['tie'], self.doc
+        d0, d1 = [c for c in d['constants'] if c['method'] == 'deshmukh2020']
+        self.assertIn(
+            'deshmukh2020: fitted together in d = d0 + (d1 - d0) cos(delta): '
+            'd0 = {:.4f} [{:.4f}, {:.4f}], '.format(*d0['fitted']) +
+            'd1 = {:.4f} [{:.4f}, {:.4f}] '.format(*d1['fitted']) +
+            '(dimensionless; 95 % bootstrap intervals over variants) against '
+            'the published d0 = 0.1492, d1 = 0.01999; the published d0 lies '
+            'inside its interval, the published d1 outside. The fit reached '
+            'the edge of its range (d at deviation 60 degrees = 1): E would '
+            'fall further beyond it, and the intervals hold within it.', page)
+        rows = [r for r in rows_of(page, 'achievable-constants')
+                if r[0].startswith('deshmukh2020')]
+        self.assertEqual([r[0] for r in rows],
+                         ['deshmukh2020 d0', 'deshmukh2020 d1'])
+        for row, c in zip(rows, (d0, d1)):
+            self.assertEqual(row[3:], ['yes' if c is d0 else 'no'] + [
+                f'{c[k] * 100:.2f}' for k in ('error_published',
+                                              'error_fitted_held_out',
+                                              'error_fitted_in_sample')])
 
     def test_held_out_is_the_fitted_figure(self):
         rows = rows_of(self.pages['tie'], 'achievable-held-out')

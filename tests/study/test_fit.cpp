@@ -1,15 +1,19 @@
 // `penumbra fit` on a small finished study: the floor is below every shipped
 // factor of its inputs, the held-out table never saw its family's renders,
-// and refitting estevez2019 on its own renders recovers its constant.
+// and refitting estevez2019 or deshmukh2020 on truths made with their own
+// factor recovers their constants.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
+#include "core/vec.h"
 #include "image/image_io.h"
 #include "study/fit.h"
 #include "study/study.h"
@@ -107,6 +111,67 @@ TEST_F(Fit, RefittingEstevez2019OnItsOwnTermRecoversItsConstant) {
     for (const FitVariant& v : r.variants)
       synthetic.push_back({v.id, v.data.tally, v.data.tally.profile(estevez2019_table(r.grid, k))});
     EXPECT_NEAR(fit_estevez2019_k(synthetic, r.grid) / k, 1.0, 2e-3) << k;
+  }
+}
+
+// Truths that are raw bump under deshmukh2020's own factor with known
+// constants: the refit finds them. The published pair is also where the
+// search may start; the others are found by the search alone.
+//
+// Tolerance: Nelder-Mead stops when its vertices lie within 1e-6 degrees of
+// the best in w = asin(d) at the deviation axis' two ends, which is
+// |dd| <= (pi / 180) 1e-6 = 1.75e-8 in d1 and in d at the end e; d0 =
+// (d_e - d1 cos e) / (1 - cos e) carries (1 + cos e) / (1 - cos e) times
+// that. Ten times those bounds leaves room for a best vertex that is not yet
+// the minimum (a narrow valley) and none for a search that stopped at a
+// coarse node (1 degree away, 1.7e-2 in d).
+TEST_F(Fit, RefittingDeshmukh2020OnItsOwnTermRecoversItsConstants) {
+  const FitResult r = fit(run_small_study("study"));
+  const double resolution = radians(1e-6), cos_end = std::cos(radians(r.grid.axes[1].max_deg));
+  const double tolerance_d1 = 10.0 * resolution,
+               tolerance_d0 = tolerance_d1 * (1.0 + cos_end) / (1.0 - cos_end);
+  for (const Deshmukh2020Constants truth :
+       {kDeshmukh2020Published, Deshmukh2020Constants{0.2, 0.03},
+        Deshmukh2020Constants{0.3, 0.01}}) {
+    std::vector<TallyVariant> synthetic;
+    for (const FitVariant& v : r.variants)
+      synthetic.push_back(
+          {v.id, v.data.tally, v.data.tally.profile(deshmukh2020_table(r.grid, truth))});
+    const Deshmukh2020Constants c = fit_deshmukh2020(synthetic, r.grid);
+    EXPECT_NEAR(c.d0, truth.d0, tolerance_d0) << truth.d0;
+    EXPECT_NEAR(c.d1, truth.d1, tolerance_d1) << truth.d1;
+  }
+}
+
+// On the study's own truths: at the published pair the table is the shipped
+// factor's (the same E to the bit as its on-grid error), and the pair fitted
+// on every variant is never worse than it there.
+TEST_F(Fit, Deshmukh2020FitIsNeverWorseThanItsPublishedConstants) {
+  const FitResult r = fit(run_small_study("study"));
+  double on_grid = std::numeric_limits<double>::quiet_NaN();
+  for (const MethodShare& s : r.shares)
+    if (s.method == "deshmukh2020") on_grid = s.grid_error;
+  std::vector<FittedConstant> pair;
+  for (const FittedConstant& c : r.constants)
+    if (c.method == "deshmukh2020") pair.push_back(c);
+  ASSERT_EQ(pair.size(), 2u);
+  EXPECT_EQ(pair[0].constant.substr(0, 3), "d0 ");
+  EXPECT_EQ(pair[1].constant.substr(0, 3), "d1 ");
+  EXPECT_EQ(pair[0].published, kDeshmukh2020Published.d0);
+  EXPECT_EQ(pair[1].published, kDeshmukh2020Published.d1);
+  for (const FittedConstant& c : pair) {
+    EXPECT_EQ(c.at_published, on_grid);
+    EXPECT_LE(c.in_sample, c.at_published) << c.constant;
+    EXPECT_TRUE(std::isfinite(c.held_out)) << c.constant;
+    EXPECT_LE(c.interval.low, c.interval.high) << c.constant;
+  }
+  // d in (0, 1] at both ends of the grid's deviation axis.
+  const double d1 = pair[1].fitted,
+               d_end = pair[0].fitted +
+                       (d1 - pair[0].fitted) * std::cos(radians(r.grid.axes[1].max_deg));
+  for (const double d : {d1, d_end}) {
+    EXPECT_GT(d, 0.0);
+    EXPECT_LE(d, 1.0);
   }
 }
 
