@@ -98,10 +98,10 @@ struct Light {
   // environment: the map's radiance (the Rec. 709 luminance of its R, G, B;
   // W/(m^2 sr) per unit of the file's values) times `scale` (>= 0), the
   // lookup direction turned by `rotation_deg` about the up axis
-  // (core/environment.h). `map_file` is the file as resolved, `map_digest`
-  // its texels' content digest (what the cache key holds).
+  // (core/environment.h). `map_digest` is its texels' content digest (what
+  // the cache key holds).
   std::shared_ptr<const EnvironmentMap> environment;
-  std::string map_file, map_digest;
+  std::string map_digest;
   double rotation_deg = 0.0;
   double scale = 1.0;
 };

@@ -178,7 +178,6 @@ void read_environment(Reader& r, Light* l) {
   } catch (const InputError& e) {
     r.fail("map", e.what());
   }
-  l->map_file = file;
 }
 
 Light read_light(Reader r) {
