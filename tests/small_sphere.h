@@ -1,10 +1,11 @@
-// A small render of the calibration sphere with its bumps (bump or
+// Small scenes for tests. A small render of the calibration sphere with its bumps (bump or
 // displacement) and a byte comparison, for the tests that measure one render
 // against another (analysis/measure.h, study/comparison_store.h).
 #pragma once
 
 #include <cstring>
 #include <string>
+#include <vector>
 
 #include "evaluator/evaluator.h"
 #include "scene/scene_json.h"
@@ -13,6 +14,14 @@ namespace penumbra {
 
 inline const std::string kSmallSphere =
     std::string(PENUMBRA_SOURCE_DIR) + "/scenes/calibration/sphere.json";
+
+// The unit sphere with its grating (scenes/sphere-grating.json) and
+// --set overrides such as "/camera/spp=16", as the CLI reads them.
+inline Scene sphere_grating_with(const std::vector<std::string>& sets) {
+  std::vector<Override> overrides;
+  for (const std::string& s : sets) overrides.push_back(parse_override(s));
+  return load_scene(std::string(PENUMBRA_SOURCE_DIR) + "/scenes/sphere-grating.json", overrides);
+}
 
 // 32x32 at 4 spp, amplitude 0.02; `representation`: bump or displacement.
 inline Image render_small_sphere(const char* representation) {

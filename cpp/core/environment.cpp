@@ -69,6 +69,7 @@ EnvironmentMap::EnvironmentMap(std::vector<float> radiance, int width, int heigh
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x)
       mean += texel_centre(x, y) * texel_weight_[std::size_t(y) * width + x];
+  light_vector_ = mean;
   if (length(mean) > 0.0) mean_direction_ = normalize(mean);
   for (double& w : texel_weight_) w /= total;
   for (double& c : row_cdf_) c /= total;

@@ -53,6 +53,9 @@ class EnvironmentMap {
   // The radiance-weighted mean of the directions (sum of L d dOmega over
   // the texels), normalised; +y (up) for a map without one.
   Vec3 mean_direction() const { return mean_direction_; }
+  // The sum of L d dOmega over the texels (W/m^2): the map's vector
+  // irradiance, the same at every point (a map at infinity).
+  Vec3 light_vector() const { return light_vector_; }
   // The irradiance on a plane of unit normal n, shadows aside: the sum over
   // texels of L max(0, n . d) dOmega at the texels' centres.
   double irradiance(const Vec3& n) const;
@@ -74,6 +77,7 @@ class EnvironmentMap {
   std::vector<double> column_cdf_;    // height * (width + 1)
   std::vector<double> texel_weight_;  // width * height, sums to 1 over all texels
   Vec3 mean_direction_{0, 1, 0};
+  Vec3 light_vector_;
 };
 
 }  // namespace penumbra

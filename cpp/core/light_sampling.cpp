@@ -61,19 +61,29 @@ LightDirectionSample sample_quad_light(const Vec3& corner, const Vec3& edge_u, c
   return {wi, d2 / (area * cos_light), d};
 }
 
-double polygon_irradiance(const Vec3* vertices, int count, const Vec3& p, const Vec3& n,
-                          double radiance) {
-  double sum = 0.0;
+Vec3 polygon_light_vector(const Vec3* vertices, int count, const Vec3& p, double radiance) {
+  Vec3 sum;
   for (int i = 0; i < count; ++i) {
     const Vec3 a = normalize(vertices[i] - p);
     const Vec3 b = normalize(vertices[(i + 1) % count] - p);
     const Vec3 c = cross(a, b);
     const double sin_gamma = length(c);
     if (!(sin_gamma > 0.0)) continue;
-    const double gamma = std::atan2(sin_gamma, dot(a, b));
-    sum += gamma * dot(n, c) / sin_gamma;
+    sum += c * (std::atan2(sin_gamma, dot(a, b)) / sin_gamma);
   }
-  return 0.5 * radiance * std::abs(sum);
+  // Every direction the polygon subtends points to the far side of p along
+  // its plane's normal m, so the integral of w does too; the sum's sign
+  // follows the winding, which this fixes.
+  Vec3 m = cross(vertices[1] - vertices[0], vertices[count - 1] - vertices[0]);
+  const double side = dot(m, vertices[0] - p);
+  if (side == 0.0) return {};
+  if (side < 0.0) m = -m;
+  return sum * (dot(sum, m) < 0.0 ? -0.5 * radiance : 0.5 * radiance);
+}
+
+double polygon_irradiance(const Vec3* vertices, int count, const Vec3& p, const Vec3& n,
+                          double radiance) {
+  return std::abs(dot(n, polygon_light_vector(vertices, count, p, radiance)));
 }
 
 std::uint32_t permute_index(std::uint32_t i, std::uint32_t n, std::uint32_t seed) {

@@ -48,6 +48,14 @@ LightDirectionSample sample_quad_light(const Vec3& corner, const Vec3& edge_u, c
 double polygon_irradiance(const Vec3* vertices, int count, const Vec3& p, const Vec3& n,
                           double radiance);
 
+// The same polygon's vector irradiance at p (Gershun's light vector,
+// W/m^2): the integral of L w dw over the directions w it subtends, by
+// Stokes' theorem  L/2 sum_i gamma_i (r_i x r_{i+1}) / |r_i x r_{i+1}|
+// (Arvo 1995, eq. 2 before its dot product with n), turned to point from p
+// towards the polygon's plane. n . it is polygon_irradiance for any n the
+// whole polygon is above. Zero for p in the polygon's plane.
+Vec3 polygon_light_vector(const Vec3* vertices, int count, const Vec3& p, double radiance);
+
 // A bijection of [0, n), n >= 1, chosen by `seed`: an invertible hash on
 // the next power of two, walked until it lands below n (the cycle-walking
 // construction of Kensler 2013, "Correlated multi-jittered sampling",

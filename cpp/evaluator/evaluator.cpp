@@ -92,6 +92,18 @@ LightUniforms light_uniforms(const Scene& scene, std::uint64_t pixel_key, int s,
           (sy + splitmix_double(key, 2 * std::uint64_t(s) + 1)) / ny};
 }
 
+// The cosine of analysis.theta at base point p of normal n: of the sampled
+// direction wi for a delta light (the one direction there is), of the light
+// vector (scene.h, light_vector) for an area light, so that a pixel's
+// angle says where the light comes from on balance rather than where its
+// samples happened to land; 0 (90 degrees) where that vector vanishes.
+double cos_light_angle(const Light& light, const Vec3& n, const Vec3& p, const Vec3& wi) {
+  if (!is_area_light(light)) return dot(n, wi);
+  const Vec3 v = light_vector(light, p);
+  const double norm = length(v);
+  return norm > 0.0 ? std::clamp(dot(n, v) / norm, -1.0, 1.0) : 0.0;
+}
+
 // What a camera ray sees: the surface point to shade and how to leave it.
 struct SurfaceHit {
   double t = 0.0;
@@ -547,7 +559,7 @@ typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray&
     point.visibility = height_field_visibility(scene_.height.function,
                                                facing.backfacing ? -amplitude : amplitude, g.p, n);
   // Within 1.2e-6 degrees: below what the float channels resolve.
-  const SampleAngles angles{degrees(acos_approx(dot(n, light.wi))),
+  const SampleAngles angles{degrees(acos_approx(cos_light_angle(scene_.light, n, g.p, light.wi))),
                             degrees(acos_approx(dot(ns, n))), degrees(acos_approx(dot(n, wo)))};
   return {facing, light, point, angles};
 }

@@ -18,8 +18,12 @@ namespace penumbra {
 // Channels of every evaluator render, in this order:
 //   R, G, B      radiance (W m^-2 sr^-1), box-filtered over the pixel
 //   A            coverage: fraction of the pixel's samples that hit the object
-//   analysis.theta      degrees between wi and the base-surface normal at the
-//                       base point (for displacement: the base point under the hit)
+//   analysis.theta      degrees between the light and the base-surface normal at
+//                       the base point (for displacement: the base point under
+//                       the hit): the light's direction wi for a distant or
+//                       point light, its light vector (scene.h, light_vector)
+//                       for an area light or an environment, the same angle
+//                       for a light that shrinks to a point
 //   analysis.deviation  degrees between Ns and that base normal
 //   analysis.G          the terminator factor at the sample (1 for `none`)
 //   analysis.view       degrees between wo and the base-surface normal (the

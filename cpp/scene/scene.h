@@ -4,6 +4,7 @@
 // so the POV-Ray export copies numbers unchanged.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -129,6 +130,44 @@ inline Vec3 light_axis(const Light& light, const Vec3& at) {
       return light.environment ? light.environment->mean_direction() : Vec3{0, 1, 0};
   }
   return light.direction;
+}
+
+// Gershun's light vector at `at` (W/m^2): the integral of L w dw over the
+// directions w the light is seen in from `at`, shadows aside. n . it is the
+// irradiance on a plane of normal n that has the whole light in front of
+// it, and its direction is where the light comes from on balance: a
+// distant or point light's own direction, a sphere's centre, the middle of
+// a quad's solid angle, an environment's radiance-weighted mean. The
+// terminator metric bins by the angle between it and the base normal
+// (analysis.theta), which is the light angle itself for a distant light.
+// Zero inside a sphere light, on or behind a quad's plane, and for an
+// environment whose light cancels out (a uniform one).
+inline Vec3 light_vector(const Light& light, const Vec3& at) {
+  switch (light.type) {
+    case LightType::kDistant:
+      return light.direction * light.irradiance;
+    case LightType::kPoint: {
+      const Vec3 d = light.position - at;
+      const double d2 = length_squared(d);
+      return d2 > 0.0 ? d * (light.intensity / (d2 * std::sqrt(d2))) : Vec3{};
+    }
+    case LightType::kSphere: {
+      // The cone of half-angle theta_max: pi L sin^2 theta_max along its axis.
+      const Vec3 d = light.position - at;
+      const double d2 = length_squared(d), r2 = light.radius * light.radius;
+      if (!(d2 > r2)) return {};
+      return d * (kPi * light.radiance * r2 / (d2 * std::sqrt(d2)));
+    }
+    case LightType::kQuad: {
+      const Vec3 v[4] = {light.corner, light.corner + light.edge_u,
+                         light.corner + light.edge_u + light.edge_v, light.corner + light.edge_v};
+      if (!(dot(cross(light.edge_u, light.edge_v), at - light.corner) > 0.0)) return {};
+      return polygon_light_vector(v, 4, at, light.radiance);
+    }
+    case LightType::kEnvironment:
+      return light.environment ? light.environment->light_vector() * light.scale : Vec3{};
+  }
+  return {};
 }
 
 enum class Representation {

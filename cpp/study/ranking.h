@@ -136,6 +136,10 @@ struct Interaction {
 struct AxisStatistics {
   std::string pointer, label;  // the axis's pointer (or name) and label
   bool numeric = false;        // every value a plain number
+  // Its levels light the scene with different kinds of light (distant,
+  // sphere, quad, environment): the headline says whether the first
+  // level's leader stays in the best rank group under the others.
+  bool lighting = false;
   std::vector<LevelRanking> levels;
   std::vector<Interaction> interactions;  // every method but `none`
 };

@@ -297,6 +297,42 @@ std::string leader_change_sentence(const StudyStatistics& s) {
   return "";
 }
 
+// For an axis of kinds of light (AxisStatistics::lighting): whether the
+// first level's leader stays in the best rank group under every other
+// level, and who leads where it does not. Rank groups, not first places:
+// a leader tied with others has not lost to them.
+std::string lighting_sentence(const StudyStatistics& s) {
+  for (const AxisStatistics& a : s.by_axis) {
+    if (!a.lighting || a.levels.empty() || a.levels.front().ranking.methods.empty()) continue;
+    const LevelRanking& base = a.levels.front();
+    const MethodStatistics& lead = base.ranking.methods.front();
+    std::vector<std::string> kept, lost;
+    for (std::size_t l = 1; l < a.levels.size(); ++l) {
+      const RankingStatistics& r = a.levels[l].ranking;
+      const MethodStatistics* m = r.find(lead.method);
+      if (!m || r.methods.empty()) continue;
+      if (m->rank == 1) {
+        kept.push_back(a.levels[l].value_id);
+        continue;
+      }
+      const MethodStatistics& other = r.methods.front();
+      lost.push_back(fmt::format("{} (rank group {} at {}; {} leads at {})", a.levels[l].value_id,
+                                 m->rank, share(*m), other.method, share(other)));
+    }
+    std::string out = fmt::format("Under the {} ({}), {} leads at {} of raw bump's combined error",
+                                  base.value_id, short_label(a), lead.method, share(lead));
+    if (lost.empty())
+      return out + fmt::format(
+                       " and stays in the best rank group under all {} other lightings "
+                       "({}): the ranking's winner does not change with the lighting.",
+                       kept.size(), list_text(kept));
+    out += fmt::format("; it falls out of the best rank group under {}", list_text(lost, "; "));
+    if (!kept.empty()) out += fmt::format(", and stays in it under {}", list_text(kept));
+    return out + ": the winner changes with the lighting.";
+  }
+  return "";
+}
+
 }  // namespace
 
 std::vector<std::string> lead_sentences(const StudyStatistics& s) {
@@ -305,6 +341,8 @@ std::vector<std::string> lead_sentences(const StudyStatistics& s) {
   out.push_back(leader_sentence(s.overall));
   if (std::string leaders = leaders_sentence(s); !leaders.empty()) out.push_back(leaders);
   out.push_back(worse_sentence(s.overall));
+  if (std::string lighting = lighting_sentence(s); !lighting.empty())
+    out.push_back(std::move(lighting));
   const std::vector<Dependence> deps = dependences(s);
   std::size_t said = 0;
   for (std::size_t k = 0; k < deps.size() && said < 2; ++k)

@@ -102,6 +102,24 @@ bool numeric_axis(const StudyAxis& a) {
                                        [](const nlohmann::json& v) { return v.is_number(); });
 }
 
+// Whether an axis sets the kind of light: each of its levels lights all
+// its variants with one kind (distant, sphere, quad, environment), and not
+// every level the same kind. An axis crossed with it (the amplitude) mixes
+// kinds within a level and is not one.
+bool sets_light_type(const Plan& plan, const std::vector<int>& level, std::size_t levels) {
+  std::vector<std::string> type(levels);
+  for (std::size_t v = 0; v < plan.variants.size(); ++v) {
+    if (level[v] < 0 || plan.variants[v].jobs.empty()) continue;
+    const nlohmann::json scene = plan.jobs[plan.variants[v].jobs.front()].scene_json();
+    const std::string t = scene.at("light").value("type", std::string("distant"));
+    std::string& kind = type[static_cast<std::size_t>(level[v])];
+    if (!kind.empty() && kind != t) return false;
+    kind = t;
+  }
+  return std::any_of(type.begin(), type.end(),
+                     [&](const std::string& t) { return !t.empty() && t != type.front(); });
+}
+
 // The rankings to compute: overall, per scene, per axis level.
 struct RankingTask {
   std::vector<char> selected;
@@ -135,6 +153,7 @@ std::vector<RankingTask> ranking_tasks(const Plan& plan, const std::vector<Study
     axis.levels.resize(axes[a].values.size());
     const std::vector<std::string> ids = axis_value_ids(axes[a]);
     const std::vector<int> level = variant_levels(plan, axes[a], a);
+    axis.lighting = sets_light_type(plan, level, axes[a].values.size());
     for (std::size_t l = 0; l < axes[a].values.size(); ++l) {
       LevelRanking& lr = axis.levels[l];
       lr.value = axes[a].values[l];

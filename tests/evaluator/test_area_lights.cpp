@@ -22,19 +22,12 @@
 #include "image/exr_file.h"
 #include "image/image_io.h"
 #include "scene/scene_json.h"
+#include "small_sphere.h"
 #include "temp_dir_test.h"
 #include "util/strict_json.h"
 
 namespace penumbra {
 namespace {
-
-const std::string kSphereScene = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/sphere-grating.json";
-
-Scene scene_with(const std::vector<std::string>& sets) {
-  std::vector<Override> overrides;
-  for (const std::string& s : sets) overrides.push_back(parse_override(s));
-  return load_scene(kSphereScene, overrides);
-}
 
 // The quad light of these tests: to the left of and in front of the plane
 // z = 0 (normal -z, towards the camera), facing it ((0.5, 0, -0.5) x
@@ -49,9 +42,10 @@ const char* const kSphere =
 // pixels at stratum centres (no jitter), so that the estimator's
 // expectation is the mean of E over known points.
 Scene plane_scene(const char* light, int spp) {
-  return scene_with({R"(/shape={"type": "plane", "axis": [0, 0, -1], "width": 2, "height": 2})",
-                     "/representation=smooth", "/camera/width=40", "/camera/height=40",
-                     "/camera/jitter=false", "/camera/spp=" + std::to_string(spp), light});
+  return sphere_grating_with(
+      {R"(/shape={"type": "plane", "axis": [0, 0, -1], "width": 2, "height": 2})",
+       "/representation=smooth", "/camera/width=40", "/camera/height=40", "/camera/jitter=false",
+       "/camera/spp=" + std::to_string(spp), light});
 }
 
 // Brute force: the irradiance at p (normal n) from a parallelogram of
@@ -175,7 +169,7 @@ TEST(AreaLight, SmallSphereTendsToThePointLight) {
   auto with = [&](const std::string& light) {
     std::vector<std::string> sets = common;
     sets.push_back("/light=" + light);
-    return render(scene_with(sets));
+    return render(sphere_grating_with(sets));
   };
   const Image point = with(R"({"type": "point", "position": [-3, 1, -2], "intensity": )" +
                            std::to_string(intensity) + "}");
@@ -204,9 +198,9 @@ TEST(AreaLight, DisplacedTruthWithoutHeightRendersTheSmoothSphere) {
       {R"(/light={"type": "sphere", "position": [-3, 1, -2], "radius": 0.5, "power": 400})",
        R"(/light={"type": "quad", "corner": [-3, -1, -3], "edge_u": [0, 2, 0], "edge_v": [1, 0, 2], "radiance": 3})"}) {
     auto with = [&](const char* representation) {
-      return render(scene_with({"/height/amplitude=0", "/displacement/edge_length=0.02",
-                                "/camera/width=40", "/camera/height=40", "/camera/spp=16", light,
-                                std::string("/representation=") + representation}));
+      return render(sphere_grating_with({"/height/amplitude=0", "/displacement/edge_length=0.02",
+                                         "/camera/width=40", "/camera/height=40", "/camera/spp=16",
+                                         light, std::string("/representation=") + representation}));
     };
     const Image smooth = with("smooth"), truth = with("displacement");
     double sum = 0.0, difference = 0.0;
@@ -221,8 +215,8 @@ TEST(AreaLight, DisplacedTruthWithoutHeightRendersTheSmoothSphere) {
 }
 
 TEST(AreaLight, SameBitsWhateverTheThreadCount) {
-  const Scene scene = scene_with({"/camera/width=32", "/camera/height=32", "/camera/spp=8", kQuad,
-                                  "/terminator/method=\"estevez2019\""});
+  const Scene scene = sphere_grating_with({"/camera/width=32", "/camera/height=32", "/camera/spp=8",
+                                           kQuad, "/terminator/method=\"estevez2019\""});
   std::vector<float> one, two;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
@@ -326,8 +320,8 @@ class Environment : public TempDirTest {
   std::vector<double> sphere_errors(const Image& map, const std::string& light, double rotation,
                                     double scale) const {
     const Scene scene =
-        scene_with({"/representation=smooth", "/camera/width=40", "/camera/height=40",
-                    "/camera/spp=64", "/camera/jitter=false", light});
+        sphere_grating_with({"/representation=smooth", "/camera/width=40", "/camera/height=40",
+                             "/camera/spp=64", "/camera/jitter=false", light});
     const Image image = render(scene);
     const Camera& c = scene.camera;
     std::vector<double> errors;
@@ -390,7 +384,7 @@ TEST_F(Environment, WhiteFurnaceGivesTheAlbedoAndNoMethodMore) {
     std::vector<std::string> all = {"/camera/width=40", "/camera/height=40", "/camera/spp=16",
                                     light};
     all.insert(all.end(), sets.begin(), sets.end());
-    const Image image = render(scene_with(all));
+    const Image image = render(sphere_grating_with(all));
     std::vector<double> values;
     for (int j = 0; j < 40; ++j)
       for (int i = 0; i < 40; ++i) {
@@ -465,7 +459,7 @@ TEST_F(Environment, BadMapsAreRefusedWithFileAndPointer) {
   };
   for (const auto& [light, expected] : cases) {
     try {
-      scene_with({light});
+      sphere_grating_with({light});
       ADD_FAILURE() << light << " was accepted";
     } catch (const InputError& e) {
       const std::string what = e.what();

@@ -18,6 +18,7 @@
 #include "study/cache.h"
 #include "study/convergence.h"
 #include "study/plan.h"
+#include "study/ranking.h"
 #include "study/study_file.h"
 #include "util/resource_usage.h"
 
@@ -111,6 +112,25 @@ TEST(Plan, ARefinedJobReadsAsItsRefinedDocument) {
     EXPECT_EQ(kept.camera.spp == 64, evaluator) << job.label;
     EXPECT_EQ(kept.displacement.edge_length == 0.003, evaluator) << job.label;
   }
+}
+
+// The shipped lighting study plans (its maps are Blender's own data files)
+// into 4 scenes x 2 amplitudes x 8 lightings, and its lighting axis, and
+// only that one, is told apart as lighting the scene with different kinds
+// of light, so that the headline says whether the sun's winner wins under
+// the rest (study/ranking_text.cpp).
+TEST(Plan, TheLightingStudyMixesKindsOfLightOnItsLightingAxisOnly) {
+  const Study study = load_study(kSource + "/scenes/studies/lighting.json");
+  const Plan plan = plan_study(study, 8.0 * (1ull << 30));
+  ASSERT_EQ(plan.variants.size(), 64u);
+  const StudyStatistics s = study_statistics(plan, {}, study.bump.axes);
+  ASSERT_EQ(s.by_axis.size(), 2u);
+  EXPECT_FALSE(s.by_axis[0].lighting) << s.by_axis[0].pointer;
+  EXPECT_TRUE(s.by_axis[1].lighting) << s.by_axis[1].pointer;
+  const Study quick = load_study(kSource + "/scenes/studies/quick.json");
+  const StudyStatistics q =
+      study_statistics(plan_study(quick, 8.0 * (1ull << 30)), {}, quick.bump.axes);
+  for (const AxisStatistics& a : q.by_axis) EXPECT_FALSE(a.lighting) << a.pointer;
 }
 
 class PlanMemory : public TempDirTest {};

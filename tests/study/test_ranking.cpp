@@ -188,6 +188,64 @@ TEST(StudyStatistics, OneRuleDecidesEveryRankAndEveryVerdict) {
   EXPECT_NE(s.headline[1].find("flip"), std::string::npos) << s.headline[1];
 }
 
+// Three kinds of light x two scenes x four amplitudes: "a" is half of raw
+// bump's error under the sun and the sphere light but 0.9 of it under the
+// environment, where "b" (0.7 elsewhere) is 0.4. The headline must say
+// that the sun's winner a leaves the best rank group under the environment
+// only, and who leads there.
+TEST(StudyStatistics, TheHeadlineSaysWhetherTheSunsWinnerWinsUnderEveryLighting) {
+  StudyAxis lighting;
+  lighting.pointer = "lighting";
+  lighting.label = "lighting (kinds of light)";
+  lighting.values = {"sun", "sphere light", "environment"};
+  lighting.ids = {"sun", "sphere", "env"};
+  lighting.sets.resize(3);
+  Synthetic t;
+  std::size_t v = 0;
+  for (int l = 0; l < 3; ++l)
+    for (const char* scene : {"cylinder", "sphere"})
+      for (int a = 0; a < 4; ++a, ++v) {
+        const double none = 0.02 * (1 + a), jitter = 1.0 + 0.01 * ((l + a) % 3 - 1);
+        t.add(v, "none", none, 0.0, 0.0);
+        t.add(v, "a", none * (l == 2 ? 0.9 : 0.5) * jitter, 0.0, 0.0);
+        t.add(v, "b", none * (l == 2 ? 0.4 : 0.7) / jitter, 0.0, 0.0);
+        Variant& var = t.plan.variants[v];
+        var.scene = scene;
+        var.section = SectionKind::kBump;
+        var.axis_values = {lighting.values[static_cast<std::size_t>(l)]};
+      }
+  StudyStatistics s = study_statistics(t.plan, t.rows, {lighting});
+  ASSERT_EQ(s.by_axis.size(), 1u);
+  // The synthetic plan has no scenes to read light types from.
+  EXPECT_FALSE(s.by_axis[0].lighting);
+  for (const std::string& line : s.headline)
+    EXPECT_EQ(line.find("Under the sun"), std::string::npos) << line;
+  s.by_axis[0].lighting = true;
+  s.headline = lead_sentences(s);
+  ASSERT_LE(s.headline.size(), 6u);
+  std::string said;
+  for (const std::string& line : s.headline)
+    if (line.rfind("Under the sun (lighting), a leads at 50", 0) == 0) said = line;
+  ASSERT_FALSE(said.empty()) << s.headline[0];
+  EXPECT_NE(said.find("falls out of the best rank group under env (rank group 2"),
+            std::string::npos)
+      << said;
+  EXPECT_NE(said.find("b leads at 40"), std::string::npos) << said;
+  EXPECT_NE(said.find("stays in it under sphere: the winner changes"), std::string::npos) << said;
+  // Where a also wins under the environment, the sentence says it never changes.
+  for (ComparisonRow& r : t.rows)
+    if (r.method == "a" && r.variant >= 16) r.profile.rmse_terminator *= 0.3 / 0.9;
+  s = study_statistics(t.plan, t.rows, {lighting});
+  s.by_axis[0].lighting = true;
+  s.headline = lead_sentences(s);
+  bool kept = false;
+  for (const std::string& line : s.headline)
+    kept |= line.find(
+                "stays in the best rank group under all 2 other lightings (sphere and "
+                "env): the ranking's winner does not change") != std::string::npos;
+  EXPECT_TRUE(kept) << s.headline[0];
+}
+
 TEST(Agreement, SummariesPerRendererAndWhatWithThresholdCounts) {
   std::vector<AgreementRow> rows;
   for (std::size_t v = 0; v < 10; ++v) {
