@@ -147,6 +147,36 @@ TEST(LightVector, AnalysisThetaOfASmallFarSphereIsTheDistantLightsAngle) {
   EXPECT_LT(largest, 0.12) << "degrees";
 }
 
+// The light vector depends on the base point alone, so with the camera's
+// samples at their strata's centres analysis.theta is the same to the bit
+// whatever light samples are drawn (another seed), while the radiance,
+// which does depend on them, changes; a channel of the sampled directions'
+// angles would change with it.
+TEST(LightVector, AnalysisThetaIsFreeOfTheLightSamplesNoise) {
+  const std::string quad =
+      R"(/light={"type": "quad", "corner": [-3, -1, -2], "edge_u": [1, 0, -1.5],
+                 "edge_v": [0, 2, 0], "radiance": 5})";
+  auto with_seed = [&](int seed) {
+    return render(sphere_grating_with({"/representation=smooth", "/camera/width=32",
+                                       "/camera/height=32", "/camera/spp=4",
+                                       "/camera/jitter=false", quad,
+                                       "/camera/seed=" + std::to_string(seed)}));
+  };
+  const Image a = with_seed(1), b = with_seed(2);
+  const int alpha = 3, theta = 4;
+  int covered = 0, same_theta = 0, same_radiance = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      if (a.at(x, y, alpha) < 0.999f) continue;
+      ++covered;
+      same_theta += a.at(x, y, theta) == b.at(x, y, theta);
+      same_radiance += a.at(x, y, 0) == b.at(x, y, 0);
+    }
+  ASSERT_GT(covered, 300);
+  EXPECT_EQ(same_theta, covered);
+  EXPECT_LT(same_radiance, covered / 2);  // the seed does change the light samples
+}
+
 // Under a sphere light of half-angle 30 degrees (radius 500 at 1000) the
 // smooth sphere's radiance is albedo/pi times pi L sin^2(30) cos(theta_L)
 // wherever the whole light is above the horizon (theta_L < 60 degrees), so
