@@ -7,7 +7,7 @@
 namespace penumbra {
 namespace {
 
-constexpr std::array<NormalAdjustmentInfo, 9> kAdjustments{{
+constexpr std::array<NormalAdjustmentInfo, 10> kAdjustments{{
     {NormalAdjustment::kNone, "none", "-", "Ns as the bump makes it", true, true},
     {NormalAdjustment::kCycles34, "cycles34",
      "blender/cycles v3.4.0 (df60698dd147) src/kernel/closure/bsdf_util.h "
@@ -31,8 +31,7 @@ constexpr std::array<NormalAdjustmentInfo, 9> kAdjustments{{
      "blender/cycles 3b1e329ac808 src/kernel/closure/bsdf.h bump_shadowing_term (the hemisphere "
      "test before the SD_USE_BUMP_MAP_CORRECTION return) and bsdf_util.h "
      "maybe_ensure_valid_specular_reflection (N unchanged without that flag)",
-     "Ns unchanged on every lobe; each lobe dropped where <Ni,wi><Ni,Ns><Ns,wi> < 0", true,
-     false},
+     "Ns unchanged on every lobe; each lobe dropped where <Ni,wi><Ni,Ns><Ns,wi> < 0", true, false},
     {NormalAdjustment::kMitsuba3Flip, "mitsuba3-flip",
      "mitsuba-renderer/mitsuba3 e32d71807c2c src/bsdfs/normalmap_helpers.h "
      "(flip_invalid_normals), normalmap.cpp, bumpmap.cpp",
@@ -57,6 +56,13 @@ constexpr std::array<NormalAdjustmentInfo, 9> kAdjustments{{
      "NVIDIAGameWorks/Falcor eb540f674877 Source/Falcor/Scene/Material/ShadingUtils.slang "
      "adjustShadingNormal",
      "every lobe: where <wo,Ns> <= 0.1, Ns -> normalize(lerp(Ng, Ns, <wo,Ns>/0.1)); not reciprocal",
+     true, false},
+    {NormalAdjustment::kOspray, "ospray",
+     "RenderKit/ospray 675c216b91a7 modules/cpu/render/pathtracer/PathSampler.ispc "
+     "sampleDirection (the sameSide/reflection test)",
+     "Ns unchanged on every lobe; a reflected direction dropped where <Ng,wi> < 0 (OSPRay "
+     "applies it to BSDF-sampled directions; its light samples keep it and move the shadow "
+     "ray's origin below the surface instead)",
      true, false},
 }};
 
@@ -199,6 +205,13 @@ Vec3 falcor_adjusted_normal(const Vec3& ng, const Vec3& ns, const Vec3& wo) {
   return normalize_or(ng + (n - ng) * t, ng) * sign;
 }
 
+bool ospray_side_test_rejects(const Vec3& ng, const Vec3& wi) {
+  // sameSide = dot(wi, Ng) >= 0; a reflection is kept only on the same side.
+  const bool same_side = dot(wi, ng) >= 0.0;
+  constexpr bool kReflection = true;
+  return same_side != kReflection;
+}
+
 AdjustedNormals adjust_normal(NormalAdjustment adjustment, const AdjustVectors& v) {
   AdjustedNormals out{v.ns, v.ns};
   switch (adjustment) {
@@ -237,6 +250,10 @@ AdjustedNormals adjust_normal(NormalAdjustment adjustment, const AdjustVectors& 
       break;
     case NormalAdjustment::kFalcor:
       out.ns_diffuse = out.ns_specular = falcor_adjusted_normal(v.ng, v.ns, v.wo);
+      break;
+    case NormalAdjustment::kOspray:
+      // Against the true Ng, not Ni: OSPRay's dg.Ng is the triangle's.
+      out.reject_diffuse = out.reject_specular = ospray_side_test_rejects(v.ng, v.wi);
       break;
   }
   return out;

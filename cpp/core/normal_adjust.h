@@ -28,6 +28,7 @@ enum class NormalAdjustment {
   kIray2017,
   kUnityHdrp,
   kFalcor,
+  kOspray,
 };
 
 struct NormalAdjustmentInfo {
@@ -86,5 +87,9 @@ bool mitsuba3_rejects(const Vec3& ni, const Vec3& ns, const Vec3& wi);
 Vec3 iray2017_bent_normal(const Vec3& ng, const Vec3& ns, const Vec3& wo);
 Vec3 unity_hdrp_consistent_normal(const Vec3& ng, const Vec3& ns, const Vec3& wo);
 Vec3 falcor_adjusted_normal(const Vec3& ng, const Vec3& ns, const Vec3& wo);
+// OSPRay's side test on a sampled direction (PathSampler.ispc,
+// sampleDirection): a reflection that ends below Ng is dropped, whatever Ns
+// says. Ng faces the viewer; Penumbra's lobes only reflect.
+bool ospray_side_test_rejects(const Vec3& ng, const Vec3& wi);
 
 }  // namespace penumbra

@@ -18,7 +18,13 @@ constexpr MethodParameter kCyclesParameters[] = {
      "fades out at dot(Ng, wi) = cutoff; 0 disables it"},
 };
 
-constexpr std::array<OffsetMethodInfo, 5> kOffsetMethods{{
+constexpr MethodParameter kOsprayParameters[] = {
+    {"ulp", "dimensionless (relative)", 0.0, 1e-3, 0x1.0fp-21,
+     "OSPRay's ulpEpsilon: the offset is ulp times the largest coordinate magnitude of the "
+     "triangle's vertices and the hit point"},
+};
+
+constexpr std::array<OffsetMethodInfo, 6> kOffsetMethods{{
     {OffsetMethod::kNone,
      "none",
      "-",
@@ -42,6 +48,13 @@ constexpr std::array<OffsetMethodInfo, 5> kOffsetMethods{{
      "parabolic surface through the vertices, clamped by a linear envelope, applied near the "
      "triangle's horizon",
      kCyclesParameters},
+    {OffsetMethod::kOspray, "ospray",
+     "RenderKit/ospray 675c216b91a7 modules/cpu/render/pathtracer/NextEventEstimation.ispc "
+     "(org - 2 epsilon Ng where dot(Ng, dir) < 0) after common/World.ih postIntersect "
+     "(P + epsilon Ng)",
+     "P + epsilon Ng for a light on Ng's side, P - epsilon Ng for a light below it; epsilon "
+     "relative to the coordinates' magnitude",
+     kOsprayParameters},
 }};
 
 }  // namespace
@@ -72,6 +85,21 @@ Vec3 hanika2021_origin(const ShadingTriangle& t, const Vec3& p) {
   Vec3 lifted = p;
   for (int k = 0; k < 3; ++k) lifted += t.n[k] * (-t.b[k] * std::min(0.0, dot(p - t.v[k], t.n[k])));
   return lifted;
+}
+
+double ospray_epsilon(const ShadingTriangle& t, const Vec3& p, double ulp) {
+  auto largest = [](const Vec3& v) {
+    return std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+  };
+  double magnitude = largest(p);
+  for (const Vec3& v : t.v) magnitude = std::max(magnitude, largest(v));
+  return ulp * magnitude;
+}
+
+Vec3 ospray_origin(const Vec3& p, const Vec3& ng, const Vec3& wi, double epsilon) {
+  const Vec3 lifted = p + ng * epsilon;
+  // Below Ng the ray must start on the far side, where the light is.
+  return dot(ng, wi) < 0.0 ? lifted - ng * (2.0 * epsilon) : lifted;
 }
 
 Vec3 cycles_smooth_surface_offset(const CyclesTriangle& t, const Vec3& ng) {
@@ -149,6 +177,8 @@ ShadowOrigin shadow_ray_origin(const OffsetSettings& settings, const ShadowQuery
       t.v_weight = q.triangle.b[1];
       return {q.p + cycles_smooth_surface_offset(t, ng) * amount, cycles_ngl > 0.0};
     }
+    case OffsetMethod::kOspray:
+      return lifted(ospray_origin(q.p, q.ng, q.wi, ospray_epsilon(q.triangle, q.p, settings.ulp)));
   }
   return {q.p, true};
 }

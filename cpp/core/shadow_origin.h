@@ -31,6 +31,7 @@ enum class OffsetMethod {
   kGist2020,
   kHanika2021,
   kCyclesGeometryOffset,
+  kOspray,
 };
 
 struct OffsetMethodInfo {
@@ -50,6 +51,9 @@ struct OffsetSettings {
   OffsetMethod method = OffsetMethod::kNone;
   double epsilon = 0.01;  // epsilon: distance along Ng, scene units, (0, 1e3]
   double cutoff = 0.1;    // cycles-geometry-offset: Cycles' "Geometry Offset", [0, 1]
+  // ospray: the epsilon relative to the coordinates' magnitude, OSPRay's
+  // ulpEpsilon 0x1.0fp-21 (modules/cpu/common/DifferentialGeometry.ih).
+  double ulp = 0x1.0fp-21;
 };
 
 // The triangle under a hit. Vertex normals are unit length and oriented to
@@ -94,6 +98,16 @@ Vec3 gist2020_origin(const ShadingTriangle& t, const Vec3& p, const Vec3& ns);
 // towards tangent planes it lies below, so points on a shared edge get the
 // same lift from both triangles (crack-free), and concave patches none.
 Vec3 hanika2021_origin(const ShadingTriangle& t, const Vec3& p);
+
+// ospray (RenderKit/ospray 675c216b91a7): postIntersect lifts P by epsilon
+// along the viewer's Ng (common/World.ih), and next-event estimation moves
+// the origin back by 2 epsilon where <Ng,wi> < 0 (render/pathtracer/
+// NextEventEstimation.ispc): P + epsilon Ng for a light on Ng's side,
+// P - epsilon Ng below. epsilon = ulp * the largest coordinate magnitude of
+// the triangle's vertices and of P (geometry/Mesh.ispc calcEpsilon and
+// common/DifferentialGeometry.ih calcEpsilon without the hit distance).
+double ospray_epsilon(const ShadingTriangle& t, const Vec3& p, double ulp);
+Vec3 ospray_origin(const Vec3& p, const Vec3& ng, const Vec3& wi, double epsilon);
 
 // Cycles 3.x (kernel/light/sample.h, shadow_ray_smooth_surface_offset):
 // vertices and normals as stored in the mesh (not flipped), u and v the

@@ -13,7 +13,7 @@ constexpr std::array<MethodParameter, 1> kShadingOffsetParameters{{
      "f = 1/(1 - s/2)"},
 }};
 
-constexpr std::array<MethodInfo, 22> kMethods{{
+constexpr std::array<MethodInfo, 23> kMethods{{
     {TerminatorMethod::kNone,
      "none",
      "-",
@@ -202,6 +202,19 @@ constexpr std::array<MethodInfo, 22> kMethods{{
      {},
      MethodKind::kAdjustment,
      NormalAdjustment::kFalcor,
+     FactorLobes::kAll,
+     false,
+     true,
+     ""},
+    {TerminatorMethod::kOspray,
+     "ospray",
+     "OSPRay path tracer: RenderKit/ospray 675c216b91a7 "
+     "modules/cpu/render/pathtracer/PathSampler.ispc sampleDirection (side test) and "
+     "NextEventEstimation.ispc (shadow ray origin, the ospray offset)",
+     "the ospray adjustment alone: Ns unchanged, light dropped where <Ng,wi> < 0; no factor",
+     {},
+     MethodKind::kAdjustment,
+     NormalAdjustment::kOspray,
      FactorLobes::kAll,
      false,
      true,
@@ -466,6 +479,7 @@ double terminator_factor(const MethodSettings& settings, const Vec3& ng, const V
     case TerminatorMethod::kIray2017:
     case TerminatorMethod::kUnityHdrp:
     case TerminatorMethod::kFalcor:
+    case TerminatorMethod::kOspray:
     case TerminatorMethod::kSchuessler2017:
     case TerminatorMethod::kSchuessler2017Shadowing:
     case TerminatorMethod::kSchuessler2017Walk:

@@ -43,6 +43,7 @@ enum class TerminatorMethod {
   kIray2017,
   kUnityHdrp,
   kFalcor,
+  kOspray,
   kSchuessler2017,
   kSchuessler2017Shadowing,
   kSchuessler2017Walk,

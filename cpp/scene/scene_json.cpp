@@ -249,6 +249,7 @@ OffsetSettings read_offset(Reader r) {
             .c_str());
     if (o.method == OffsetMethod::kEpsilon) o.epsilon = value;
     if (o.method == OffsetMethod::kCyclesGeometryOffset) o.cutoff = value;
+    if (o.method == OffsetMethod::kOspray) o.ulp = value;
   }
   r.finish();
   return o;

@@ -29,7 +29,7 @@ Vec3 mirror(const Vec3& w, const Vec3& n) {
 }
 
 TEST(NormalAdjust, TableIsCompleteAndIdsRoundTrip) {
-  EXPECT_EQ(all_normal_adjustments().size(), 9u);
+  EXPECT_EQ(all_normal_adjustments().size(), 10u);
   for (const NormalAdjustmentInfo& info : all_normal_adjustments()) {
     EXPECT_EQ(normal_adjustment_from_id(info.id), info.adjustment);
     EXPECT_EQ(&normal_adjustment_info(info.adjustment), &info);
@@ -261,6 +261,67 @@ TEST(NormalAdjust, Cycles50WithoutCorrectionKeepsNsAndTestsEveryLobeWithIt) {
     dropped += drops;
   }
   EXPECT_GT(dropped, 1000);
+}
+
+// OSPRay's side test, transcribed from RenderKit/ospray 675c216b91a7
+// modules/cpu/render/pathtracer/PathSampler.ispc, sampleDirection:
+//   const bool sameSide = dot(fs.wi, pathVertex.dg.Ng) >= 0.f;
+//   const bool reflection = fs.type & SCATTERING_REFLECTION;
+//   if (sameSide != reflection) fs.weight = make_vec3f(0.0f);
+// dg.Ng is the true geometric normal turned towards the viewer (common/
+// World.ih postIntersect); Penumbra's lobes are reflections.
+bool ospray_source_drops(const Vec3& dg_ng, const Vec3& wi) {
+  const bool same_side = dot(wi, dg_ng) >= 0.0;
+  const bool reflection = true;
+  return same_side != reflection;
+}
+
+// Both signs of the disagreement between Ng and Ns, on hand-made vectors
+// (Ng = z, Ns tilted 30 degrees towards +x): only Ng decides, Ns is never
+// changed, and Ni (the interpolated normal) plays no part.
+TEST(NormalAdjust, OsprayDropsAReflectionBelowNgWhateverNsSays) {
+  const Vec3 ns = in_plane(30.0 * kPi / 180.0), wo = in_plane(-20.0 * kPi / 180.0);
+  struct Case {
+    const char* what;
+    Vec3 ni, wi;
+    bool dropped;
+  };
+  const Case cases[] = {
+      {"above Ng and Ns", kZ, in_plane(0.5), false},
+      // Ns faces the light, Ng does not: the leak OSPRay drops.
+      {"below Ng, above Ns", kZ, in_plane(100.0 * kPi / 180.0), true},
+      // Ng faces the light, Ns does not: kept (the BSDF gives 0 itself).
+      {"above Ng, below Ns", kZ, in_plane(-70.0 * kPi / 180.0), false},
+      {"on Ng's horizon (>= 0 keeps it)", kZ, Vec3{1, 0, 0}, false},
+      {"below both", kZ, in_plane(-120.0 * kPi / 180.0), true},
+      // Ni tilted away: the light is above Ni but below Ng, and the other way.
+      {"above Ni, below Ng", in_plane(40.0 * kPi / 180.0), in_plane(95.0 * kPi / 180.0), true},
+      {"below Ni, above Ng", in_plane(-40.0 * kPi / 180.0), in_plane(80.0 * kPi / 180.0), false},
+  };
+  for (const Case& c : cases) {
+    ASSERT_EQ(ospray_source_drops(kZ, c.wi), c.dropped) << c.what;
+    const AdjustedNormals a = adjust_normal(NormalAdjustment::kOspray, {kZ, c.ni, ns, c.wi, wo});
+    EXPECT_EQ(a.reject_diffuse, c.dropped) << c.what;
+    EXPECT_EQ(a.reject_specular, c.dropped) << c.what;
+    EXPECT_EQ(a.ns_diffuse, ns) << c.what;
+    EXPECT_EQ(a.ns_specular, ns) << c.what;
+  }
+}
+
+TEST(NormalAdjust, OsprayRejectsExactlyWhereTheSourceDrops) {
+  Pcg32 rng(40);
+  int dropped = 0;
+  for (int i = 0; i < 200'000; ++i) {
+    const Vec3 ng = random_unit(rng);
+    const AdjustVectors v{ng, random_unit(rng), random_unit(rng), random_unit(rng), upper(rng, ng)};
+    const AdjustedNormals a = adjust_normal(NormalAdjustment::kOspray, v);
+    const bool drops = ospray_source_drops(v.ng, v.wi);
+    ASSERT_EQ(a.reject_diffuse, drops) << i;
+    ASSERT_EQ(a.reject_specular, drops) << i;
+    ASSERT_EQ(ospray_side_test_rejects(v.ng, v.wi), drops) << i;
+    dropped += drops;
+  }
+  EXPECT_GT(dropped, 50'000);
 }
 
 TEST(NormalAdjust, UnitAndFiniteOnRandomAndDegenerateInputs) {

@@ -102,6 +102,30 @@ TEST(Shade, Cycles50WithoutCorrectionDropsBothLobesAndNeverSoftens) {
   EXPECT_GT(compared, 1000);
 }
 
+// ospray: raw bump, glossy lobe included, wherever the light is on Ng's
+// side, and nothing below Ng even where Ns faces the light (the leak that
+// OSPRay's side test drops, PathSampler.ispc at 675c216b91a7).
+TEST(Shade, OsprayIsRawBumpAboveNgAndNothingBelow) {
+  const Material m = glossy();
+  const ShadingPoint leak{kZ, kZ, in_plane(40.0 * kPi / 180.0), in_plane(95.0 * kPi / 180.0),
+                          in_plane(-30.0 * kPi / 180.0)};
+  ASSERT_GT(shade(settings_for(TerminatorMethod::kNone), m, leak, nullptr).value, 0.0);
+  EXPECT_EQ(shade(settings_for(TerminatorMethod::kOspray), m, leak, nullptr).value, 0.0);
+  Pcg32 rng(41);
+  int compared = 0, dropped = 0;
+  for (int i = 0; i < 20'000; ++i) {
+    const ShadingPoint q{kZ, kZ, random_unit(rng), random_unit(rng), random_unit(rng)};
+    if (q.ns.z <= 0.0 || q.wo.z <= 0.0) continue;
+    const double raw = shade(settings_for(TerminatorMethod::kNone), m, q, nullptr).value;
+    const double ospray = shade(settings_for(TerminatorMethod::kOspray), m, q, nullptr).value;
+    EXPECT_EQ(ospray, q.wi.z >= 0.0 ? raw : 0.0) << i;
+    compared += raw > 0.0 && q.wi.z >= 0.0;
+    dropped += raw > 0.0 && q.wi.z < 0.0;
+  }
+  EXPECT_GT(compared, 1000);
+  EXPECT_GT(dropped, 100);
+}
+
 // With Ns == Ng every method is the plain BSDF, except the two documented
 // exceptions (deshmukh2020, shading-offset with s > 0).
 TEST(Shade, EveryMethodIsThePlainBsdfWithoutDeviation) {

@@ -149,6 +149,62 @@ TEST(ShadowOrigin, CyclesAmountIsFullNearTheHorizonAndFadesAtTheCutoff) {
   EXPECT_EQ(cycles_offset_amount(0.1, 0.5, 0.4), 0.0);
 }
 
+// OSPRay, transcribed from RenderKit/ospray 675c216b91a7:
+//   common/World.ih postIntersect:  dg.P = dg.P + dg.epsilon * ffnng;
+//     (ffnng: Ng turned towards the viewer)
+//   render/pathtracer/NextEventEstimation.ispc:
+//     vec3f org = pathVertex.dg.P;
+//     if (dot(pathVertex.dg.Ng, ls.dir) < 0.f)
+//       org = org - (2.0f * pathVertex.dg.epsilon) * pathVertex.dg.Ng;
+//   epsilon: ulpEpsilon (0x1.0fp-21, common/DifferentialGeometry.ih) times
+//   the largest coordinate magnitude (geometry/Mesh.ispc calcEpsilon).
+// A flat triangle in the plane z = -5 with Ng = -z and a vertex at x = 7:
+// epsilon = 7 ulpEpsilon, and the origin goes to the light's side of Ng.
+TEST(ShadowOrigin, OsprayMovesTheOriginToTheLightsSideOfNgByItsEpsilon) {
+  ShadingTriangle t;
+  t.v[0] = {7, 0, -5}, t.v[1] = {0, 1, -5}, t.v[2] = {0, -1, -5};
+  for (Vec3& n : t.n) n = {0, 0, -1};
+  t.b[0] = 0.25, t.b[1] = 0.25, t.b[2] = 0.5;
+  ShadowQuery q;
+  q.triangle = t;
+  q.p = point_of(t);
+  q.ng = q.ns = {0, 0, -1};
+  const double ulp_epsilon = 1.05859375 / double(1 << 21);  // 0x1.0fp-21
+  const double epsilon = 7.0 * ulp_epsilon;
+  OffsetSettings settings;
+  settings.method = OffsetMethod::kOspray;
+  EXPECT_EQ(settings.ulp, ulp_epsilon);
+  EXPECT_EQ(offset_method_info(OffsetMethod::kOspray).parameters[0].default_value, ulp_epsilon);
+  EXPECT_NEAR(ospray_epsilon(t, q.p, settings.ulp), epsilon, 1e-22);
+  struct Case {
+    const char* what;
+    Vec3 wi;
+    double side;  // +1: along Ng, -1: against it
+  };
+  const Case cases[] = {
+      {"light above Ng", normalize(Vec3{1, 0, -1}), 1.0},
+      {"light on Ng's horizon (< 0 moves it)", Vec3{1, 0, 0}, 1.0},
+      {"light just below Ng", normalize(Vec3{1, 0, 0.01}), -1.0},
+      {"light straight below", Vec3{0, 0, 1}, -1.0},
+  };
+  for (const Case& c : cases) {
+    q.wi = c.wi;
+    const ShadowOrigin o = shadow_ray_origin(settings, q);
+    const Vec3 expected = q.p + q.ng * (c.side * epsilon);
+    EXPECT_NEAR(length(o.origin - expected), 0.0, 1e-13) << c.what;
+    EXPECT_GT(c.side * dot(o.origin - q.p, q.ng), 0.5 * epsilon) << c.what;
+    // Penumbra's rule for every lifted origin: skip the own triangle only
+    // while the light is strictly above it.
+    EXPECT_EQ(o.skip_self, dot(q.ng, c.wi) > 0.0) << c.what;
+  }
+  // The parameter scales it; 0 leaves the hit point.
+  settings.ulp = 1e-3;
+  q.wi = Vec3{0, 0, 1};
+  EXPECT_NEAR(length(shadow_ray_origin(settings, q).origin - (q.p + Vec3{0, 0, 7e-3})), 0.0, 1e-13);
+  settings.ulp = 0.0;
+  EXPECT_EQ(shadow_ray_origin(settings, q).origin, q.p);
+}
+
 TEST(ShadowOrigin, IdsRoundTripAndAreUnique) {
   std::map<std::string, int> seen;
   for (const OffsetMethodInfo& info : all_offset_methods()) {
@@ -253,6 +309,10 @@ TEST(LowPolyScene, RejectsWhatCannotBeRendered) {
             std::string::npos);
   EXPECT_EQ(scene_error("sphere.json", {{"/offset", {{"method", "epsilon"}, {"distance", 0.02}}}}),
             "");
+  EXPECT_EQ(scene_error("sphere.json", {{"/offset", {{"method", "ospray"}, {"ulp", 1e-6}}}}), "");
+  EXPECT_NE(scene_error("sphere.json", {{"/offset", {{"method", "ospray"}, {"ulp", 0.5}}}})
+                .find("/offset/ulp"),
+            std::string::npos);
 }
 
 // ---- renders -----------------------------------------------------------------

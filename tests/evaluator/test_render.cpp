@@ -201,6 +201,32 @@ TEST(Render, MethodsRenderedTogetherHaveTheBitsOfTheirOwnRenders) {
   EXPECT_EQ(render_methods(walk, {w}).size(), 1u);  // alone it is a plain render
 }
 
+// ospray renders: on a closed sphere every light below Ng is already behind
+// the sphere, so its side test changes no radiance; on a plane lit from just
+// below its horizon, raw bump lets the bump normals catch the light and
+// ospray drops all of it.
+TEST(Render, OsprayDropsTheLightBelowAPlaneAndChangesNothingOnASphere) {
+  const auto radiance = [](const std::string& method, std::vector<std::string> sets) {
+    for (const char* s : {"/camera/width=48", "/camera/height=48", "/camera/spp=4"})
+      sets.emplace_back(s);
+    sets.push_back("/terminator/method=\"" + method + "\"");
+    const Image image = render(scene_with("sphere-weave.json", sets));
+    std::vector<float> r;
+    for (int j = 0; j < image.height; ++j)
+      for (int i = 0; i < image.width; ++i) r.push_back(image.at(i, j, 0));
+    return r;
+  };
+  EXPECT_EQ(radiance("ospray", {}), radiance("none", {}));
+  const std::vector<std::string> plane = {
+      R"(/shape={"type": "plane", "axis": [0, 0, -1], "width": 2, "height": 2})",
+      "/light/direction=[-1,0,0.05]", "/height/amplitude=0.05"};
+  double leaked = 0.0, dropped = 0.0;
+  for (float r : radiance("none", plane)) leaked += r;
+  for (float r : radiance("ospray", plane)) dropped += r;
+  EXPECT_GT(leaked, 1.0);
+  EXPECT_EQ(dropped, 0.0);
+}
+
 // The table's draws_random is what shade() does: a method that says it draws
 // none leaves the pixel's stream where it was, at points where it shades.
 TEST(Render, MethodsDrawRandomNumbersExactlyWhenTheTableSaysSo) {
