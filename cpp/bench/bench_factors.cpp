@@ -34,7 +34,7 @@ const std::vector<ShadingVectors>& pool() {
 
 void bm_factor(benchmark::State& state, penumbra::TerminatorMethod method) {
   const auto& vectors = pool();
-  penumbra::MethodSettings settings{method, 0.5, nullptr};
+  penumbra::MethodSettings settings{method, 0.5, nullptr, nullptr, {}};
   std::size_t i = 0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(penumbra::terminator_factor(settings, vectors[i]));
@@ -63,6 +63,7 @@ void bm_shade(benchmark::State& state, penumbra::TerminatorMethod method) {
 
 const int registered = [] {
   for (const auto& info : penumbra::all_methods()) {
+    if (info.user_defined) continue;  // no function in a benchmark binary
     if (info.kind == penumbra::MethodKind::kFactor)
       benchmark::RegisterBenchmark(("factor/" + std::string(info.id)).c_str(), bm_factor,
                                    info.method);

@@ -113,6 +113,12 @@ nlohmann::json methods_json();
 // ship (the exporters refuse them too, but only after the mesh is built).
 void check_offered(RendererKind renderer, const Scene& scene);
 
+// `penumbra export`'s files for `scene` in the folder `output` (made if
+// missing): what the exporter prints of them. UsageError for a renderer
+// with nothing to export, OutputError for a folder that takes no files.
+std::string export_scene_files(RendererKind renderer, const Scene& scene,
+                               const std::string& output);
+
 // The output formats, from the extension: only OpenEXR holds float radiance
 // and the analysis channels; the preview is a PNG. `why` says so in the error.
 void check_extension(const std::string& path, const char* extension, const char* option,

@@ -95,7 +95,7 @@ int bench(const BenchArgs& a, const CommandContext& c) {
   out << fmt::format("{:<30} {:>8} {:>8} {:>8} {:>14} {:>17}\n", "method", "path", "wall s",
                      "CPU s", "M samples/s", "M samples/CPU-s");
   for (const MethodInfo& m : all_methods())
-    if (!m.needs_table) print_line(bench_method(m, a.size, a.spp, true), out);
+    if (!m.needs_table && !m.user_defined) print_line(bench_method(m, a.size, a.spp, true), out);
   print_line(bench_shared_pass(a.size, a.spp, true), out);
   out << "  (one pass: each camera sample counted once per method, as separate renders would "
          "count it)\nthe scalar path, for comparison (same bits):\n";

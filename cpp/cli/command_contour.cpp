@@ -73,7 +73,10 @@ int contour(const ContourArgs& a, std::ostream& out) {
           "--method {}: its G is a table over the grid of penumbra fit; fit.json's pictures hold "
           "it at the cells' centres",
           id));
-    methods.push_back({*m, 0.0, nullptr});
+    if (method_info(*m).user_defined)
+      throw UsageError(fmt::format(
+          "--method {}: a user method is plotted in Python (penumbra.factor, docs/python.md)", id));
+    methods.push_back({*m, 0.0, nullptr, nullptr, {}});
   }
   std::error_code ec;
   fs::create_directories(a.output, ec);

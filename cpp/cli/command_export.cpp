@@ -33,20 +33,26 @@ std::vector<std::string> exporter_ids() {
 int export_scene(const ExportArgs& a, std::ostream& out) {
   const Scene scene = read_scene(a.scene, a.scene_args).scene;
   // --to is one of exporter_ids(); refused before a folder is made.
-  const RendererKind r = renderer_from_id(a.to).value();
-  check_offered(r, scene);
-  std::error_code ec;
-  fs::create_directories(a.output, ec);
-  if (ec || !fs::is_directory(a.output))
-    throw OutputError(fmt::format("{}: cannot create the output folder: {}", a.output,
-                                  ec ? ec.message() : "not a folder"));
-  // A folder that takes no files fails here, before the mesh is built.
-  check_writable((fs::path(a.output) / renderer(r).export_file).string());
-  out << renderer(r).export_files(scene, a.output);
+  out << export_scene_files(renderer_from_id(a.to).value(), scene, a.output);
   return kExitOk;
 }
 
 }  // namespace
+
+std::string export_scene_files(RendererKind r, const Scene& scene, const std::string& output) {
+  if (!renderer(r).export_files)
+    throw UsageError(fmt::format("{} has nothing to export (exporters: {})", to_string(r),
+                                 fmt::join(exporter_ids(), ", ")));
+  check_offered(r, scene);
+  std::error_code ec;
+  fs::create_directories(output, ec);
+  if (ec || !fs::is_directory(output))
+    throw OutputError(fmt::format("{}: cannot create the output folder: {}", output,
+                                  ec ? ec.message() : "not a folder"));
+  // A folder that takes no files fails here, before the mesh is built.
+  check_writable((fs::path(output) / renderer(r).export_file).string());
+  return renderer(r).export_files(scene, output);
+}
 
 Command add_export_command(CLI::App& app, SharedOptions&) {
   auto a = std::make_shared<ExportArgs>();

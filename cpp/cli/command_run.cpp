@@ -9,6 +9,7 @@
 #include <thread>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "cli/command.h"
 #include "cli/stop_signals.h"
@@ -28,6 +29,9 @@ struct RunArgs {
   bool no_figures = false, no_fit = false, quiet = false, dry_run = false;
   bool self_contained = false;  // report.html embeds its images
   double max_memory_gib = kDefaultMaxMemoryBytes / kGiB;
+  std::vector<std::string> add_methods;  // --add-method, in the order given
+  // --methods-from: main.cpp hands the command to Python before it gets here.
+  std::vector<std::string> methods_from;
   std::string executor = "local";  // local or slurm
   SlurmOptions slurm;              // --partition, --array-limit, ... (chain: --slurm-chain)
 };
@@ -224,12 +228,52 @@ void print_efficiency(const StudyRunStats& stats, int cores, std::ostream& out) 
       stats.render_core_seconds, cores, bound, stats.seconds, stats.seconds / bound, stats.fit_s);
 }
 
+// --add-method: each id joins the bump section's methods (after those the
+// study names), measured and ranked like them; a user method registered
+// from Python (core/user_method.h) is named this way.
+void add_methods(const std::vector<std::string>& ids, Study* study) {
+  if (ids.empty()) return;
+  std::vector<StudyMethod>& methods = study->bump.methods;
+  if (study->bump.scenes.empty())
+    throw UsageError("--add-method: study " + study->file + " has no bump section");
+  for (const std::string& id : ids) {
+    const auto method = method_from_id(id);
+    if (!method || method_info(*method).needs_table ||
+        (*method == TerminatorMethod::kPython && !find_user_method(id))) {
+      const std::vector<std::string> users = user_method_ids();
+      throw UsageError(fmt::format(
+          "--add-method: expected a built-in method id that needs no table or a user method "
+          "registered in this process{}, got \"{}\"",
+          users.empty() ? " (none is: register them with @penumbra.method in Python)"
+                        : " (" + fmt::format("{}", fmt::join(users, ", ")) + ")",
+          id));
+    }
+    const bool named = std::any_of(methods.begin(), methods.end(),
+                                   [&](const StudyMethod& m) { return m.label == id; });
+    if (!named) methods.push_back({id, nlohmann::json(), id});
+  }
+}
+
 int run(const RunArgs& a, const CommandContext& c) {
   // A study writes PNG previews after its renders: a missing image module
   // (a binary copied without lib/penumbra/) is found now, not mid-run.
   if (!a.dry_run) load_image_formats();
   const ImageReadLimit image_limit(a.max_memory_gib * kGiB);  // the maps the study reads
-  const Study study = load_study(a.study);
+  if (!a.methods_from.empty())
+    throw UsageError(
+        "--methods-from: run the penumbra binary, or python3 -m penumbra, which "
+        "register the file's methods; in Python, import the file and pass "
+        "extra_methods to penumbra.run");
+  Study study = load_study(a.study);
+  add_methods(a.add_methods, &study);
+  // Slurm's array tasks run the penumbra binary, which has no Python.
+  if (a.executor == "slurm")
+    for (const StudyMethod& m : study.bump.methods)
+      if (find_user_method(m.id))
+        throw UsageError(fmt::format(
+            "--executor slurm: \"{}\" is a user method, which only a Python process has "
+            "(the array tasks run the penumbra binary); run the study with --executor local",
+            m.id));
   StudyOptions o = study_options(a, study, c);
   const bool tty = ::isatty(STDERR_FILENO);
   std::mutex mutex;
@@ -311,6 +355,14 @@ Command add_run_command(CLI::App& app, SharedOptions& shared) {
       ->check(CLI::Range(0.001, 1e6))
       ->capture_default_str();
   cmd->add_flag("-q,--quiet", a->quiet, "no progress");
+  cmd->add_option("--add-method", a->add_methods,
+                  "also measure this method in the bump section (repeatable): a built-in id, or a "
+                  "user method registered from Python (docs/python.md; `python3 -m penumbra run "
+                  "STUDY --methods-from FILE.py` registers a file's)");
+  cmd->add_option("--methods-from", a->methods_from,
+                  "a Python file of user methods (@penumbra.method): the study runs as "
+                  "`python3 -m penumbra run ...`, which registers them and measures each like "
+                  "--add-method (repeatable; docs/python.md)");
   add_slurm_options(cmd, *a);
   return {cmd, [a](const CommandContext& c) { return run(*a, c); }};
 }

@@ -13,7 +13,7 @@ constexpr std::array<MethodParameter, 1> kShadingOffsetParameters{{
      "f = 1/(1 - s/2)"},
 }};
 
-constexpr std::array<MethodInfo, 23> kMethods{{
+constexpr std::array<MethodInfo, 24> kMethods{{
     {TerminatorMethod::kNone,
      "none",
      "-",
@@ -309,6 +309,24 @@ constexpr std::array<MethodInfo, 23> kMethods{{
      false,
      false,
      true},
+    {TerminatorMethod::kPython,
+     "python",
+     "a user's function registered from Python with @penumbra.method (docs/python.md); "
+     "scenes and studies name it by its own id",
+     "G(cos_light, cos_deviation, cos_shading, cos_view, parameters) from the user's vectorised "
+     "function, called on batches of samples",
+     {},
+     MethodKind::kFactor,
+     NormalAdjustment::kNone,
+     FactorLobes::kScene,
+     false,
+     false,
+     "G where Ns == Ng is whatever the user's function returns there",
+     "",
+     false,
+     false,
+     false,
+     true},
 }};
 
 double clamp01(double x) {
@@ -328,7 +346,13 @@ const MethodInfo& method_info(TerminatorMethod method) {
 std::optional<TerminatorMethod> method_from_id(std::string_view id) {
   for (const MethodInfo& info : kMethods)
     if (info.id == id) return info.method;
+  if (find_user_method(id)) return TerminatorMethod::kPython;
   return std::nullopt;
+}
+
+std::string_view method_id(const MethodSettings& settings) {
+  if (settings.method == TerminatorMethod::kPython && settings.user) return settings.user->id;
+  return method_info(settings.method).id;
 }
 
 double chiang2019_raw_g(const Vec3& ng, const Vec3& ns, const Vec3& wi) {
@@ -490,6 +514,8 @@ double terminator_factor(const MethodSettings& settings, const Vec3& ng, const V
       return microshadow_brinck2016(dot(ns, wi), visibility);
     case TerminatorMethod::kFitted:
       return settings.table ? settings.table->at(factor_inputs(ng, ns, wi, wo)) : 1.0;
+    case TerminatorMethod::kPython:
+      return 1.0;
   }
   return 1.0;
 }

@@ -19,9 +19,11 @@
 #include <optional>
 #include <span>
 #include <string_view>
+#include <vector>
 
 #include "core/factor_table.h"
 #include "core/normal_adjust.h"
+#include "core/user_method.h"
 #include "core/vec.h"
 
 namespace penumbra {
@@ -50,6 +52,7 @@ enum class TerminatorMethod {
   kMicroshadowChan2018,
   kMicroshadowBrinck2016,
   kFitted,
+  kPython,
 };
 
 // How a method acts: a factor on the lobes' contribution, a factor plus the
@@ -103,6 +106,9 @@ struct MethodInfo {
   // the table.json that `penumbra fit` writes): a study or bench that takes
   // every method leaves it out unless a table is given.
   bool needs_table = false;
+  // The row that stands for the user methods (core/user_method.h): a scene
+  // names one by its own id; a study takes none unless it names it.
+  bool user_defined = false;
 };
 
 std::span<const MethodInfo> all_methods();
@@ -116,7 +122,15 @@ struct MethodSettings {
   // fitted: G over (light, deviation, ...) angles, multilinear between the
   // cells' centres (core/factor_table.h), with its content digest.
   std::shared_ptr<const FactorTable> table = nullptr;
+  // python: the user's method and its parameters' values, in the order of
+  // its `parameters`. Its factor is evaluated in batches by the evaluator
+  // (evaluator.h, render_methods), never by terminator_factor.
+  std::shared_ptr<const UserMethod> user = nullptr;
+  std::vector<double> user_values = {};
 };
+
+// The id a method is named by: the user method's own for `python`.
+std::string_view method_id(const MethodSettings& settings);
 
 // Unit vectors at a shading point, all in the same space.
 //   ng: reference normal of the factor (Ng or Ni, the caller's choice)
@@ -129,10 +143,9 @@ struct ShadingVectors {
 // The factor multiplied into the affected lobes' contribution, in [0,1]
 // (fitted: in the table's range, which may exceed 1 where raw bump is too
 // dark). Finite for every finite unit input, degenerate ones included. 1 for the
-// adjustment-only methods; the microfacet models have no factor (1 here;
-// shading.cpp evaluates them).
-// `visibility`: the height field's ambient visibility at the point, in [0,1]
-// (core/height.h); only the micro-shadowing methods read it.
+// adjustment-only methods and for `python` (evaluated in batches instead); the microfacet models
+// have no factor (1 here; shading.cpp evaluates them). `visibility`: the height field's ambient
+// visibility at the point, in [0,1] (core/height.h); only the micro-shadowing methods read it.
 double terminator_factor(const MethodSettings& settings, const Vec3& ng, const Vec3& ns,
                          const Vec3& wi, const Vec3& wo, double visibility = 1.0);
 inline double terminator_factor(const MethodSettings& settings, const ShadingVectors& v,

@@ -379,23 +379,101 @@ struct PendingShadow {
   std::size_t first = 0, last = 0;
 };
 
+// Where a render of one raw-bump pass puts each of its samples as well
+// (render_tallied; the user methods' passes): add() is called once per
+// sample that hits, `lit` when the light reaches it unblocked and raw bump
+// gives it radiance `value`; `column`: the sample's pixel in its row.
+class SampleSink {
+ public:
+  virtual ~SampleSink() = default;
+  virtual void add(const Material& m, const ShadingPoint& p, double irradiance, double value,
+                   bool lit, int column) const = 0;
+};
+
 // Where a tallied render (render_tallied) puts one pixel's unblocked light:
 // the part a factor scales, split over the factor grid's nodes by each
 // sample's interpolation weights.
-struct TallySink {
-  const FactorGrid* grid = nullptr;
-  Lobes lobes = Lobes::kDiffuse;
-  std::vector<std::pair<int, double>>* scaled = nullptr;  // (cell, light), unsorted
-  double* rest = nullptr;                                 // light no cell's G scales
-  void add(const Material& m, const ShadingPoint& p, double irradiance, double value) const {
+class TallySink final : public SampleSink {
+ public:
+  TallySink(const FactorGrid* grid, Lobes lobes, std::vector<std::pair<int, double>>* scaled,
+            double* rest)
+      : grid_(grid), lobes_(lobes), scaled_(scaled), rest_(rest) {}
+  void add(const Material& m, const ShadingPoint& p, double irradiance, double value, bool lit,
+           int /*column*/) const override {
+    if (!lit) return;
     NodeWeights nodes;
-    const int n = grid->nodes(factor_inputs(p.ng, p.ns, p.wi, p.wo), &nodes);
-    const double light = n ? factor_scaled_value(m, p.ns, p.wi, p.wo, lobes) * irradiance : 0.0;
+    const int n = grid_->nodes(factor_inputs(p.ng, p.ns, p.wi, p.wo), &nodes);
+    const double light = n ? factor_scaled_value(m, p.ns, p.wi, p.wo, lobes_) * irradiance : 0.0;
     if (light > 0.0)
       for (int k = 0; k < n; ++k)
-        scaled->emplace_back(nodes[std::size_t(k)].first, light * nodes[std::size_t(k)].second);
-    *rest += value - light;
+        scaled_->emplace_back(nodes[std::size_t(k)].first, light * nodes[std::size_t(k)].second);
+    *rest_ += value - light;
   }
+
+ private:
+  const FactorGrid* grid_;
+  Lobes lobes_;
+  std::vector<std::pair<int, double>>* scaled_;  // (cell, light), unsorted
+  double* rest_;                                 // light no cell's G scales
+};
+
+// The samples of a user method's pass (core/user_method.h) in the order
+// they are shaded (a row's pixels in turn): the factor's inputs and the
+// light the factor scales (0 where the light does not reach the sample
+// unblocked).
+struct SampleRecords {
+  std::vector<double> cos_light, cos_deviation, cos_shading, cos_view, light;
+  std::vector<Vec3> ng, ns, wi, wo;  // only for a method that wants the vectors
+  // The sample's pixel: in its row as recorded, in the block once appended.
+  std::vector<std::uint32_t> column;
+  std::vector<double> rest;  // one per pixel of the rows: the light no factor scales
+
+  // `o`'s samples after these, its pixels after these.
+  void append(const SampleRecords& o) {
+    auto cat = [](auto& a, const auto& b) { a.insert(a.end(), b.begin(), b.end()); };
+    const auto offset = static_cast<std::uint32_t>(rest.size());
+    cat(cos_light, o.cos_light), cat(cos_deviation, o.cos_deviation);
+    cat(cos_shading, o.cos_shading), cat(cos_view, o.cos_view), cat(light, o.light);
+    cat(ng, o.ng), cat(ns, o.ns), cat(wi, o.wi), cat(wo, o.wo), cat(rest, o.rest);
+    for (const std::uint32_t c : o.column) column.push_back(offset + c);
+  }
+  FactorBatch batch() const {
+    return {cos_light, cos_deviation, cos_shading, cos_view, ng, ns, wi, wo};
+  }
+};
+
+// Records a user method's samples: the raw-bump pass it renders is the
+// user's scene with the method `none`, so it sees the same normals.
+class RecordSink final : public SampleSink {
+ public:
+  // `out`: one row's records, its `rest` one entry per pixel of the row.
+  RecordSink(const TerminatorSettings& t, bool vectors, SampleRecords* out)
+      : use_ni_(t.reference_normal == ReferenceNormal::kInterpolated),
+        lobes_(t.lobes),
+        vectors_(vectors),
+        out_(out) {}
+  void add(const Material& m, const ShadingPoint& p, double irradiance, double value, bool lit,
+           int column) const override {
+    const Vec3& ng = use_ni_ ? p.ni : p.ng;
+    out_->cos_light.push_back(dot(ng, p.wi));
+    out_->cos_deviation.push_back(dot(ng, p.ns));
+    out_->cos_shading.push_back(dot(p.ns, p.wi));
+    out_->cos_view.push_back(dot(ng, p.wo));
+    if (vectors_) {
+      out_->ng.push_back(ng), out_->ns.push_back(p.ns);
+      out_->wi.push_back(p.wi), out_->wo.push_back(p.wo);
+    }
+    const double light = lit ? factor_scaled_value(m, p.ns, p.wi, p.wo, lobes_) * irradiance : 0.0;
+    out_->light.push_back(light);
+    out_->column.push_back(static_cast<std::uint32_t>(column));
+    if (lit) out_->rest[std::size_t(column)] += value - light;
+  }
+
+ private:
+  bool use_ni_;
+  Lobes lobes_;
+  bool vectors_;
+  SampleRecords* out_;
 };
 
 // The parts of a sample every method sees alike, in the channels' units.
@@ -473,10 +551,10 @@ class SampleShader {
   // Whether a hit's shading normal is the bump normal (BumpNormals::at).
   bool bumps() const { return displaced_shading_ && perturbed_; }
 
-  // `tally`: where the one pass's unblocked light goes as well (render_tallied).
+  // `sink`: where the one pass's samples go as well (SampleSink).
   void shade(const Ray& ray, const SurfaceHit& hit, const LightUniforms& u, Material* material,
              Pcg32* rng, PixelSums* sums, std::uint64_t* shadow_rays,
-             const TallySink* tally = nullptr) const;
+             const SampleSink* sink = nullptr, int column = 0) const;
   // shade() but for the radiance of the passes the light reaches, which
   // waits for the shadow ray's verdict: its contributions are appended to
   // *lit, and the ray to trace is returned (nullopt: no pass needs it).
@@ -490,7 +568,8 @@ class SampleShader {
   // Copying them through a SurfaceHit first cost a tenth of the render:
   // wider loads of a Vec3 just stored narrower wait for the store.
   void shade_packed(const HitPacket& hits, const RayPacket& rays, std::size_t k,
-                    const Material& material, PixelSums* sums, std::uint64_t* shadow_rays) const;
+                    const Material& material, PixelSums* sums, std::uint64_t* shadow_rays,
+                    const SampleSink* sink, int column) const;
   // Every pass on one shading point, into sums, but for the radiance of
   // the passes the light reaches: lit(pass, radiance) decides on those.
   template <typename Lit>
@@ -567,9 +646,11 @@ typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray&
 template <typename Tracer>
 void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const LightUniforms& u,
                                  Material* material, Pcg32* rng, PixelSums* sums,
-                                 std::uint64_t* shadow_rays, const TallySink* tally) const {
+                                 std::uint64_t* shadow_rays, const SampleSink* sink,
+                                 int column) const {
   const Prepared p = prepare(ray, hit, u, material);
   int is_blocked = -1;  // the shadow ray, traced for the first pass that needs it
+  double lit_value = 0.0;  // the one pass's, where the light reaches it (sink)
   shade_passes(*material, p.point, p.light, p.angles, rng, sums, [&](std::size_t k, double value) {
     if (is_blocked < 0) {
       ++*shadow_rays;
@@ -579,8 +660,9 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Li
     }
     if (is_blocked != 0) return;
     sums[k].radiance += value;
-    if (tally) tally->add(*material, p.point, p.light.irradiance, value);
+    lit_value = value;
   });
+  if (sink) sink->add(*material, p.point, p.light.irradiance, lit_value, lit_value > 0.0, column);
 }
 
 template <typename Tracer>
@@ -620,7 +702,8 @@ void SampleShader<Tracer>::shade_passes(const Material& material, const ShadingP
 template <typename Tracer>
 void SampleShader<Tracer>::shade_packed(const HitPacket& hits, const RayPacket& rays, std::size_t k,
                                         const Material& material, PixelSums* sums,
-                                        std::uint64_t* shadow_rays) const {
+                                        std::uint64_t* shadow_rays, const SampleSink* sink,
+                                        int column) const {
   // As shade() for a BaseTracer hit: Ng = Ni = the base normal, Ns the
   // packet's (the base normal where nothing bumps it), both turned towards
   // the viewer.
@@ -638,10 +721,12 @@ void SampleShader<Tracer>::shade_packed(const HitPacket& hits, const RayPacket& 
         height_field_visibility(scene_.height.function, backfacing ? -amplitude : amplitude, p, n);
   const SampleAngles angles{hits.theta[k], hits.deviation[k], hits.view[k]};
   bool counted = false;  // the packet traced the shadow ray; count it once, as shade() does
+  double lit_value = 0.0;
   shade_passes(material, point, light, angles, nullptr, sums, [&](std::size_t pass, double value) {
     if (!counted) ++*shadow_rays, counted = true;
-    if (hits.blocked[k] == 0.0) sums[pass].radiance += value;
+    if (hits.blocked[k] == 0.0) sums[pass].radiance += value, lit_value = value;
   });
+  if (sink) sink->add(material, point, light.irradiance, lit_value, lit_value > 0.0, column);
 }
 
 // Whether render_image traces its camera rays in packets (core/ray_packet.h):
@@ -673,7 +758,7 @@ struct PixelTask {
   Pcg32* rng = nullptr;       // for the methods that draw random numbers while shading
   PixelSums* sums = nullptr;  // one per pass
   std::uint64_t* shadow_rays = nullptr;
-  const TallySink* tally = nullptr;  // render_tallied only (scalar path)
+  const SampleSink* sink = nullptr;  // one pass's samples (scalar path only)
 };
 
 // The rows of a render through packets: rays, hits, bump normals, shadow
@@ -693,7 +778,8 @@ class PacketRows {
         buffers_(std::make_unique<PacketBuffers>()),
         sums_(kSlots * pass_count) {}
 
-  void render_row(int j, std::uint64_t* shadow_rays);
+  // `sink`: where the one pass's samples go as well (a user method's).
+  void render_row(int j, std::uint64_t* shadow_rays, const SampleSink* sink = nullptr);
 
  private:
   // Pixels with samples in flight: at most a packet's worth of pixels whose
@@ -712,9 +798,11 @@ class PacketRows {
   std::size_t lane_slot_[kPacketSize]{};
   std::vector<int> complete_;  // pixels of row j_ whose samples are all in the packets
   int j_ = 0;
+  const SampleSink* sink_ = nullptr;
 };
 
-void PacketRows::render_row(int j, std::uint64_t* shadow_rays) {
+void PacketRows::render_row(int j, std::uint64_t* shadow_rays, const SampleSink* sink) {
+  sink_ = sink;
   const Camera& camera = scene_.camera;
   SamplePacket& samples = buffers_->samples;
   RayPacket& rays = buffers_->rays;
@@ -752,7 +840,7 @@ void PacketRows::flush(std::uint64_t* shadow_rays) {
   for (std::size_t k = 0; k < rays.count; ++k)
     if (hits.found[k] != 0.0)
       shader_.shade_packed(hits, rays, k, scene_.material, &sums_[lane_slot_[k] * pass_count_],
-                           shadow_rays);
+                           shadow_rays, sink_, static_cast<int>(buffers_->samples.i[k]));
   rays.count = 0;
   const Camera& camera = scene_.camera;
   const std::size_t channel_count = evaluator_channels().size();
@@ -869,7 +957,7 @@ void shade_pixel(const Scene& scene, const Tracer& tracer, const Props& props,
       const bool found = tracer.primary(ray, &hit);
       if (!(props.nearer(ray, found, &hit) || found)) continue;
       shader.shade(ray, hit, light_uniforms(scene, pixel.key, sy * nx + sx, nx, ny), &material,
-                   pixel.rng, pixel.sums, pixel.shadow_rays, pixel.tally);
+                   pixel.rng, pixel.sums, pixel.shadow_rays, pixel.sink, pixel.i);
     }
   }
 }
@@ -896,19 +984,43 @@ struct TallyRequest {
   }
 };
 
-// Renders with each of `passes` (one per image); see render_methods. With
-// `tally` (one pass), on the scalar path, tallying as it goes.
+// A user method's pass while it renders (render_user_passes): the samples
+// of rows [first_row, first_row + rows.size()), a SampleRecords per row.
+struct RecordRequest {
+  const TerminatorSettings* pass = nullptr;  // the raw-bump pass that is rendered
+  bool vectors = false;                      // record the vectors too
+  int first_row = 0;
+  std::vector<SampleRecords> rows;
+};
+
+// Renders rows [first_row, end_row) of the image with each of `passes` (one
+// per image); see render_methods. With `tally` or `record` (one pass), on
+// the scalar path, tallying or recording its samples as it goes.
+struct ImageRequest {
+  TallyRequest* tally = nullptr;
+  RecordRequest* record = nullptr;
+  int first_row = 0;
+  int end_row = -1;  // -1: the last row
+};
+
 template <typename Tracer>
 void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions& options,
                   const std::vector<TerminatorSettings>& passes, std::vector<Image>* images,
-                  RenderStats* stats, TallyRequest* tally = nullptr) {
+                  RenderStats* stats, const ImageRequest& request = {}) {
   const Camera& camera = scene.camera;
   const int width = camera.width, height = camera.height;
+  const int first_row = request.first_row;
+  const int end_row = request.end_row < 0 ? height : request.end_row;
   const std::size_t channel_count = evaluator_channels().size();
   const std::size_t pass_count = passes.size();
   const double inv_spp = 1.0 / camera.spp;
   const Props props(scene);
   const SampleShader<Tracer> shader(scene, tracer, props, passes);
+  TallyRequest* const tally = request.tally;
+  RecordRequest* const record = request.record;
+  const bool sinks = tally || record;
+  // A user method's recording goes through packets too (PacketRows): its
+  // samples come in the scalar path's order.
   const bool packets = !tally && traces_packets(scene, shader, passes, options);
   const PacketSetup setup = packet_setup(scene, tracer);
 
@@ -917,51 +1029,185 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   std::mutex progress_mutex;
   auto last_report = Clock::now();
 
-  tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
-    std::uint64_t local_shadow_rays = 0;
-    std::vector<PixelSums> sums(pass_count);
-    std::vector<std::pair<int, double>> entries;  // a tallied pixel's samples
-    double rest = 0.0;
-    const TallySink sink =
-        tally ? TallySink{tally->grid, tally->lobes, &entries, &rest} : TallySink{};
-    std::optional<PacketRows> packet_rows;
-    if constexpr (std::is_same_v<Tracer, BaseTracer>)
-      if (packets) packet_rows.emplace(scene, setup, shader, pass_count, images);
-    for (int j = rows.begin(); j != rows.end(); ++j) {
-      if (packet_rows) {
-        packet_rows->render_row(j, &local_shadow_rays);
-      } else {
-        for (int i = 0; i < width; ++i) {
-          const std::uint64_t pixel = std::uint64_t(j) * width + i;
-          const std::uint64_t key = pixel_key(camera, i, j);
-          Pcg32 rng(key);
-          std::fill(sums.begin(), sums.end(), PixelSums{});
-          entries.clear();
-          rest = 0.0;
-          shade_pixel(scene, tracer, props, shader,
-                      {i, j, key, &rng, sums.data(), &local_shadow_rays, tally ? &sink : nullptr},
-                      options.packets && !tally);
-          if (tally) tally->store(pixel, entries, rest, inv_spp);
-          for (std::size_t k = 0; k < pass_count; ++k)
-            write_pixel(sums[k], inv_spp, &(*images)[k].pixels[pixel * channel_count]);
+  tbb::parallel_for(
+      tbb::blocked_range<int>(first_row, end_row), [&](const tbb::blocked_range<int>& rows) {
+        std::uint64_t local_shadow_rays = 0;
+        std::vector<PixelSums> sums(pass_count);
+        std::vector<std::pair<int, double>> entries;  // a tallied pixel's samples
+        double rest = 0.0;
+        std::optional<TallySink> tally_sink;
+        if (tally) tally_sink.emplace(tally->grid, tally->lobes, &entries, &rest);
+        std::optional<PacketRows> packet_rows;
+        if constexpr (std::is_same_v<Tracer, BaseTracer>)
+          if (packets) packet_rows.emplace(scene, setup, shader, pass_count, images);
+        for (int j = rows.begin(); j != rows.end(); ++j) {
+          std::optional<RecordSink> record_sink;
+          if (record) {
+            SampleRecords* recorded = &record->rows[std::size_t(j - record->first_row)];
+            recorded->rest.assign(std::size_t(width), 0.0);
+            record_sink.emplace(*record->pass, record->vectors, recorded);
+          }
+          if (packet_rows) {
+            packet_rows->render_row(j, &local_shadow_rays, record_sink ? &*record_sink : nullptr);
+          } else {
+            const SampleSink* sink = tally_sink    ? static_cast<const SampleSink*>(&*tally_sink)
+                                     : record_sink ? &*record_sink
+                                                   : nullptr;
+            for (int i = 0; i < width; ++i) {
+              const std::uint64_t pixel = std::uint64_t(j) * width + i;
+              const std::uint64_t key = pixel_key(camera, i, j);
+              Pcg32 rng(key);
+              std::fill(sums.begin(), sums.end(), PixelSums{});
+              entries.clear();
+              rest = 0.0;
+              shade_pixel(scene, tracer, props, shader,
+                          {i, j, key, &rng, sums.data(), &local_shadow_rays, sink},
+                          options.packets && !sinks);
+              if (tally) tally->store(pixel, entries, rest, inv_spp);
+              for (std::size_t k = 0; k < pass_count; ++k)
+                write_pixel(sums[k], inv_spp, &(*images)[k].pixels[pixel * channel_count]);
+            }
+          }
+          const int done = ++rows_done;
+          if (options.progress) {
+            std::lock_guard<std::mutex> lock(progress_mutex);
+            const auto now = Clock::now();
+            if (done == end_row - first_row || now - last_report > std::chrono::milliseconds(250)) {
+              last_report = now;
+              options.progress(static_cast<double>(first_row + done) / height);
+            }
+          }
         }
-      }
-      const int done = ++rows_done;
-      if (options.progress) {
-        std::lock_guard<std::mutex> lock(progress_mutex);
-        const auto now = Clock::now();
-        if (done == height || now - last_report > std::chrono::milliseconds(250)) {
-          last_report = now;
-          options.progress(static_cast<double>(done) / height);
-        }
-      }
-    }
-    shadow_rays += local_shadow_rays;
-  });
+        shadow_rays += local_shadow_rays;
+      });
   if (stats) {
     stats->camera_samples = std::uint64_t(width) * height * camera.spp;
-    stats->shadow_rays = shadow_rays;
-    stats->packets = packets || (requires { Tracer::kPacketRays; } && options.packets);
+    stats->shadow_rays += shadow_rays;
+    stats->packets = stats->packets || packets ||
+                     (requires { Tracer::kPacketRays; } && options.packets && !sinks);
+    // (PacketRows records; a tracer's own packets, shade_pixel_packets, do not.)
+  }
+}
+
+// Samples per recorded block of a user method's pass: about 20 MiB of
+// records (60 more with the vectors), and a few blocks per image, so that
+// each call of the user's function covers thousands of samples.
+constexpr std::size_t kRecordedSamples = std::size_t(1) << 19;
+
+// A user method's image for the pixels of `r` (from pixel `first_pixel`
+// on): the raw-bump pass's channels, but for the
+// radiance, the light no factor scales plus each sample's g times the light
+// it scales, in the order of the samples, and analysis.G, the mean of g
+// over the samples that hit.
+void write_user_pixels(const SampleRecords& r, std::span<const double> g, const Image& raw,
+                       std::size_t first_pixel, double inv_spp, Image* out) {
+  const std::size_t c = evaluator_channels().size();
+  const std::size_t pixels = r.rest.size();
+  std::vector<double> radiance(r.rest), g_sum(pixels, 0.0), hits(pixels, 0.0);
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    const std::size_t q = r.column[k];
+    radiance[q] += g[k] * r.light[k];
+    g_sum[q] += g[k];
+    hits[q] += 1.0;
+  }
+  for (std::size_t q = 0; q < pixels; ++q) {
+    const std::size_t at = (first_pixel + q) * c;
+    std::copy_n(&raw.pixels[at], c, &out->pixels[at]);
+    out->pixels[at] = out->pixels[at + 1] = out->pixels[at + 2] =
+        static_cast<float>(radiance[q] * inv_spp);
+    if (hits[q] > 0.0) out->pixels[at + 6] = static_cast<float>(g_sum[q] / hits[q]);
+  }
+}
+
+Image blank_image(const Scene& scene) {
+  Image image;
+  image.width = scene.camera.width;
+  image.height = scene.camera.height;
+  image.channels = evaluator_channels();
+  image.pixels.assign(std::size_t(image.width) * image.height * image.channels.size(), 0.0f);
+  return image;
+}
+
+// The images of user methods' passes (core/user_method.h), all with the
+// lobes and reference normal of users[0], from one raw-bump render whose
+// samples are recorded a block of rows at a time: after each block, every
+// user's function is called once on the block's samples, on this thread.
+template <typename Tracer>
+void render_user_passes(const Scene& scene, const Tracer& tracer, const RenderOptions& options,
+                        const std::vector<const TerminatorSettings*>& users,
+                        const std::vector<Image*>& out, RenderStats* stats) {
+  TerminatorSettings raw = *users.front();
+  raw.method = MethodSettings{};
+  const bool vectors = std::any_of(users.begin(), users.end(), [](const TerminatorSettings* t) {
+    return t->method.user->wants_vectors;
+  });
+  const Camera& camera = scene.camera;
+  const std::size_t row_samples = std::size_t(camera.width) * camera.spp;
+  const int block = static_cast<int>(std::max<std::size_t>(1, kRecordedSamples / row_samples));
+  std::vector<Image> raw_image{blank_image(scene)};
+  std::vector<double> g;
+  for (int first = 0; first < camera.height; first += block) {
+    const int end = std::min(camera.height, first + block);
+    RecordRequest record{&raw, vectors, first,
+                         std::vector<SampleRecords>(std::size_t(end - first))};
+    render_image(scene, tracer, options, {raw}, &raw_image, stats,
+                 {.record = &record, .first_row = first, .end_row = end});
+    SampleRecords all = std::move(record.rows.front());
+    for (std::size_t row = 1; row < record.rows.size(); ++row) all.append(record.rows[row]);
+    g.assign(all.light.size(), 0.0);
+    for (std::size_t k = 0; k < users.size(); ++k) {
+      const MethodSettings& m = users[k]->method;
+      if (!g.empty()) evaluate_user_method(*m.user, all.batch(), m.user_values, g);
+      write_user_pixels(all, g, raw_image.front(), std::size_t(first) * camera.width,
+                        1.0 / camera.spp, out[k]);
+    }
+  }
+}
+
+bool is_user_pass(const TerminatorSettings& t) {
+  return t.method.method == TerminatorMethod::kPython;
+}
+
+// Every pass of render_methods on one tracer: the built-in methods in one
+// pass, the user methods through recorded raw-bump passes, one per
+// distinct (lobes, reference normal).
+template <typename Tracer>
+void render_passes(const Scene& scene, const Tracer& tracer, const RenderOptions& options,
+                   const std::vector<TerminatorSettings>& methods, std::vector<Image>* images,
+                   RenderStats* stats) {
+  std::vector<TerminatorSettings> built_in;
+  std::vector<std::size_t> built_in_at, users_at;
+  for (std::size_t k = 0; k < methods.size(); ++k) {
+    if (is_user_pass(methods[k])) {
+      users_at.push_back(k);
+    } else {
+      built_in.push_back(methods[k]);
+      built_in_at.push_back(k);
+    }
+  }
+  if (users_at.empty()) return render_image(scene, tracer, options, methods, images, stats);
+  if (!built_in.empty()) {
+    std::vector<Image> rendered(built_in.size(), blank_image(scene));
+    render_image(scene, tracer, options, built_in, &rendered, stats);
+    for (std::size_t k = 0; k < built_in.size(); ++k)
+      (*images)[built_in_at[k]] = std::move(rendered[k]);
+  }
+  while (!users_at.empty()) {
+    const TerminatorSettings& first = methods[users_at.front()];
+    std::vector<const TerminatorSettings*> group;
+    std::vector<Image*> out;
+    std::vector<std::size_t> rest;
+    for (const std::size_t k : users_at) {
+      const TerminatorSettings& t = methods[k];
+      if (t.lobes == first.lobes && t.reference_normal == first.reference_normal) {
+        group.push_back(&t);
+        out.push_back(&(*images)[k]);
+      } else {
+        rest.push_back(k);
+      }
+    }
+    render_user_passes(scene, tracer, options, group, out, stats);
+    users_at = std::move(rest);
   }
 }
 
@@ -981,15 +1227,16 @@ std::vector<Image> render_methods(const Scene& scene,
         throw std::invalid_argument(
             fmt::format("render_methods: {} draws random numbers while shading; render it alone",
                         method_info(t.method.method).id));
+  for (const TerminatorSettings& t : methods)
+    if (is_user_pass(t) &&
+        (!t.method.user || scene.representation == Representation::kDisplacement ||
+         effective_adjustment(t) != NormalAdjustment::kNone))
+      throw std::invalid_argument(
+          "render_methods: a user method is a plain factor on a bump or smooth render, with its "
+          "function registered and no normal adjustment");
   const auto start = Clock::now();
   RenderStats local;
-  std::vector<Image> images(methods.size());
-  for (Image& image : images) {
-    image.width = scene.camera.width;
-    image.height = scene.camera.height;
-    image.channels = evaluator_channels();
-    image.pixels.assign(std::size_t(image.width) * image.height * image.channels.size(), 0.0f);
-  }
+  std::vector<Image> images(methods.size(), blank_image(scene));
   if (scene.representation == Representation::kDisplacement) {
     const std::shared_ptr<const DisplacedMesh> mesh =
         options.share_meshes ? shared_displaced_mesh(scene, &local.mesh_reused)
@@ -1001,9 +1248,9 @@ std::vector<Image> render_methods(const Scene& scene,
     const LowPolyMesh mesh(scene.shape, *scene.tessellation);
     local.triangles = mesh.triangle_count();
     local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    render_image(scene, LowPolyTracer(scene, mesh), options, methods, &images, &local);
+    render_passes(scene, LowPolyTracer(scene, mesh), options, methods, &images, &local);
   } else {
-    render_image(scene, BaseTracer(scene), options, methods, &images, &local);
+    render_passes(scene, BaseTracer(scene), options, methods, &images, &local);
   }
   local.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   if (stats) *stats = local;
@@ -1058,9 +1305,10 @@ Image render_tallied(const Scene& scene, const FactorGrid& grid, PixelTally* tal
     const LowPolyMesh mesh(scene.shape, *scene.tessellation);
     local.triangles = mesh.triangle_count();
     local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    render_image(scene, LowPolyTracer(scene, mesh), options, {t}, &images, &local, &request);
+    render_image(scene, LowPolyTracer(scene, mesh), options, {t}, &images, &local,
+                 {.tally = &request});
   } else {
-    render_image(scene, BaseTracer(scene), options, {t}, &images, &local, &request);
+    render_image(scene, BaseTracer(scene), options, {t}, &images, &local, {.tally = &request});
   }
   *tally = flatten(request, image.width, image.height);
   local.seconds = std::chrono::duration<double>(Clock::now() - start).count();

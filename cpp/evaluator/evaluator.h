@@ -70,6 +70,13 @@ bool shares_samples(const TerminatorSettings& terminator);
 // variant cost a few renders rather than 20. std::invalid_argument when a
 // method does not share its samples (shares_samples) or `methods` is empty.
 // stats->shadow_rays counts each shared shadow ray once.
+// A user method (`python`, core/user_method.h) renders apart from the
+// built-in methods: one raw-bump pass, its samples recorded a block of
+// rows at a time (their cosines and the light the factor scales), the
+// user's function called once per block on this thread, and each pixel
+// summed from them; std::invalid_argument for a user method on a
+// displacement render or with a normal adjustment. The function's
+// failures propagate as UserMethodError.
 std::vector<Image> render_methods(const Scene& scene,
                                   const std::vector<TerminatorSettings>& methods,
                                   const RenderOptions& options = {}, RenderStats* stats = nullptr);

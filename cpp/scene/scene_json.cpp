@@ -14,6 +14,7 @@
 #include <utility>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "image/bump_maps.h"
 #include "image/environment_file.h"
@@ -463,6 +464,28 @@ std::shared_ptr<const FactorTable> read_table_file(Reader& p) {
   }
 }
 
+// /terminator/parameters of a user method: each of its parameters, its
+// default where absent, and no other key.
+void read_user_parameters(Reader& r, MethodSettings* method) {
+  const UserMethod& user = *method->user;
+  method->user_values.clear();
+  std::optional<Reader> p;
+  if (r.has("parameters")) p.emplace(r.object("parameters"));
+  for (const UserParameter& parameter : user.parameters) {
+    if (!p) {
+      method->user_values.push_back(parameter.default_value);
+      continue;
+    }
+    method->user_values.push_back(p->number_or(
+        parameter.name, parameter.default_value,
+        [&](double x) { return x >= parameter.min_value && x <= parameter.max_value; },
+        fmt::format("in [{}, {}] ({})", parameter.min_value, parameter.max_value,
+                    parameter.description)
+            .c_str()));
+  }
+  if (p) p->finish();
+}
+
 TerminatorSettings read_terminator(Reader r) {
   TerminatorSettings t;
   if (r.has("method")) {
@@ -470,16 +493,30 @@ TerminatorSettings read_terminator(Reader r) {
     const auto method = method_from_id(id);
     if (!method) {
       const std::string ids = id_list(all_methods());
-      r.fail("method", fmt::format("unknown method \"{}\" (valid: {})", id, ids));
+      r.fail("method", fmt::format("unknown method \"{}\" (valid: {}, or a user method "
+                                   "registered with @penumbra.method: docs/python.md)",
+                                   id, ids));
     }
     t.method.method = *method;
+    if (*method == TerminatorMethod::kPython) {
+      t.method.user = find_user_method(id);
+      if (!t.method.user) {
+        const std::vector<std::string> users = user_method_ids();
+        r.fail("method",
+               fmt::format("\"python\" stands for the user methods: name one by the id it was "
+                           "registered under with @penumbra.method ({}; docs/python.md)",
+                           users.empty() ? "none is registered in this process"
+                                         : fmt::format("registered: {}", fmt::join(users, ", "))));
+      }
+    }
   }
   const MethodInfo& info = method_info(t.method.method);
+  if (t.method.user) read_user_parameters(r, &t.method);
   if (info.needs_table && !r.has("parameters"))
     r.fail("parameters", fmt::format("method \"{}\" needs {{\"table\": FILE}}, the table.json "
                                      "that penumbra fit writes",
                                      info.id));
-  if (r.has("parameters")) {
+  if (r.has("parameters") && !t.method.user) {
     Reader p = r.object("parameters");
     if (info.needs_table) t.method.table = read_table_file(p);
     for (const MethodParameter& parameter : info.parameters) {
@@ -500,6 +537,10 @@ TerminatorSettings read_terminator(Reader r) {
       r.fail("normal_adjustment",
              fmt::format("unknown normal adjustment \"{}\" (valid: {})", id, ids));
     }
+    if (*adjustment != NormalAdjustment::kNone && t.method.user)
+      r.fail("normal_adjustment",
+             fmt::format("user method \"{}\" is a plain factor: it takes no normal adjustment",
+                         t.method.user->id));
     if (*adjustment != NormalAdjustment::kNone && info.adjustment != NormalAdjustment::kNone)
       r.fail("normal_adjustment",
              fmt::format("method \"{}\" already applies the normal adjustment \"{}\"; a scene "
@@ -546,6 +587,14 @@ void check_maps(const Scene& s, const std::string& origin) {
 
 TerminatorSettings terminator_from_json(const json& j, const std::string& origin) {
   return read_terminator(Reader(j, "/terminator", origin));
+}
+
+Material material_from_json(const json& j, const std::string& origin) {
+  return read_material(Reader(j, "/material", origin));
+}
+
+OffsetSettings offset_from_json(const json& j, const std::string& origin) {
+  return read_offset(Reader(j, "/offset", origin));
 }
 
 void resolve_map_files(json& document, const std::string& scene_path) {

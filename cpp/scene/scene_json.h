@@ -40,6 +40,9 @@ void resolve_map_files(nlohmann::json& document, const std::string& scene_path);
 // /terminator alone, `j` being its object: what pn.factor (python/) reads
 // a method and its parameters with, so that they are checked as in a scene.
 TerminatorSettings terminator_from_json(const nlohmann::json& j, const std::string& origin);
+// /material and /offset alone, likewise (pn.factor's material, pn.offset).
+Material material_from_json(const nlohmann::json& j, const std::string& origin);
+OffsetSettings offset_from_json(const nlohmann::json& j, const std::string& origin);
 
 // Validates and converts. `origin` is the file name used in error messages.
 Scene scene_from_json(const nlohmann::json& document, const std::string& origin);

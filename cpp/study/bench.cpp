@@ -56,7 +56,7 @@ BenchTiming bench_shared_pass(int size, int spp, bool packets) {
   for (const MethodInfo& m : all_methods()) {
     TerminatorSettings t = scene.terminator;
     t.method.method = m.method;
-    if (shares_samples(t) && !m.needs_table) methods.push_back(t);
+    if (shares_samples(t) && !m.needs_table && !m.user_defined) methods.push_back(t);
   }
   RenderStats stats;
   RenderOptions options;

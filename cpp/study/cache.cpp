@@ -93,12 +93,15 @@ void assign_keys(std::vector<Job>& jobs,
     const Scene scene = job.scene();
     const auto& table = scene.terminator.method.table;
     nlohmann::json keyed = job.scene_json();
-    // An image map or a fitted table enters the key by its content, not by
+    // An image map, a fitted table or a user method enters the key by its content, not by
     // where it lies: a file edited in place re-renders, a moved one does not.
     if (scene.height.map) keyed["height"]["file"] = "content:" + scene.height.map->digest;
     if (scene.light.environment) keyed["light"]["map"] = "content:" + scene.light.map_digest;
     if (table)
       keyed["terminator"]["parameters"]["table"] = "content:" + factor_table_digest(*table);
+    // A user method by its definition: editing the function renders again.
+    if (const auto& user = scene.terminator.method.user)
+      keyed["terminator"]["definition"] = "content:" + user->digest;
     job.key = render_key(keyed, job.renderer, identity);
   });
 }

@@ -219,11 +219,15 @@ std::vector<std::string> offset_ids() {
 }
 
 // Every method a study may name; `with_table`: also those that need a table
-// file, which a study without "methods" cannot give them.
+// file, which a study without "methods" cannot give them, and the user
+// methods registered in this process (core/user_method.h), which it takes
+// only by name. The `python` row itself is never a study's.
 std::vector<std::string> terminator_ids(bool with_table) {
   std::vector<std::string> ids;
   for (const MethodInfo& info : all_methods())
-    if (with_table || !info.needs_table) ids.emplace_back(info.id);
+    if (!info.user_defined && (with_table || !info.needs_table)) ids.emplace_back(info.id);
+  if (with_table)
+    for (std::string& id : user_method_ids()) ids.push_back(std::move(id));
   return ids;
 }
 

@@ -120,7 +120,7 @@ TEST_F(Emit, CompiledCMatchesTheFittedMethodToRounding) {
     }
     in.close();
     std::istringstream out(run(exe + " < " + path("points.txt")));
-    MethodSettings fitted{TerminatorMethod::kFitted, 0.0, table};
+    MethodSettings fitted{TerminatorMethod::kFitted, 0.0, table, nullptr, {}};
     int inside = 0;
     for (const Point& p : points) {
       double emitted = -1.0;

@@ -9,6 +9,7 @@ import os
 import shutil
 import subprocess
 
+import numpy as np
 import pytest
 
 BINARY = os.environ.get("PENUMBRA_BINARY", "build/penumbra")
@@ -35,3 +36,16 @@ def folder(request):
     shutil.rmtree(path, ignore_errors=True)
     os.makedirs(path)
     return path
+
+
+def estevez2019_cosines(cos_light, cos_deviation):
+    """Conty Estevez, Lecocq and Stein 2019 (Ray Tracing Gems ch. 12) in
+    NumPy, on the two cosines it reads: alpha^2 = tan^2(delta) / 8 clamped
+    to [0, 1], G = 2 / (1 + sqrt(1 + alpha^2 tan^2 theta_i)); |cos delta| and
+    cos theta_i clamped below at 1e-6, as core/terminator.cpp does."""
+    cos_d = np.minimum(np.abs(cos_deviation), 1.0)
+    with np.errstate(divide="ignore"):
+        alpha2 = np.clip(0.125 * (1.0 - cos_d * cos_d) / (cos_d * cos_d), 0.0, 1.0)
+    cos_i = np.maximum(np.abs(cos_light), 1e-6)
+    tan2_i = (1.0 - cos_i * cos_i) / (cos_i * cos_i)
+    return np.clip(2.0 / (1.0 + np.sqrt(1.0 + alpha2 * tan2_i)), 0.0, 1.0)

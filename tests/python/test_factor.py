@@ -1,6 +1,7 @@
 """pn.factor against the command line's factors and the papers' formulas."""
 
 import csv
+import json
 import math
 import os
 
@@ -8,11 +9,12 @@ import numpy as np
 import pytest
 
 import penumbra as pn
-from conftest import cli
+from conftest import cli, source
 
 TERMINATOR_METHODS = [m for m in pn.methods() if m["kind"] == "terminator"]
-# fitted reads a table file; the others need nothing beyond their defaults.
-PLAIN = [m["id"] for m in TERMINATOR_METHODS if m["id"] != "fitted"]
+# fitted reads a table file and python stands for the user methods (test_user_methods.py);
+# the others need nothing beyond their defaults.
+PLAIN = [m["id"] for m in TERMINATOR_METHODS if m["id"] not in ("fitted", "python")]
 
 
 def unit(v):
@@ -149,3 +151,77 @@ def test_methods_is_the_cli_registry():
     assert pn.methods() == json.loads(out)
     assert math.isclose(next(p for m in pn.methods() if m["id"] == "shading-offset"
                              for p in m["parameters"])["max"], 1.0)
+
+
+def test_a_plain_factor_ignores_the_material_and_a_model_does_not():
+    rng = np.random.default_rng(5)
+    n = 500
+    ng = np.tile([0.0, 0.0, 1.0], (n, 1))
+    ns = unit(rng.normal(size=(n, 3)) * [0.4, 0.4, 0.0] + ng)
+    wi = unit(rng.normal(size=(n, 3)) + [0.0, 0.0, 0.3])
+    wo = unit(rng.normal(size=(n, 3)) * [1.0, 1.0, 0.0] + ng)
+    glossy = {"albedo": 0.8, "specular": {"weight": 0.5, "roughness": 0.3}}
+    # G of a plain factor is a function of the vectors alone.
+    for method in ("estevez2019", "chiang2019", "deshmukh2020"):
+        np.testing.assert_array_equal(pn.factor(method, ng, ns, wi, wo, material=glossy),
+                                      pn.factor(method, ng, ns, wi, wo))
+    # A microfacet model's effective factor is its radiance over raw bump's,
+    # which a glossy lobe changes.
+    lambert = pn.factor("schuessler2017", ng, ns, wi, wo)
+    mixed = pn.factor("schuessler2017", ng, ns, wi, wo, material=glossy)
+    lit = np.isfinite(lambert) & np.isfinite(mixed)
+    assert lit.sum() > 100 and np.max(np.abs(lambert[lit] - mixed[lit])) > 1e-3
+    with pytest.raises(pn.SceneError) as e:
+        pn.factor("estevez2019", ng, ns, wi, material={"albedo": 2})
+    assert (e.value.file, e.value.pointer) == ("pn.factor", "/material/albedo")
+
+
+def test_fitted_is_its_table_at_the_cells_centres():
+    # tests/evaluator/data/fitted-table.json: light cells 30 degrees wide from
+    # 0, deviation cells from 0; values with light fastest.
+    table = source("tests", "evaluator", "data", "fitted-table.json")
+    with open(table) as f:
+        values = json.load(f)["values"]
+    ng, ns, wi = [], [], []
+    for d in (15.0, 45.0):
+        for t in (15.0, 45.0, 75.0):
+            ng.append([0.0, 0.0, 1.0])
+            ns.append([math.sin(math.radians(d)), 0.0, math.cos(math.radians(d))])
+            wi.append([-math.sin(math.radians(t)), 0.0, math.cos(math.radians(t))])
+    g = pn.factor("fitted", np.array(ng), np.array(ns), np.array(wi), table=table)
+    np.testing.assert_allclose(g, values, rtol=0, atol=1e-12)
+
+
+def hanika2021(v, m, b):
+    """Hanika 2021 ("Hacking the Shadow Terminator", Ray Tracing Gems II
+    ch. 4): P' = P - sum_k b_k min(0, <P - v_k, n_k>) n_k."""
+    p = np.einsum("ij,ijk->ik", b, v)
+    d = np.einsum("ijk,ijk->ij", p[:, None, :] - v, m)
+    return p - np.einsum("ij,ijk->ik", b * np.minimum(0.0, d), m)
+
+
+def test_offsets_on_arrays_follow_their_formulas():
+    # Triangles of a unit sphere tessellated coarsely, vertex normals radial,
+    # hit at random barycentrics, lights above the shading normal.
+    rng = np.random.default_rng(9)
+    n = 400
+    centre = unit(rng.normal(size=(n, 3)))
+    v = unit(centre[:, None, :] + 0.35 * rng.normal(size=(n, 3, 3)))
+    flip = np.einsum("ij,ij->i", np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), centre) < 0
+    v[flip] = v[flip][:, ::-1]  # wind every triangle outwards
+    m = v.copy()  # on a unit sphere the vertex normal is the vertex
+    b = rng.dirichlet([1.0, 1.0, 1.0], size=n)
+    wi = unit(centre + 0.5 * rng.normal(size=(n, 3)))
+    p = np.einsum("ij,ijk->ik", b, v)
+    ng = unit(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]))
+    origins, skip = pn.offset("none", v, m, b, wi)
+    np.testing.assert_array_equal(origins, p)
+    assert skip.all()
+    origins, _ = pn.offset("hanika2021", v, m, b, wi)
+    np.testing.assert_allclose(origins, hanika2021(v, m, b), rtol=0, atol=1e-12)
+    origins, _ = pn.offset("epsilon", v, m, b, wi, distance=0.01)
+    above = np.einsum("ij,ij->i", ng, wi) > 0
+    np.testing.assert_allclose(origins[above], p[above] + 0.01 * ng[above], rtol=0, atol=1e-12)
+    with pytest.raises(pn.SceneError) as e:
+        pn.offset("no-such-offset", v, m, b, wi)
+    assert e.value.pointer == "/offset/method"

@@ -125,3 +125,24 @@ def test_compare_is_compare_json(folder):
                            pn.render(SCENE, method="chiang2019", width=32, height=32, spp=2))
     assert in_memory == dict(expected, reference=None, test=None)
     assert "rmse_terminator_ci" in expected["profile"]
+
+
+def test_export_of_a_dict_writes_the_files_of_the_cli(folder):
+    scene = pn.load_scene(SCENE)
+    scene["height"]["amplitude"] = 0.015
+    path = os.path.join(folder, "scene.json")
+    with open(path, "w") as f:
+        json.dump(scene, f)
+    cli("export", "--to", "povray", path, "-o", os.path.join(folder, "cli"))
+    pn.export(scene, "povray", os.path.join(folder, "module"))
+    names = sorted(os.listdir(os.path.join(folder, "cli")))
+    assert names and names == sorted(os.listdir(os.path.join(folder, "module")))
+    for name in names:
+        with open(os.path.join(folder, "cli", name), "rb") as a, \
+                open(os.path.join(folder, "module", name), "rb") as b:
+            # The files name their scene and folder; all else is the same bytes.
+            text_a = a.read().replace(path.encode(), b"SCENE").replace(b"/cli", b"/OUT")
+            text_b = b.read().replace(os.path.join(os.getcwd(), "<dict>").encode(), b"SCENE")
+            assert text_a == text_b.replace(b"/module", b"/OUT"), name
+    with pytest.raises(RuntimeError, match='povray does not offer the method "estevez2019"'):
+        pn.export(scene, "povray", os.path.join(folder, "bad"), method="estevez2019")

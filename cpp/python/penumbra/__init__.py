@@ -8,8 +8,13 @@ factors are dimensionless, in [0, 1] unless a method's row says otherwise.
 See docs/python.md for a worked session.
 """
 
+import hashlib
+import inspect
 import json
+import marshal
+import math
 import os
+import re
 import tempfile
 
 import numpy as np
@@ -25,7 +30,10 @@ os.environ.setdefault("PENUMBRA_DATA_DIR", _build.DATA_DIR)
 
 from . import _penumbra  # noqa: E402  (after PENUMBRA_DATA_DIR)
 
-__all__ = ["SceneError", "methods", "factor", "load_scene", "render", "read_exr", "write_exr",
+UserMethodError = _penumbra.UserMethodError
+
+__all__ = ["SceneError", "UserMethodError", "method", "user_methods", "methods", "factor",
+           "offset", "export", "load_scene", "render", "read_exr", "write_exr",
            "compare", "run", "load_metrics", "load_report"]
 
 
@@ -48,7 +56,8 @@ def _directions(name, value, n=None):
     return a
 
 
-def factor(method, ng, ns, wi, wo=None, visibility=1.0, **parameters):
+def factor(method, ng, ns, wi, wo=None, visibility=1.0, material=None, lobes=None,
+           **parameters):
     """The factor G a terminator method applies at each of N shading points.
 
     The evaluator's own per-sample computation (core/shading.cpp, shade()),
@@ -66,6 +75,12 @@ def factor(method, ng, ns, wi, wo=None, visibility=1.0, **parameters):
                 methods and adjustments read it
     visibility  the height field's ambient visibility, [0, 1], scalar or
                 (N,); only the micro-shadowing methods read it
+    material    a scene's /material as a dict (``{"albedo": 0.8, "specular":
+                {"weight": 0.5, "roughness": 0.3}}``); default a white
+                Lambertian base. A plain factor does not depend on it; the
+                effective factor of an adjustment or a microfacet model does
+    lobes       "diffuse" (default) or "all": the scene's /terminator/lobes,
+                the lobes a plain factor scales
     parameters  the method's parameters by name (e.g. ``s=0.3`` for
                 shading-offset), checked against their domains as a scene's
                 /terminator/parameters are; ``table="table.json"`` for fitted
@@ -80,10 +95,163 @@ def factor(method, ng, ns, wi, wo=None, visibility=1.0, **parameters):
     wi = _directions("wi", wi, n)
     wo = ng if wo is None else _directions("wo", wo, n)
     vis = np.ascontiguousarray(np.broadcast_to(np.asarray(visibility, dtype=np.float64), (n,)))
-    terminator = {"method": method}
+    terminator = {"method": _method_id(method)}
     if parameters:
         terminator["parameters"] = parameters
-    return _penumbra.factor(json.dumps(terminator), ng, ns, wi, wo, vis)
+    if lobes is not None:
+        terminator["lobes"] = lobes
+    if terminator["method"] in _penumbra.user_methods():
+        return _penumbra.user_factor(json.dumps(terminator), ng, ns, wi, wo)
+    return _penumbra.factor(json.dumps(terminator), ng, ns, wi, wo, vis,
+                            "" if material is None else json.dumps(material))
+
+
+def offset(method, vertices, normals, barycentrics, wi, ns=None, backfacing=False,
+           **parameters):
+    """The shadow ray's origin a low-poly offset method picks at N hits.
+
+    The evaluator's own computation (core/shadow_origin.cpp,
+    shadow_ray_origin), as the low-poly section renders it.
+
+    method        an offset id (``pn.methods()``, kind "offset")
+    vertices      (N, 3, 3): each hit's triangle, vertex by vertex, in scene
+                  units; the triangle's normal is taken from its winding,
+                  (v1 - v0) x (v2 - v0), which must face the shaded side
+    normals       (N, 3, 3): the vertex normals (unit), on the shaded side
+    barycentrics  (N, 3): the hit's weights of the three vertices (sum 1)
+    wi            (N, 3): unit vectors towards the light
+    ns            (N, 3): the shading normal; default the interpolated
+                  vertex normal
+    backfacing    the triangles were hit from their backs (normals flipped)
+    parameters    the method's parameters by name (``distance=0.01`` for
+                  epsilon, ``cutoff=0.1`` for cycles-geometry-offset, ...)
+
+    Returns (origins, skip_self): (N, 3) float64 points in scene units, and
+    (N,) bool, whether the shadow ray ignores its own triangle.
+    """
+    v = np.ascontiguousarray(vertices, dtype=np.float64)
+    m = np.ascontiguousarray(normals, dtype=np.float64)
+    b = _directions("barycentrics", barycentrics)
+    n = b.shape[0]
+    if v.shape != (n, 3, 3) or m.shape != (n, 3, 3):
+        raise ValueError(f"vertices, normals: expected ({n}, 3, 3) arrays, got {v.shape} "
+                         f"and {m.shape}")
+    ng = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    ng /= np.linalg.norm(ng, axis=1, keepdims=True)
+    if ns is None:
+        ns = np.einsum("ij,ijk->ik", b, m)
+        ns /= np.linalg.norm(ns, axis=1, keepdims=True)
+    settings = {"method": method, **parameters}  # a scene's /offset
+    return _penumbra.offset(json.dumps(settings), v, m, b, ng, _directions("ns", ns, n),
+                            _directions("wi", wi, n), bool(backfacing))
+
+
+_DOMAIN = re.compile(r"\[\s*([-+]?(?:inf|[0-9.]+(?:e[-+]?[0-9]+)?))\s*,"
+                     r"\s*([-+]?(?:inf|[0-9.]+(?:e[-+]?[0-9]+)?))\s*\]", re.IGNORECASE)
+
+
+def _parameter(name, spec):
+    """(name, default, min, max, description) from (default, "unit, [lo, hi]")."""
+    if isinstance(spec, (int, float)):
+        spec = (spec, "")
+    if not (isinstance(spec, tuple) and len(spec) == 2 and isinstance(spec[1], str)):
+        raise TypeError(f"parameter {name!r}: expected (default, \"unit, [min, max]\"), "
+                        f"got {spec!r}")
+    default, description = float(spec[0]), spec[1]
+    domain = _DOMAIN.search(description)
+    low, high = (float(domain[1]), float(domain[2])) if domain else (-math.inf, math.inf)
+    if not low <= default <= high:
+        raise ValueError(f"parameter {name!r}: default {default} outside [{low}, {high}]")
+    return (name, default, max(low, -1e300), min(high, 1e300), description)
+
+
+def _definition_digest(function, id, parameters, value_range, vectors):
+    """SHA-256 of what defines a user method: its source file's bytes (the
+    function's own source where there is no file, its compiled code where
+    there is no source), its name and its
+    declaration. A render's cache key includes it, so editing the file
+    renders again."""
+    h = hashlib.sha256()
+    try:
+        path = inspect.getsourcefile(function)
+    except TypeError:  # a built-in or C function: no source file
+        path = None
+    if path and os.path.isfile(path):
+        with open(path, "rb") as f:
+            h.update(f.read())
+    else:
+        try:
+            h.update(inspect.getsource(function).encode())
+        except (OSError, TypeError):  # defined by exec or in a REPL: its compiled code
+            h.update(marshal.dumps(function.__code__))
+    h.update(json.dumps([id, function.__qualname__, parameters, list(value_range),
+                         vectors]).encode())
+    return h.hexdigest()
+
+
+def method(id, parameters=None, range=(0.0, 1.0), vectors=False):
+    """Decorator: a Python function becomes a terminator method ``id``.
+
+    The function takes NumPy (N,) arrays of the four cosines a factor may
+    use, as the evaluator computes them at each shading sample (ng is the
+    reference normal: Ng, or Ni where the scene says so):
+
+        cos_light      <ng, wi>    cos_deviation  <ng, ns>
+        cos_shading    <ns, wi>    cos_view       <ng, wo>
+
+    and each declared parameter as a keyword (a float), plus ``ng, ns, wi,
+    wo`` as (N, 3) arrays when ``vectors=True``. It returns G, an (N,)
+    array, dimensionless, finite and within ``range`` ([0, 1] by default).
+    The arrays are read-only views, valid during the call only.
+
+    The method then works wherever a built-in one does, by its id: in
+    ``pn.render(..., method=id)``, ``pn.factor(id, ...)``, a scene's
+    /terminator/method, a study's "methods" and ``pn.run(...,
+    extra_methods=[id])``. G multiplies raw bump's light on the scene's
+    /terminator/lobes (diffuse by default), as a built-in factor does. The
+    evaluator calls the function once per block of samples (about 5e5),
+    never per sample; a render that calls it runs its shading on one
+    sample path (no SIMD packets) and records the samples in between.
+
+    id          lower-case letters, digits and '-'; not a built-in id
+    parameters  {name: (default, "unit, [min, max]")}; the domain in
+                brackets is parsed and enforced, e.g. (0.125,
+                "dimensionless, [0, 1]")
+    range       (min, max) of G: a value outside it, NaN or infinite fails
+                the render with UserMethodError
+    vectors     also pass the unit vectors (more memory per sample)
+
+    Registering an id again replaces the function. A failing function
+    (an exception, a wrong shape, a value outside ``range``) fails the
+    render with UserMethodError naming the method; in a study, that render
+    fails, the study exits 1 and nothing of it is cached.
+    """
+    declared = [_parameter(name, spec) for name, spec in (parameters or {}).items()]
+    low, high = float(range[0]), float(range[1])
+    if not low <= high:
+        raise ValueError(f"range: expected (min, max) with min <= max, got {range!r}")
+
+    def register(function):
+        digest = _definition_digest(function, id, declared, (low, high), bool(vectors))
+        code = getattr(function, "__code__", None)
+        path = code.co_filename if code else "<unknown>"
+        source = f"{os.path.basename(path)}:{function.__qualname__}"
+        _penumbra.register_method(id, function, source, digest, declared, low, high,
+                                  bool(vectors))
+        function.penumbra_id = id
+        return function
+
+    return register
+
+
+def user_methods():
+    """The ids of the user methods registered in this process."""
+    return list(_penumbra.user_methods())
+
+
+def _method_id(m):
+    """A method id, or a function that penumbra.method registered."""
+    return getattr(m, "penumbra_id", m)
 
 
 def _scene_source(scene):
@@ -98,6 +266,7 @@ def _scene_source(scene):
 
 
 def _scene_options(method, width, height, spp, representation, set):
+    method = None if method is None else _method_id(method)
     options = {}
     for key, value in (("method", method), ("width", width), ("height", height), ("spp", spp),
                        ("representation", representation)):
@@ -130,6 +299,24 @@ def load_scene(scene, *, method=None, width=None, height=None, spp=None, represe
     path, document = _scene_source(scene)
     options = _scene_options(method, width, height, spp, representation, set)
     return json.loads(_penumbra.load_scene(path, document, options))
+
+
+def export(scene, to, out, *, method=None, width=None, height=None, spp=None,
+           representation=None, set=None):
+    """Write a scene for POV-Ray or Blender, as ``penumbra export --to TO
+    SCENE -o OUT`` does, from a file or a dict.
+
+    to      "povray" (a .pov file) or "blender" (a job and its mesh)
+    out     the output folder, made if missing
+    method, ..., set  as ``load_scene``
+
+    Returns what the command prints (the files written). Raises SceneError
+    for bad input, RuntimeError for a method or offset the renderer does not
+    ship.
+    """
+    path, document = _scene_source(scene)
+    options = _scene_options(method, width, height, spp, representation, set)
+    return _penumbra.export(path, document, options, to, os.fspath(out))
 
 
 class Render(dict):
@@ -231,14 +418,18 @@ def run(study, out, *options, extra_methods=None):
     """Run a study as ``penumbra run STUDY -o OUT`` does; returns stdout.
 
     options        further ``penumbra run`` options, e.g. "--jobs", "2"
-    extra_methods  not supported yet (user methods in Python: see docs/python.md)
+    extra_methods  method ids (or functions registered with penumbra.method)
+                   measured in the study's bump section besides its own, as
+                   ``--add-method`` adds them: ranked and reported like the
+                   built-in methods
 
-    Raises RuntimeError with the command's message when it exits non-zero.
+    Raises RuntimeError with the command's message when it exits non-zero
+    (a user method that fails makes its renders fail: exit 1).
     """
-    if extra_methods:
-        raise NotImplementedError("extra_methods: user methods in Python are not implemented; "
-                                  "see docs/python.md, 'What is not there yet'")
-    status, stdout, err = cli("run", study, "-o", out, *options)
+    added = []
+    for m in extra_methods or ():
+        added += ["--add-method", _method_id(m)]
+    status, stdout, err = cli("run", study, "-o", out, *options, *added)
     if status != 0:
         raise RuntimeError(f"penumbra run exited {status}: {err.strip()}")
     return stdout
