@@ -225,3 +225,20 @@ def test_offsets_on_arrays_follow_their_formulas():
     with pytest.raises(pn.SceneError) as e:
         pn.offset("no-such-offset", v, m, b, wi)
     assert e.value.pointer == "/offset/method"
+
+
+def test_an_adjustment_on_none_is_the_method_that_brings_it():
+    # iray2017 and unity-hdrp are normal adjustments alone in the method
+    # table (kind "adjustment"): the adjustment on `none` is the method.
+    rng = np.random.default_rng(11)
+    n = 300
+    ng = np.tile([0.0, 0.0, 1.0], (n, 1))
+    ns = unit(rng.normal(size=(n, 3)) * [0.5, 0.5, 0.0] + ng)
+    wi = unit(rng.normal(size=(n, 3)) + [0.0, 0.0, 0.2])
+    wo = unit(rng.normal(size=(n, 3)) * [1.0, 1.0, 0.0] + ng)
+    for id in ("iray2017", "unity-hdrp"):
+        np.testing.assert_array_equal(pn.factor("none", ng, ns, wi, wo, adjustment=id),
+                                      pn.factor(id, ng, ns, wi, wo))
+    with pytest.raises(pn.SceneError) as e:
+        pn.factor("none", ng, ns, wi, adjustment="no-such-adjustment")
+    assert e.value.pointer == "/terminator/normal_adjustment"

@@ -57,7 +57,7 @@ def _directions(name, value, n=None):
 
 
 def factor(method, ng, ns, wi, wo=None, visibility=1.0, material=None, lobes=None,
-           **parameters):
+           adjustment=None, **parameters):
     """The factor G a terminator method applies at each of N shading points.
 
     The evaluator's own per-sample computation (core/shading.cpp, shade()),
@@ -81,6 +81,10 @@ def factor(method, ng, ns, wi, wo=None, visibility=1.0, material=None, lobes=Non
                 effective factor of an adjustment or a microfacet model does
     lobes       "diffuse" (default) or "all": the scene's /terminator/lobes,
                 the lobes a plain factor scales
+    adjustment  a normal adjustment id (``pn.methods()``, kind
+                "normal_adjustment"), the scene's
+                /terminator/normal_adjustment, on top of ``method`` (which
+                may be "none"): G is then the effective factor
     parameters  the method's parameters by name (e.g. ``s=0.3`` for
                 shading-offset), checked against their domains as a scene's
                 /terminator/parameters are; ``table="table.json"`` for fitted
@@ -100,6 +104,8 @@ def factor(method, ng, ns, wi, wo=None, visibility=1.0, material=None, lobes=Non
         terminator["parameters"] = parameters
     if lobes is not None:
         terminator["lobes"] = lobes
+    if adjustment is not None:
+        terminator["normal_adjustment"] = adjustment
     if terminator["method"] in _penumbra.user_methods():
         return _penumbra.user_factor(json.dumps(terminator), ng, ns, wi, wo)
     return _penumbra.factor(json.dumps(terminator), ng, ns, wi, wo, vis,
