@@ -24,7 +24,13 @@ constexpr MethodParameter kOsprayParameters[] = {
      "triangle's vertices and the hit point"},
 };
 
-constexpr std::array<OffsetMethodInfo, 6> kOffsetMethods{{
+constexpr MethodParameter kPhongParameters[] = {
+    {"alpha", "dimensionless", 0.0, 1.0, 0.75,
+     "Phong tessellation's shape factor: 0 the flat triangle, 1 the full quadratic patch; "
+     "Boubekeur and Alexa recommend 3/4"},
+};
+
+constexpr std::array<OffsetMethodInfo, 7> kOffsetMethods{{
     {OffsetMethod::kNone,
      "none",
      "-",
@@ -55,6 +61,12 @@ constexpr std::array<OffsetMethodInfo, 6> kOffsetMethods{{
      "P + epsilon Ng for a light on Ng's side, P - epsilon Ng for a light below it; epsilon "
      "relative to the coordinates' magnitude",
      kOsprayParameters},
+    {OffsetMethod::kPhong2008, "phong2008",
+     "Boubekeur and Alexa, \"Phong Tessellation\", ACM TOG 27(5), SIGGRAPH Asia 2008, "
+     "eq. 3-4",
+     "P moved onto the Phong surface: (1 - alpha) P + alpha times the barycentric mean of P's "
+     "projections onto the vertices' tangent planes, convex or not",
+     kPhongParameters},
 }};
 
 }  // namespace
@@ -85,6 +97,12 @@ Vec3 hanika2021_origin(const ShadingTriangle& t, const Vec3& p) {
   Vec3 lifted = p;
   for (int k = 0; k < 3; ++k) lifted += t.n[k] * (-t.b[k] * std::min(0.0, dot(p - t.v[k], t.n[k])));
   return lifted;
+}
+
+Vec3 phong2008_origin(const ShadingTriangle& t, const Vec3& p, double alpha) {
+  Vec3 projected;
+  for (int k = 0; k < 3; ++k) projected += (p - t.n[k] * dot(p - t.v[k], t.n[k])) * t.b[k];
+  return p * (1.0 - alpha) + projected * alpha;
 }
 
 double ospray_epsilon(const ShadingTriangle& t, const Vec3& p, double ulp) {
@@ -179,6 +197,10 @@ ShadowOrigin shadow_ray_origin(const OffsetSettings& settings, const ShadowQuery
     }
     case OffsetMethod::kOspray:
       return lifted(ospray_origin(q.p, q.ng, q.wi, ospray_epsilon(q.triangle, q.p, settings.ulp)));
+    case OffsetMethod::kPhong2008: {
+      const Vec3 s = phong2008_origin(q.triangle, q.p, settings.alpha);
+      return s == q.p ? ShadowOrigin{q.p, true} : lifted(s);
+    }
   }
   return {q.p, true};
 }

@@ -32,6 +32,7 @@ enum class OffsetMethod {
   kHanika2021,
   kCyclesGeometryOffset,
   kOspray,
+  kPhong2008,
 };
 
 struct OffsetMethodInfo {
@@ -54,6 +55,9 @@ struct OffsetSettings {
   // ospray: the epsilon relative to the coordinates' magnitude, OSPRay's
   // ulpEpsilon 0x1.0fp-21 (modules/cpu/common/DifferentialGeometry.ih).
   double ulp = 0x1.0fp-21;
+  // phong2008: Phong tessellation's shape factor alpha, [0, 1]; Boubekeur
+  // and Alexa recommend 3/4.
+  double alpha = 0.75;
 };
 
 // The triangle under a hit. Vertex normals are unit length and oriented to
@@ -98,6 +102,12 @@ Vec3 gist2020_origin(const ShadingTriangle& t, const Vec3& p, const Vec3& ns);
 // towards tangent planes it lies below, so points on a shared edge get the
 // same lift from both triangles (crack-free), and concave patches none.
 Vec3 hanika2021_origin(const ShadingTriangle& t, const Vec3& p);
+// phong2008 (Boubekeur and Alexa, "Phong Tessellation", ACM TOG 27(5),
+// SIGGRAPH Asia 2008, eq. 3 and 4): the point of the Phong surface over P,
+// p* = (1 - alpha) P + alpha sum b_k pi_k(P), pi_k(P) = P - <P - v_k, n_k> n_k
+// the projection onto vertex k's tangent plane. alpha = 1 is gist2020's
+// point without its convexity test.
+Vec3 phong2008_origin(const ShadingTriangle& t, const Vec3& p, double alpha);
 
 // ospray (RenderKit/ospray 675c216b91a7): postIntersect lifts P by epsilon
 // along the viewer's Ng (common/World.ih), and next-event estimation moves

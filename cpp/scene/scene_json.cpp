@@ -251,6 +251,7 @@ OffsetSettings read_offset(Reader r) {
     if (o.method == OffsetMethod::kEpsilon) o.epsilon = value;
     if (o.method == OffsetMethod::kCyclesGeometryOffset) o.cutoff = value;
     if (o.method == OffsetMethod::kOspray) o.ulp = value;
+    if (o.method == OffsetMethod::kPhong2008) o.alpha = value;
   }
   r.finish();
   return o;

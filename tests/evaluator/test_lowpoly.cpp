@@ -75,6 +75,45 @@ TEST(ShadowOrigin, ConvexPatchGistAndHanikaAgreeAndLiftAboveTheTriangle) {
   }
 }
 
+// Boubekeur and Alexa 2008, eq. 3-4, transcribed apart from the library:
+// with barycentrics (u, v, w) of vertices (p_i, p_j, p_k),
+// p*(u, v) = (1 - alpha) (u p_i + v p_j + w p_k)
+//          + alpha (u pi_i(p) + v pi_j(p) + w pi_k(p)),
+// pi_i(q) = q - ((q - p_i) . n_i) n_i.
+Vec3 phong_point(const ShadingTriangle& t, double alpha) {
+  const Vec3 p = t.v[0] * t.b[0] + t.v[1] * t.b[1] + t.v[2] * t.b[2];
+  Vec3 sum;
+  for (int i = 0; i < 3; ++i) {
+    const double height = dot(p - t.v[i], t.n[i]);
+    sum += (p - t.n[i] * height) * t.b[i];
+  }
+  return (1.0 - alpha) * p + alpha * sum;
+}
+
+// The paper's point, from the flat triangle (alpha = 0) to gist2020's
+// point where gist keeps it (alpha = 1, a convex patch); and the paper's
+// purpose: at the recommended alpha = 3/4 the Phong surface of a
+// tessellated sphere lies nearer the sphere the normals describe than the
+// flat triangle does, from outside (lifted) and from inside (the normals
+// flipped: the same surface, since n enters pi twice).
+TEST(ShadowOrigin, PhongIsThePapersPointAndNearerTheSphereThanTheTriangle) {
+  Pcg32 rng(12);
+  for (int i = 0; i < 200; ++i) {
+    const double b1 = 0.05 + 0.4 * rng.next_double(), b2 = 0.05 + 0.4 * rng.next_double();
+    const ShadingTriangle t = sphere_triangle(kA, kB, kC, i % 2 == 1, b1, b2);
+    const Vec3 p = point_of(t);
+    for (double alpha : {0.25, 0.75, 1.0})
+      EXPECT_NEAR(length(phong2008_origin(t, p, alpha) - phong_point(t, alpha)), 0.0, 1e-14);
+    EXPECT_EQ(phong2008_origin(t, p, 0.0), p);
+    if (i % 2 == 0) {
+      const Vec3 gist = gist2020_origin(t, p, interpolated_normal(t));
+      EXPECT_NEAR(length(phong2008_origin(t, p, 1.0) - gist), 0.0, 1e-14);
+    }
+    const Vec3 q = phong2008_origin(t, p, 0.75);
+    EXPECT_LT(std::abs(length(q) - 1.0), 0.5 * std::abs(length(p) - 1.0));
+  }
+}
+
 TEST(ShadowOrigin, EveryMethodLeavesTheVerticesWhereTheyAre) {
   for (int k = 0; k < 3; ++k) {
     const ShadingTriangle t =
@@ -82,6 +121,7 @@ TEST(ShadowOrigin, EveryMethodLeavesTheVerticesWhereTheyAre) {
     const Vec3 p = point_of(t);
     EXPECT_NEAR(length(gist2020_origin(t, p, interpolated_normal(t)) - p), 0.0, 1e-15);
     EXPECT_NEAR(length(hanika2021_origin(t, p) - p), 0.0, 1e-15);
+    EXPECT_NEAR(length(phong2008_origin(t, p, 0.75) - p), 0.0, 1e-15);
     CyclesTriangle c;
     for (int j = 0; j < 3; ++j) c.v[j] = t.v[j], c.n[j] = t.n[j];
     c.u = t.b[0], c.v_weight = t.b[1];
