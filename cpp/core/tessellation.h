@@ -34,6 +34,12 @@ struct Tessellation {
   unsigned frequency =
       1;  // icosphere: each icosahedron edge in `frequency` parts, 20 f^2 triangles
   NormalShading shading = NormalShading::kSmooth;
+  // Phong tessellation (Boubekeur and Alexa 2008) of the mesh above: each
+  // triangle split into phong_level^2 on a barycentric lattice whose points
+  // move onto the triangle's Phong surface with shape factor phong_alpha.
+  // 1: the flat mesh. [1, 64]; alpha [0, 1], 3/4 as the paper recommends.
+  unsigned phong_level = 1;
+  double phong_alpha = 0.75;
 };
 
 // The grid of a uv tessellation, defaults resolved.
@@ -43,8 +49,19 @@ GridResolution uv_resolution(const Shape& shape, const Tessellation& t);
 std::size_t tessellated_triangle_count(const Shape& shape, const Tessellation& t);
 
 // The mesh; its normals are the exact surface normals at the vertices (flat
-// shading ignores them). Cylinder caps keep their own rim vertices. Shape must
+// shading ignores them), or with phong_level > 1 the Phong-refined mesh
+// (phong_refine). Cylinder caps keep their own rim vertices. Shape must
 // carry its frame (with_frame).
 TriangleMesh tessellate(const Shape& shape, const Tessellation& t);
+
+// Boubekeur and Alexa, "Phong Tessellation", ACM TOG 27(5), SIGGRAPH Asia
+// 2008: each triangle of `mesh` split into level^2 on a barycentric lattice,
+// each lattice point moved to (1 - alpha) P + alpha sum b_k pi_k(P) (pi_k
+// the projection onto vertex k's tangent plane, as phong2008_origin in
+// shadow_origin.h) with the normal sum b_k n_k normalised. A point on an
+// edge depends on that edge's two vertices alone, so triangles that share
+// the edge share the point: the refined mesh is watertight where the mesh
+// is. Triangles keep their order (side triangles first).
+TriangleMesh phong_refine(const TriangleMesh& mesh, unsigned level, double alpha);
 
 }  // namespace penumbra

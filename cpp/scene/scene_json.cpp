@@ -228,6 +228,10 @@ Tessellation read_tessellation(Reader r, const Shape& shape) {
     t.frequency = static_cast<unsigned>(r.integer_or("frequency", t.frequency, 1, 2048));
   }
   t.shading = r.choice<NormalShading>("shading", kNormalShadingNames, NormalShading::kSmooth);
+  t.phong_level = static_cast<unsigned>(r.integer_or("phong_level", t.phong_level, 1, 64));
+  t.phong_alpha = r.number_or(
+      "phong_alpha", t.phong_alpha, [](double x) { return x >= 0.0 && x <= 1.0; },
+      "in [0, 1] (Phong tessellation's shape factor)");
   r.finish();
   return t;
 }

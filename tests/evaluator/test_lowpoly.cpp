@@ -309,6 +309,31 @@ TEST(Tessellation, ClosedMeshesAreWatertight) {
             20u * 49u);
 }
 
+// Boubekeur and Alexa's purpose for Phong tessellation: a refined coarse
+// mesh lies nearer the smooth surface its normals describe than the same
+// lattice on the flat triangles (alpha = 0), and stays watertight.
+TEST(Tessellation, PhongRefinementLiesNearerTheSphereAndStaysWatertight) {
+  const Shape sphere = unit(ShapeType::kSphere);
+  auto largest_gap = [&](double alpha) {
+    Tessellation t{TessellationScheme::kIcosphere, 0, 0, 2, NormalShading::kSmooth};
+    t.phong_level = 4;
+    t.phong_alpha = alpha;
+    const TriangleMesh mesh = tessellate(sphere, t);
+    EXPECT_EQ(mesh.triangle_count(), tessellated_triangle_count(sphere, t));
+    EXPECT_EQ(mesh.triangle_count(), 80u * 16u);
+    expect_watertight(mesh);
+    double gap = 0.0;
+    for (std::size_t k = 0; k < mesh.vertex_count(); ++k) {
+      const Vec3 p{mesh.positions[3 * k], mesh.positions[3 * k + 1], mesh.positions[3 * k + 2]};
+      gap = std::max(gap, std::abs(length(p - sphere.center) - sphere.radius));
+    }
+    return gap;
+  };
+  const double flat = largest_gap(0.0), phong = largest_gap(0.75);
+  EXPECT_GT(flat, 0.02);  // f = 2: the flat lattice sags visibly
+  EXPECT_LT(phong, 0.5 * flat);
+}
+
 // ---- scenes ------------------------------------------------------------------
 
 std::string scene_error(const std::string& file, const std::vector<Override>& overrides) {
