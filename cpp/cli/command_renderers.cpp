@@ -44,7 +44,9 @@ json renderer_json(const RendererInfo& info) {
           {"normal_maps", info.normal_maps},
           {"normal_maps_why_not", info.normal_maps_why_not},
           {"plane", info.plane},
-          {"plane_why_not", info.plane_why_not}};
+          {"plane_why_not", info.plane_why_not},
+          {"consistent_normals", info.consistent_normals},
+          {"consistent_normals_why_not", info.consistent_normals_why_not}};
 }
 
 std::string join_ids(const json& ids) {
@@ -71,6 +73,8 @@ void print_renderer(const RendererInfo& info, std::ostream& out) {
   if (*info.normal_maps_why_not)
     out << fmt::format("  normal maps: {}\n", info.normal_maps_why_not);
   if (*info.plane_why_not) out << fmt::format("  plane: {}\n", info.plane_why_not);
+  if (*info.consistent_normals_why_not)
+    out << fmt::format("  consistent normals: {}\n", info.consistent_normals_why_not);
 }
 
 }  // namespace

@@ -20,9 +20,14 @@ inline constexpr EnumName<TessellationScheme> kTessellationSchemeNames[] = {
 enum class NormalShading {
   kSmooth,  // shading normal Ni interpolated from the vertex normals
   kFlat,    // shading normal = the triangle's Ng
+  // Ni bent towards the view so that mirror reflections stay above the
+  // triangle (Reshetov et al. 2010, core/consistent_normal.h)
+  kConsistent,
 };
 inline constexpr EnumName<NormalShading> kNormalShadingNames[] = {
-    {"smooth", NormalShading::kSmooth}, {"flat", NormalShading::kFlat}};
+    {"smooth", NormalShading::kSmooth},
+    {"flat", NormalShading::kFlat},
+    {"consistent", NormalShading::kConsistent}};
 
 struct Tessellation {
   TessellationScheme scheme = TessellationScheme::kUv;

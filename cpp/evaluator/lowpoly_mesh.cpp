@@ -1,11 +1,15 @@
 #include "evaluator/lowpoly_mesh.h"
 
+#include "core/consistent_normal.h"
+
 namespace penumbra {
 
 LowPolyMesh::LowPolyMesh(const Shape& shape, const Tessellation& tessellation)
     : shape_(shape),
       tessellation_(tessellation),
       mesh_(tessellate(shape, tessellation)),
+      alpha_(tessellation.shading == NormalShading::kConsistent ? consistent_normal_alphas(mesh_)
+                                                                : std::vector<double>{}),
       bvh_(mesh_, bvh_build_for(mesh_.triangle_count())) {}
 
 Vec3 LowPolyMesh::position(unsigned vertex) const {
@@ -40,6 +44,13 @@ std::optional<LowPolyHit> LowPolyMesh::intersect(const Ray& ray) const {
   hit.ni = tessellation_.shading == NormalShading::kFlat
                ? hit.ng
                : normalize(n[0] * hit.b[0] + n[1] * hit.b[1] + n[2] * hit.b[2]);
+  if (!alpha_.empty()) {
+    for (int k = 0; k < 3; ++k) hit.alpha += alpha_[index[k]] * hit.b[k];
+    // Seen from behind (inside an open cylinder) every vector turns over.
+    const Vec3 wo = -ray.direction;
+    const double side = dot(hit.ng, wo) < 0.0 ? -1.0 : 1.0;
+    hit.ni = side * consistent_normal(wo, hit.ni * side, hit.alpha);
+  }
   int cap = 0;
   if (hit.triangle >= mesh_.side_triangles)
     cap = hit.triangle >= mesh_.side_triangles + (mesh_.triangle_count() - mesh_.side_triangles) / 2

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <vector>
 
 #include "core/shadow_origin.h"
 #include "core/tessellation.h"
@@ -21,6 +22,7 @@ struct LowPolyHit {
   Vec3 p;                         // on the flat triangle
   Vec3 ng;                        // the triangle's normal, on the vertex normals' side
   Vec3 ni;                        // normalised sum b_k n_k (flat shading: ng)
+  double alpha = 0.0;             // consistent shading: sum b_k alpha_k (radians), else 0
   SurfaceGeometry base;           // analytic surface under p
 };
 
@@ -28,6 +30,8 @@ class LowPolyMesh {
  public:
   LowPolyMesh(const Shape& shape, const Tessellation& tessellation);
 
+  // Consistent shading bends ni for the ray's view (core/consistent_normal.h),
+  // on whichever side of the triangle the ray sees.
   std::optional<LowPolyHit> intersect(const Ray& ray) const;
   bool occluded(const Ray& ray, double t_min, double t_max, std::uint32_t skip) const {
     return bvh_.occluded(ray, t_min, t_max, skip);
@@ -46,6 +50,7 @@ class LowPolyMesh {
   Shape shape_;
   Tessellation tessellation_;
   TriangleMesh mesh_;
+  std::vector<double> alpha_;  // per vertex, consistent shading only
   EmbreeMesh bvh_;
 };
 

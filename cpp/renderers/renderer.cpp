@@ -46,6 +46,9 @@ void refuse_unoffered(const Scene& scene, const RendererInfo& info, const char* 
     throw ExportError(std::string(name) + " export: " + info.normal_maps_why_not);
   if (scene.shape.type == ShapeType::kPlane && !info.plane)
     throw ExportError(std::string(name) + " export: " + info.plane_why_not);
+  if (scene.tessellation && scene.tessellation->shading == NormalShading::kConsistent &&
+      !info.consistent_normals)
+    throw ExportError(std::string(name) + " export: " + info.consistent_normals_why_not);
 }
 
 namespace {

@@ -139,6 +139,9 @@ struct RendererInfo {
   const char* normal_maps_why_not = "";  // "" when they are offered
   bool plane = false;                    // /shape/type "plane"
   const char* plane_why_not = "";        // "" when it is offered
+  // /shape/tessellation/shading "consistent" (core/consistent_normal.h)
+  bool consistent_normals = false;
+  const char* consistent_normals_why_not = "";  // "" when they are offered
 
   // Runs a program of its own (and so writes a log and needs a geometry
   // pass for its analysis channels); false for the built-in evaluator.
@@ -182,7 +185,7 @@ bool offers(const RendererInfo& info, OffsetMethod offset);
 
 // Refuses, with the row's reason, the scene features the row says its
 // renderer (exported as `name`) cannot render: height or normal maps, the
-// plane.
+// plane, consistent normal interpolation.
 void refuse_unoffered(const Scene& scene, const RendererInfo& info, const char* name);
 
 // The estimate of a render that holds the evaluator's image plus

@@ -118,13 +118,14 @@ void add_agreement(const Plan& plan, const Measurer& measure, std::size_t i, Com
   c.agreement.push_back(std::move(row));
 }
 
-// Mean of `metric` (and `second`) per method over the evaluator's rows
-// against the evaluator's truth that `metric` and `second` define, sorted by
-// the mean, then the method label.
+// Mean of `metric` (and `second`) per method (and `group` of its variant,
+// appended to the label) over the evaluator's rows against the evaluator's
+// truth that `metric` and `second` define, sorted by the mean, then the label.
 std::vector<RankEntry> rank_rows(const Plan& plan, const std::vector<ComparisonRow>& rows,
                                  SectionKind kind, const std::string& scene,
                                  const std::function<double(const ComparisonRow&)>& metric,
-                                 const std::function<double(const ComparisonRow&)>& second) {
+                                 const std::function<double(const ComparisonRow&)>& second,
+                                 const std::function<std::string(const Variant&)>& group = {}) {
   std::map<std::string, RankEntry> sums;
   for (const ComparisonRow& row : rows) {
     const Variant& v = plan.variants[row.variant];
@@ -134,8 +135,9 @@ std::vector<RankEntry> rank_rows(const Plan& plan, const std::vector<ComparisonR
     if (!scene.empty() && v.scene != scene) continue;
     const double m = metric(row), s = second(row);
     if (!std::isfinite(m) || !std::isfinite(s)) continue;
-    RankEntry& e = sums[row.method];
-    e.method = row.method;
+    const std::string label = group ? row.method + group(v) : row.method;
+    RankEntry& e = sums[label];
+    e.method = label;
     e.mean += m, e.second += s, ++e.count;
   }
   std::vector<RankEntry> order;
@@ -193,12 +195,25 @@ std::vector<RankEntry> rank_bump(const Plan& plan, const std::vector<ComparisonR
       [](const ComparisonRow&) { return 0.0; });
 }
 
-std::vector<RankEntry> rank_lowpoly(const Plan& plan, const std::vector<ComparisonRow>& rows,
+std::vector<RankEntry> rank_lowpoly(const Plan& plan, const Section& section,
+                                    const std::vector<ComparisonRow>& rows,
                                     const std::string& scene) {
+  // The tessellation level is averaged over; any other axis (Phong
+  // refinement, normal interpolation) is a different mesh, ranked apart.
+  auto group = [&section](const Variant& v) {
+    std::string suffix;
+    for (std::size_t i = 0; i < section.axes.size() && i < v.axis_values.size(); ++i) {
+      if (int(i) == section.convergence_axis) continue;
+      const StudyAxis& axis = section.axes[i];
+      suffix += suffix.empty() ? " (" : ", ";
+      suffix += axis.label + ": " + axis_value_text(axis.pointer, v.axis_values[i]);
+    }
+    return suffix.empty() ? suffix : suffix + ")";
+  };
   return rank_rows(
       plan, rows, SectionKind::kLowPoly, scene,
       [](const ComparisonRow& r) { return r.shadow->darkened_fraction; },
-      [](const ComparisonRow& r) { return r.profile.rmse_terminator; });
+      [](const ComparisonRow& r) { return r.profile.rmse_terminator; }, group);
 }
 
 }  // namespace penumbra

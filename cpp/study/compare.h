@@ -83,8 +83,11 @@ struct RankEntry {
 std::vector<RankEntry> rank_bump(const Plan& plan, const std::vector<ComparisonRow>& rows,
                                  const std::string& scene);
 // Offsets: the evaluator against its analytic render, by the mean fraction of
-// lit pixels each darkens.
-std::vector<RankEntry> rank_lowpoly(const Plan& plan, const std::vector<ComparisonRow>& rows,
+// lit pixels each darkens over the tessellation levels; where the section has
+// other axes, one entry per offset and value ("none (normal interpolation:
+// consistent)").
+std::vector<RankEntry> rank_lowpoly(const Plan& plan, const Section& section,
+                                    const std::vector<ComparisonRow>& rows,
                                     const std::string& scene);
 
 }  // namespace penumbra

@@ -200,6 +200,9 @@ std::string cannot_render_variant(RendererKind r, const json& scene) {
   if (!info.specular && scene.contains(weight) && scene[weight].is_number() &&
       scene[weight].get<double>() > 0.0)
     return info.specular_why_not;
+  const json::json_pointer shading("/shape/tessellation/shading");
+  if (!info.consistent_normals && scene.contains(shading) && scene[shading] == "consistent")
+    return info.consistent_normals_why_not;
   return "";
 }
 

@@ -675,7 +675,7 @@ json lowpoly_json(const ReportInputs& in) {
   json per_scene = json::array();
   for (const std::string& name : section_scenes(in.plan, SectionKind::kLowPoly))
     per_scene.push_back(
-        {{"scene", name}, {"offsets", lowpoly_rank_json(rank_lowpoly(in.plan, rows, name))}});
+        {{"scene", name}, {"offsets", lowpoly_rank_json(rank_lowpoly(in.plan, part, rows, name))}});
   const Offered offered = offered_json(in, part);
   return {{"axes", axes_json(part.axes)},
           {"convergence_axis",
@@ -688,7 +688,7 @@ json lowpoly_json(const ReportInputs& in) {
             {"reference", "evaluator:analytic"},
             {"renderer", "evaluator"},
             {"per_scene", per_scene},
-            {"overall", lowpoly_rank_json(rank_lowpoly(in.plan, rows, ""))}}},
+            {"overall", lowpoly_rank_json(rank_lowpoly(in.plan, part, rows, ""))}}},
           {"missing", offered.missing},
           {"units",
            {{"darkened_fraction",

@@ -191,6 +191,10 @@ TEST(LowPolyExport, RenderersRefuseWhatTheyCannotExpress) {
   refused(pov, lowpoly_sphere({prop}), {"props are evaluator-only"});
   refused(cycles, lowpoly_sphere({prop}), {"props are evaluator-only"});
   refused(pov, lowpoly_sphere({"/shape/tessellation=null", prop}), {"props are evaluator-only"});
+  // Consistent normal interpolation is view-dependent shading neither has.
+  const std::string consistent = "/shape/tessellation/shading=consistent";
+  refused(pov, lowpoly_sphere({consistent}), {"no view-dependent shading normal"});
+  refused(cycles, lowpoly_sphere({consistent}), {"no consistent normal interpolation"});
   // Bump on a mesh: neither renderer's bump is the evaluator's (see export).
   const Scene bumped = lowpoly_sphere(
       {"/representation=bump",

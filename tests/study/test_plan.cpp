@@ -8,6 +8,7 @@
 
 #include "temp_dir_test.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -131,6 +132,39 @@ TEST(Plan, TheLightingStudyMixesKindsOfLightOnItsLightingAxisOnly) {
   const StudyStatistics q =
       study_statistics(plan_study(quick, 8.0 * (1ull << 30)), {}, quick.bump.axes);
   for (const AxisStatistics& a : q.by_axis) EXPECT_FALSE(a.lighting) << a.pointer;
+}
+
+// Consistent normal interpolation is evaluator-only: a study that puts it on
+// an axis leaves exactly those variants out of POV-Ray and Blender, each with
+// the renderer's reason, and renders the smooth ones everywhere.
+TEST(Plan, ConsistentNormalVariantsAreLeftOutOfTheExternalRenderers) {
+  Study study = load_study(kSource + "/scenes/studies/consistent.json");
+  ASSERT_TRUE(study.lowpoly);
+  study.lowpoly->renderers = {RendererKind::kEvaluator, RendererKind::kPovray,
+                              RendererKind::kBlender};
+  const Plan plan = plan_study(study, 8.0 * (1ull << 30));
+  std::size_t consistent = 0;
+  for (const Variant& v : plan.variants) {
+    const bool is_consistent = v.axis_values.at(1) == "consistent";
+    consistent += is_consistent;
+    for (RendererKind r : {RendererKind::kPovray, RendererKind::kBlender}) {
+      // ball-on-sphere has a prop, which neither renders at all.
+      if (std::any_of(plan.skipped.begin(), plan.skipped.end(), [&](const SkippedRenderer& s) {
+            return s.scene == v.scene && s.renderer == r && s.variant.empty();
+          }))
+        continue;
+      const bool skipped =
+          std::any_of(plan.skipped.begin(), plan.skipped.end(), [&](const SkippedRenderer& s) {
+            return s.variant == v.id && s.renderer == r &&
+                   s.why == renderer_info(r).consistent_normals_why_not;
+          });
+      EXPECT_EQ(skipped, is_consistent) << v.id << " " << to_string(r);
+      const bool has_jobs = std::any_of(v.jobs.begin(), v.jobs.end(),
+                                        [&](std::size_t j) { return plan.jobs[j].renderer == r; });
+      EXPECT_EQ(has_jobs, !is_consistent) << v.id << " " << to_string(r);
+    }
+  }
+  EXPECT_EQ(consistent, plan.variants.size() / 2);
 }
 
 class PlanMemory : public TempDirTest {};

@@ -74,7 +74,9 @@ const RendererEntry& blender_entry() {
                                    "multiple-scattering options the evaluator does not model)",
                .height_maps = true,
                .normal_maps = true,
-               .plane = true},
+               .plane = true,
+               .consistent_normals_why_not = "Cycles interpolates a smooth mesh's normals "
+                                             "linearly; it has no consistent normal interpolation"},
       .render = render_blender,
       .version = external::probe_version,
       .pixel_code_digest = blender_code_digest,

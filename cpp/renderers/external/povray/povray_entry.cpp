@@ -66,7 +66,9 @@ const RendererEntry& povray_entry() {
                .normal_maps_why_not = "POV-Ray 3.7 has no tangent-space normal-map input: its "
                                       "normal patterns perturb the normal by the gradient of a "
                                       "scalar function, which a normal map does not give",
-               .plane = true},
+               .plane = true,
+               .consistent_normals_why_not = "POV-Ray 3.7 interpolates mesh2 normal_vectors "
+                                             "linearly; it has no view-dependent shading normal"},
       .render = render_povray,
       .version = external::probe_version,
       .pixel_code_digest = povray_code_digest,
