@@ -40,6 +40,23 @@ def caption(path, floors, lp):
                   'and thicker lines lie under smaller ones.')
 
 
+def percent_interval(ci):
+    lo, hi = (num(x) for x in (list(ci or []) + [None, None])[:2])
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        return '–'
+    return f'[{100 * lo:.2f}, {100 * hi:.2f}]'
+
+
+def versus_best(e):
+    vb = e.get('versus_best')
+    if not isinstance(vb, dict):
+        return 'the first'
+    d = num(vb.get('mean_difference'))
+    text = (f'{100 * d:+.2f} {percent_interval(vb.get("ci"))}'
+            if math.isfinite(d) else '–')
+    return f'{text}: ' + ('a tie' if vb.get('tie') else 'worse')
+
+
 def rank_table(entries):
     vals = [num(e.get('darkened_fraction')) for e in entries]
     rows = []
@@ -47,9 +64,12 @@ def rank_table(entries):
         rank = 1 + sum(w < v for w in vals if math.isfinite(w)) \
             if math.isfinite(v) else None  # equal values share a rank
         rows.append([rank, str(e.get('offset')), (v, 100),
+                     percent_interval(e.get('darkened_fraction_ci')),
+                     versus_best(e),
                      (e.get('rmse_terminator'), 100), e.get('count')])
     return table(['rank', 'offset', 'mean darkened fraction (% of '
-                          'lit pixels)', 'mean terminator profile RMSE (% of '
+                          'lit pixels)', '95 % interval', 'minus the first '
+                          '(paired, 95 %)', 'mean terminator profile RMSE (% of '
                           'albedo·E/π)', 'count'], rows)
 
 

@@ -94,7 +94,8 @@ comparisons[{variant,scene,axis_values[],renderer,offset,reference
 ("<renderer>:analytic"),shadow{darkened_fraction,max_darkening,
 lost_shadow_fraction,shadow_shift_px,shadowed_pixels,...},profile{},
 image{}}], ranking{metric,reference,renderer,per_scene[{scene,offsets[{offset,
-darkened_fraction,rmse_terminator,count}]}],overall[...]}, units{}),
+darkened_fraction,darkened_fraction_ci,rmse_terminator,count,versus_best{pairs,
+mean_difference,ci,tie}}]}],overall[...]}, units{}),
 filtering (null, or [{map,run,source,json,csv,findings[]}]: each json a
 filtering.json, see below), interplay (null, or {scene,map{file,size,digest},
 filter,levels[],methods[],compared_against,truth,truth_check{},units,

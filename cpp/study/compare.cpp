@@ -120,13 +120,19 @@ void add_agreement(const Plan& plan, const Measurer& measure, std::size_t i, Com
 
 // Mean of `metric` (and `second`) per method (and `group` of its variant,
 // appended to the label) over the evaluator's rows against the evaluator's
-// truth that `metric` and `second` define, sorted by the mean, then the label.
+// truth that `metric` and `second` define, sorted by the mean, then the
+// label; `with_intervals`: each mean's interval and the paired comparison
+// with the first (RankEntry), pairing rows by `pair_key` (else by variant).
 std::vector<RankEntry> rank_rows(const Plan& plan, const std::vector<ComparisonRow>& rows,
                                  SectionKind kind, const std::string& scene,
                                  const std::function<double(const ComparisonRow&)>& metric,
                                  const std::function<double(const ComparisonRow&)>& second,
-                                 const std::function<std::string(const Variant&)>& group = {}) {
+                                 const std::function<std::string(const Variant&)>& group = {},
+                                 const std::function<std::string(const Variant&)>& pair_key = {},
+                                 bool with_intervals = false) {
   std::map<std::string, RankEntry> sums;
+  // label -> the row's pairing key (pair_key, else its variant) -> metric
+  std::map<std::string, std::map<std::string, double>> values;
   for (const ComparisonRow& row : rows) {
     const Variant& v = plan.variants[row.variant];
     if (v.section != kind || row.renderer != RendererKind::kEvaluator ||
@@ -139,6 +145,7 @@ std::vector<RankEntry> rank_rows(const Plan& plan, const std::vector<ComparisonR
     RankEntry& e = sums[label];
     e.method = label;
     e.mean += m, e.second += s, ++e.count;
+    values[label][pair_key ? pair_key(v) : v.id] = m;
   }
   std::vector<RankEntry> order;
   for (auto& [method, e] : sums) {
@@ -148,6 +155,21 @@ std::vector<RankEntry> rank_rows(const Plan& plan, const std::vector<ComparisonR
   std::sort(order.begin(), order.end(), [](const RankEntry& a, const RankEntry& b) {
     return a.mean != b.mean ? a.mean < b.mean : a.method < b.method;
   });
+  if (!with_intervals || order.empty()) return order;
+  const std::map<std::string, double>& best = values[order.front().method];
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    RankEntry& e = order[k];
+    std::vector<double> own, mine, theirs;
+    for (const auto& [variant, m] : values[e.method]) {
+      own.push_back(m);
+      if (const auto b = best.find(variant); b != best.end()) {
+        mine.push_back(m);
+        theirs.push_back(b->second);
+      }
+    }
+    e.interval = bootstrap_mean_interval(own);
+    if (k > 0 && !mine.empty()) e.versus_best = compare_paired(mine, theirs);
+  }
   return order;
 }
 
@@ -210,10 +232,17 @@ std::vector<RankEntry> rank_lowpoly(const Plan& plan, const Section& section,
     }
     return suffix.empty() ? suffix : suffix + ")";
   };
+  // Entries pair up on the same scene at the same tessellation level, so
+  // that values of the other axes (ranked apart) compare pairwise too.
+  auto pair_key = [&section](const Variant& v) {
+    const int c = section.convergence_axis;
+    if (c < 0 || std::size_t(c) >= v.axis_values.size()) return v.scene;
+    return v.scene + " " + v.axis_values[std::size_t(c)].dump();
+  };
   return rank_rows(
       plan, rows, SectionKind::kLowPoly, scene,
       [](const ComparisonRow& r) { return r.shadow->darkened_fraction; },
-      [](const ComparisonRow& r) { return r.profile.rmse_terminator; }, group);
+      [](const ComparisonRow& r) { return r.profile.rmse_terminator; }, group, pair_key, true);
 }
 
 }  // namespace penumbra

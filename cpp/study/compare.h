@@ -10,6 +10,7 @@
 
 #include "analysis/intervals.h"
 #include "analysis/metrics.h"
+#include "analysis/statistics.h"
 #include "image/image.h"
 #include "study/comparison_store.h"
 #include "study/plan.h"
@@ -76,6 +77,12 @@ struct RankEntry {
   double mean = 0.0;    // the ranking metric
   double second = 0.0;  // low-poly: the mean terminator RMSE beside it
   int count = 0;
+  // Low-poly: the mean's 95 % percentile-bootstrap interval over the rows
+  // counted, and the paired comparison with the first entry over the scenes
+  // and tessellation levels both have (none for the first, or without any
+  // pair): a tie when its interval of the mean difference holds 0.
+  Interval interval;
+  std::optional<PairedComparison> versus_best;
 };
 
 // Bump methods: the evaluator against the evaluator's displacement, by the

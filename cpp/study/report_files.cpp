@@ -592,11 +592,20 @@ json bump_rank_json(const std::vector<RankEntry>& entries) {
 
 json lowpoly_rank_json(const std::vector<RankEntry>& entries) {
   json list = json::array();
-  for (const RankEntry& e : entries)
-    list.push_back({{"offset", e.method},
-                    {"darkened_fraction", e.mean},
-                    {"rmse_terminator", e.second},
-                    {"count", e.count}});
+  for (const RankEntry& e : entries) {
+    json entry = {{"offset", e.method},
+                  {"darkened_fraction", e.mean},
+                  {"darkened_fraction_ci", {e.interval.low, e.interval.high}},
+                  {"rmse_terminator", e.second},
+                  {"count", e.count},
+                  {"versus_best", nullptr}};
+    if (e.versus_best)
+      entry["versus_best"] = {{"pairs", e.versus_best->n},
+                              {"mean_difference", e.versus_best->mean_difference},
+                              {"ci", {e.versus_best->interval.low, e.versus_best->interval.high}},
+                              {"tie", e.versus_best->interval.contains(0.0)}};
+    list.push_back(std::move(entry));
+  }
   return list;
 }
 

@@ -422,7 +422,26 @@ TEST_F(Study, LowPolyStudyComparesEveryOffsetWithTheAnalyticSurface) {
       darkened_at_8[c.at("offset")] = c.at("shadow").at("darkened_fraction").get<double>();
   }
   EXPECT_GT(darkened_at_8.at("none"), darkened_at_8.at("hanika2021"));
-  EXPECT_EQ(lowpoly.at("ranking").at("overall").size(), 3u);
+  const json& overall = lowpoly.at("ranking").at("overall");
+  ASSERT_EQ(overall.size(), 3u);
+  // Each mean with its interval; each offset after the first paired with it
+  // on the same scene and levels (here both levels of the one scene).
+  EXPECT_TRUE(overall[0].at("versus_best").is_null());
+  const double first = overall[0].at("darkened_fraction").get<double>();
+  for (const json& e : overall) {
+    const double mean = e.at("darkened_fraction").get<double>();
+    EXPECT_LE(e.at("darkened_fraction_ci")[0].get<double>(), mean) << e.dump();
+    EXPECT_GE(e.at("darkened_fraction_ci")[1].get<double>(), mean) << e.dump();
+    if (e.at("versus_best").is_null()) continue;
+    const json& vb = e.at("versus_best");
+    EXPECT_EQ(vb.at("pairs"), 2);
+    // Every pair shared: the mean difference is the difference of the means.
+    const double d = vb.at("mean_difference").get<double>();
+    EXPECT_NEAR(d, mean - first, 1e-12);
+    const double low = vb.at("ci")[0].get<double>(), high = vb.at("ci")[1].get<double>();
+    EXPECT_TRUE(low <= d && d <= high) << vb.dump();
+    EXPECT_EQ(vb.at("tie").get<bool>(), low <= 0.0 && 0.0 <= high) << vb.dump();
+  }
   // lowpoly.csv: one header, one row per comparison.
   std::istringstream csv(read_text(path("out/lowpoly.csv")));
   std::string line;
