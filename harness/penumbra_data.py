@@ -35,6 +35,7 @@ METRICS = {                       # metric -> (name, unit)
     'view.bias_grazing': ('grazing-view bias', FRACTION),
     'image.rmse': ('image RMSE', 'W m⁻² sr⁻¹'),
     'image.ssim': ('image SSIM', 'unitless, [-1, 1]'),
+    'image.flip': ('mean HDR-FLIP', 'unitless, [0, 1]'),
     'image.mask_iou': ('silhouette IoU', 'unitless, [0, 1]')}
 CSV_COLUMNS = {                   # metric -> its metrics.csv column
     PRIMARY: PRIMARY,
@@ -49,6 +50,7 @@ CSV_COLUMNS = {                   # metric -> its metrics.csv column
     'view.bias_grazing': 'view_bias_grazing_rel',
     'image.rmse': 'image_rmse_w_m2_sr',
     'image.ssim': 'image_ssim',
+    'image.flip': 'image_flip',
     'image.mask_iou': 'image_mask_iou'}
 # (metric, name, unit, scale): fractions, as lowpoly.csv gives them (its
 # column in LP_COLUMNS); the page's low-poly tables say "%" where they

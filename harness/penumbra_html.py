@@ -43,7 +43,8 @@ VARIANT_METRICS = (               # (metric, scale, column head)
     ('view.rmse_grazing', 100, 'grazing-view RMSE (%)'),
     ('view.bias_grazing', 100, 'grazing-view bias (%)'),
     ('image.rmse', 1, 'image RMSE (W m⁻² sr⁻¹)'),
-    ('image.ssim', 1, 'SSIM'))
+    ('image.ssim', 1, 'SSIM'),
+    ('image.flip', 1, 'FLIP'))
 
 
 def image_grid(var, uris, missing, renderers):

@@ -22,7 +22,8 @@ COMPARISON_METRICS = (            # (metric, scale, column head)
     ('shadow.shadow_shift_px', 1, 'shadow shift (px)'),
     ('profile.position_error_deg', 1, 'position error (deg)'),
     ('image.rmse', 1, 'image RMSE'),
-    ('image.ssim', 1, 'SSIM'))
+    ('image.ssim', 1, 'SSIM'),
+    ('image.flip', 1, 'FLIP'))
 
 
 def caption(path, floors, lp):

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 
 #include "analysis/metrics.h"
 #include "analysis/statistics.h"
@@ -32,6 +33,9 @@ struct ComparisonIntervals {
   // The other profile metrics (ProfileMetrics): fraction of albedo*E/pi,
   // degrees. NaN where the metric is undefined in the estimate.
   Interval max_error, position_error, lit_bias;
+  // Mean HDR-FLIP (ImageMetrics::flip): the same bands of rows and resamples
+  // (mean_flip_interval, analysis/flip.h); NaN unless it was measured.
+  Interval flip{std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
   // mean(replicates) - estimate: how much resampling noise inflates the
   // terminator RMSE (a finite-pixel bias of the same sign in the estimate).
   double rmse_terminator_bias = 0.0;

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "analysis/flip.h"
 #include "util/strict_json.h"
 
 namespace penumbra {
@@ -152,8 +153,40 @@ double threshold_level(const MeasureOptions& options) {
   return options.threshold.value_or(kNaN) * options.scale;
 }
 
+namespace {
+
+// Mean HDR-FLIP of the two images as rendered (linear radiance, every
+// pixel: the background is black in both) and its interval; NaN where the
+// reference gives no exposure (an all-black reference).
+void measure_flip(const Image& test, const Image& reference, Measurement& m) {
+  try {
+    FlipOptions options;
+    options.range = FlipRange::kHdr;
+    const FlipImage map = flip_map(test, reference, options);
+    m.image.flip = mean_flip(map);
+    m.intervals.flip = mean_flip_interval(map);
+  } catch (const std::invalid_argument&) {
+    m.image.flip = kNaN;
+    m.intervals.flip = {kNaN, kNaN};
+  }
+}
+
+Measurement measure_covered(const Image& test_image, const Image& reference_image,
+                            const MeasureOptions& options);
+
+}  // namespace
+
 Measurement measure(const Image& test_image, const Image& reference_image,
                     const MeasureOptions& options) {
+  Measurement m = measure_covered(test_image, reference_image, options);
+  if (options.image && options.flip) measure_flip(test_image, reference_image, m);
+  return m;
+}
+
+namespace {
+
+Measurement measure_covered(const Image& test_image, const Image& reference_image,
+                            const MeasureOptions& options) {
   if (test_image.width != reference_image.width || test_image.height != reference_image.height)
     throw std::invalid_argument(fmt::format("measure: a {}x{} image against a {}x{} one",
                                             test_image.width, test_image.height,
@@ -184,6 +217,8 @@ Measurement measure(const Image& test_image, const Image& reference_image,
   }
   return m;
 }
+
+}  // namespace
 
 Image difference_image(const Image& test_image, const Image& reference_image,
                        const MeasureOptions& options) {

@@ -47,6 +47,9 @@ struct MeasureOptions {
   bool image = true;
   bool view = true;
   bool shadows = false;
+  // With `image`: mean HDR-FLIP of the linear radiance over every pixel at
+  // FLIP's default 67.02 pixels per degree, and its interval.
+  bool flip = false;
 };
 
 // Why there is no profile (nor view metrics or intervals).

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -132,6 +133,10 @@ struct ImageMetrics {
   double ssim = 0.0;
   std::size_t pixels = 0;     // pixels fully covered in both
   std::size_t nonfinite = 0;  // NaN or Inf values in either image (a failure)
+  // Mean HDR-FLIP over every pixel of the frame (analysis/flip.h, 67.02
+  // pixels per degree), in [0, 1], 0 = identical; NaN unless measured
+  // (MeasureOptions::flip).
+  double flip = std::numeric_limits<double>::quiet_NaN();
 };
 
 ImageMetrics compare_images(const Image& test, const Image& reference, double min_coverage = 0.999);

@@ -48,10 +48,11 @@ Command add_figure_command(CLI::App& app, SharedOptions&) {
                              "achievable-contour"}));
   cmd->add_option("--x", a->x, "the axis (its pointer, e.g. /height/amplitude, or its name)");
   cmd->add_option("--y", a->y, "heatmap: the second axis");
-  cmd->add_option("--metric", a->metric,
-                  "line and ranking: combined_relative_error (default), profile.rmse_terminator, "
-                  "view.rmse_grazing, profile.position_error_deg, image.rmse or image.ssim; "
-                  "heatmap: any comparison metric");
+  cmd->add_option(
+      "--metric", a->metric,
+      "line and ranking: combined_relative_error (default), profile.rmse_terminator, "
+      "view.rmse_grazing, profile.position_error_deg, image.rmse, image.ssim or image.flip; "
+      "heatmap: any comparison metric");
   cmd->add_option("--methods", a->methods,
                   "comma-separated method labels in the order to draw, or all (default: none, the "
                   "study's figures.methods and the leading methods, at most 5)");

@@ -21,12 +21,12 @@ template <typename T>
 constexpr bool kPlain = std::is_trivially_copyable_v<T>;
 static_assert(kPlain<ProfileMetrics> && sizeof(ProfileMetrics) == 12 * sizeof(double));
 static_assert(kPlain<ImageMetrics> &&
-              sizeof(ImageMetrics) == 7 * sizeof(double) + 2 * sizeof(std::size_t));
+              sizeof(ImageMetrics) == 8 * sizeof(double) + 2 * sizeof(std::size_t));
 static_assert(kPlain<ViewMetrics> && sizeof(ViewMetrics) == 2 * sizeof(double) + 8);
 static_assert(kPlain<ShadowMetrics> &&
               sizeof(ShadowMetrics) == 4 * sizeof(double) + 4 * sizeof(std::size_t));
 static_assert(kPlain<ComparisonIntervals> &&
-              sizeof(ComparisonIntervals) == 15 * sizeof(double) + 2 * sizeof(int));
+              sizeof(ComparisonIntervals) == 17 * sizeof(double) + 2 * sizeof(int));
 
 // key, has-shadow flag, then the metrics.
 constexpr std::size_t kRecordBytes = 2 * sizeof(std::uint64_t) + sizeof(ProfileMetrics) +
@@ -84,6 +84,7 @@ Measurement measure_comparison(const Image& test, const Image& reference, double
   options.scale = scale;
   options.image = options.view = extent != ComparisonExtent::kProfileOnly;
   options.shadows = extent == ComparisonExtent::kFullShadows;
+  options.flip = options.image;
   return measure(test, reference, options);
 }
 

@@ -128,6 +128,8 @@ Columns bump_columns() {
   add_with_ci(
       out, "image_rmse_w_m2_sr", [](const C& r) { return r.image.rmse; }, &I::image_rmse);
   out.push_back(metric_column("image_ssim", [](const C& r) { return r.image.ssim; }));
+  add_with_ci(
+      out, "image_flip", [](const C& r) { return r.image.flip; }, &I::flip);
   out.push_back(
       metric_column("image_max_error_w_m2_sr", [](const C& r) { return r.image.max_error; }));
   out.push_back(
@@ -181,6 +183,8 @@ Columns lowpoly_columns() {
   out.push_back(metric_column("lit_bias_rel", [](const C& r) { return r.profile.lit_bias; }));
   out.push_back(metric_column("image_rmse_w_m2_sr", [](const C& r) { return r.image.rmse; }));
   out.push_back(metric_column("image_ssim", [](const C& r) { return r.image.ssim; }));
+  add_with_ci(
+      out, "image_flip", [](const C& r) { return r.image.flip; }, &ComparisonIntervals::flip);
   out.push_back(metric_column("image_mask_iou", [](const C& r) { return r.image.mask_iou; }));
   out.push_back(count_column("image_nonfinite_count",
                              [](const C& r) -> std::uint64_t { return r.image.nonfinite; }));
@@ -437,6 +441,7 @@ const std::vector<LongMetric>& long_metrics() {
       {"profile.lit_bias", rel, [](const R& r) { return r.c.profile.lit_bias; }, &I::lit_bias},
       {"image.rmse", radiance, [](const R& r) { return r.c.image.rmse; }, &I::image_rmse},
       {"image.ssim", "unitless", [](const R& r) { return r.c.image.ssim; }, nullptr},
+      {"image.flip", "unitless, [0, 1]", [](const R& r) { return r.c.image.flip; }, &I::flip},
       {"image.max_error", radiance, [](const R& r) { return r.c.image.max_error; }, nullptr},
       {"image.mask_iou", "unitless", [](const R& r) { return r.c.image.mask_iou; }, nullptr},
       {"view.rmse_grazing", rel, [](const R& r) { return r.c.view.rmse_grazing; },
@@ -567,6 +572,8 @@ json comparisons_json(const ReportInputs& in, SectionKind kind) {
     c["profile"]["position_error_deg_ci"] = interval_json(row.intervals.position_error);
     c["profile"]["lit_bias_ci"] = interval_json(row.intervals.lit_bias);
     c["image"]["rmse_ci"] = interval_json(row.intervals.image_rmse);
+    c["image"]["flip"] = value(row.image.flip);
+    c["image"]["flip_ci"] = interval_json(row.intervals.flip);
     c["view"]["rmse_grazing_ci"] = interval_json(row.intervals.view_rmse_grazing);
     c["view"]["bias_grazing_ci"] = interval_json(row.intervals.view_bias_grazing);
     out.push_back(std::move(c));

@@ -264,6 +264,7 @@ const std::set<std::string>& plot_metrics() {
                                              "profile.lit_bias",
                                              "image.rmse",
                                              "image.ssim",
+                                             "image.flip",
                                              "image.max_error",
                                              "view.rmse_grazing",
                                              "view.bias_grazing"};

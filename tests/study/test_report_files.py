@@ -278,6 +278,7 @@ def main():
                 check(os.path.isfile(os.path.join(out, r['reference_exr'])),
                       f'no file {r["reference_exr"]}')
                 check((r['width_px'], r['height_px']) == ('24', '24'), 'resolution')
+            check_flip(out, table[:3])
             truths = {r['truth'] for r in table}
             check(truths == ({'own', 'evaluator'} if with_povray else {'own'}), f'truths {truths}')
         print(f'{"FAILED" if failures else "ok"}: {len(failures)} failures '
@@ -285,6 +286,27 @@ def main():
         return 1 if failures else 0
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def check_flip(out, rows):
+    """Mean FLIP in the CSV is what `penumbra compare --flip` (checked
+    against NVlabs/flip's own values, tests/analysis/test_flip.cpp) gives for
+    the same two renders, interval included."""
+    for r in rows:
+        run = subprocess.run(
+            [BINARY, 'compare', os.path.join(out, r['reference_exr']),
+             os.path.join(out, r['exr']), '--flip', '--json'],
+            capture_output=True, text=True, check=False)
+        check(run.returncode == 0, f'compare --flip exited {run.returncode}: {run.stderr[-300:]}')
+        if run.returncode != 0:
+            continue
+        flip = json.loads(run.stdout)['flip']
+        check(flip["range"] == "hdr", "HDR-FLIP on EXRs")
+        for column, value in (('image_flip', flip['mean']),
+                              ('image_flip_ci_low', flip['mean_ci'][0]),
+                              ('image_flip_ci_high', flip['mean_ci'][1])):
+            check(math.isclose(float(r[column]), value, rel_tol=1e-12, abs_tol=1e-15),
+                  f'{column} {r[column]} against compare --flip {value}')
 
 
 if __name__ == '__main__':
