@@ -101,7 +101,8 @@ def renders_and_comparisons(v, out, methods):
                                 'width_deg': 10.0, 'lit_bias': 0.001},
                     'view': {'rmse_grazing': 0.02 * f * (1 + v['wiggle']),
                              'bias_grazing': -0.01},
-                    'image': {'rmse': 0.01 * f, 'ssim': 0.95, 'mask_iou': 1.0}})
+                    'image': {'rmse': 0.01 * f, 'ssim': 0.95, 'mask_iou': 1.0,
+                              'flip': 0.05 * f, 'flip_ci': [0.045 * f, 0.055 * f]}})
             renders.append(r)
     return renders, comps
 
