@@ -63,6 +63,19 @@ class Checker:
                       '(low and high may be null)')
         return [num(x) for x in v]
 
+    def paired(self, parent, ptr, key):
+        """{"difference": [value, low, high], "tie": bool}: a paired
+        difference of two pooled errors over the same resamples."""
+        v = self.get(parent, ptr, key, dict,
+                     '{"difference": [value, low, high], "tie": true or '
+                     'false} (a fit.json from before paired differences: '
+                     'run penumbra fit STUDY again)')
+        tie = v.get('tie')
+        if not isinstance(tie, bool):
+            self.fail(f'{ptr}/{key}/tie', 'true or false')
+        return {'difference': self.interval(v, f'{ptr}/{key}', 'difference'),
+                'tie': tie}
+
     def array(self, parent, ptr, key):
         """The objects of parent[key] with their pointers."""
         v = self.get(parent, ptr, key, list, 'an array')
@@ -99,6 +112,14 @@ def load_fit(path):
            'held_out_pooled': (None if doc.get('held_out_pooled', 0) is None
                                and not doc.get('held_out')
                                else c.interval(doc, '', 'held_out_pooled')),
+           # null without a shipped method or without held-out families
+           'best_method': (None if doc.get('best_method', 0) is None
+                           else c.get(doc, '', 'best_method', str,
+                                      'a string or null')),
+           'held_out_minus_best': (
+               None if doc.get('held_out_minus_best', 0) is None
+               and (not doc.get('held_out') or doc.get('best_method') is None)
+               else c.paired(doc, '', 'held_out_minus_best')),
            'constants': [constant_of(c, e, p)
                          for e, p in c.array(doc, '', 'constants')],
            'pictures': None}
@@ -119,6 +140,13 @@ def method_of(c, e, p):
     return {'method': c.get(e, p, 'method', str, 'a string'),
             'error': c.interval(e, p, 'error'),
             'share': c.interval(e, p, 'share'),
+            # null where the share is undefined (not in any group)
+            'group': (None if e.get('group', 0) is None
+                      else c.get(e, p, 'group', int, 'an integer or null')),
+            'leader': (None if e.get('group', 0) is None
+                       else c.get(e, p, 'leader', str, 'a string')),
+            'versus_leader': (None if e.get('group', 0) is None
+                              else c.paired(e, p, 'versus_leader')),
             'on_grid': 'on_grid' in e}
 
 
@@ -130,7 +158,12 @@ def held_out_of(c, e, p):
                                    'a number')),
             'none': c.interval(e, p, 'none'),
             'best_method': c.get(e, p, 'best_method', str, 'a string'),
-            'best': c.interval(e, p, 'best')}
+            'best': c.interval(e, p, 'best'),
+            # null where the family has no shipped method
+            'held_out_minus_best': (
+                None if e.get('held_out_minus_best', 0) is None
+                and not e.get('best_method')
+                else c.paired(e, p, 'held_out_minus_best'))}
 
 
 def constant_of(c, e, p):
@@ -140,9 +173,11 @@ def constant_of(c, e, p):
             'constant': c.get(e, p, 'constant', str, 'a string'),
             'published': number('published'),
             'fitted': c.interval(e, p, 'fitted'),
-            'error_published': number('error_published'),
-            'error_in_sample': number('error_fitted_in_sample'),
-            'error_held_out': number('error_fitted_held_out'),
+            'error_published': c.interval(e, p, 'error_published'),
+            'error_in_sample': c.interval(e, p, 'error_fitted_in_sample'),
+            'error_held_out': c.interval(e, p, 'error_fitted_held_out'),
+            'held_out_minus_published': c.paired(e, p,
+                                                 'held_out_minus_published'),
             # null or absent (a fit.json before it): inside the range
             'at_bound': (c.get(e, p, 'at_bound', str, 'a string or null')
                          if e.get('at_bound') is not None else None)}
@@ -182,32 +217,15 @@ def fit_path(study):
 
 
 def share_groups(methods):
-    """Methods sorted by share, highest first, in tie groups: the best
-    method not yet grouped leads the next group, which holds every later
-    one whose interval overlaps the leader's (the project's tie rule on
-    intervals: fit.json gives no paired difference of shares).
-    [{'method', 'group', 'leader', 'value', 'lo', 'hi'}]."""
-    rows = sorted((m for m in methods if math.isfinite(m['share'][0])),
-                  key=lambda m: (-m['share'][0], m['method']))
-    out, left, g = [], list(rows), 0
-    while left:
-        g += 1
-        lead = left.pop(0)
-        members = [lead] + [m for m in left if overlap(m['share'],
-                                                       lead['share'])]
-        left = [m for m in left if m not in members]
-        out += [{'method': m['method'], 'group': g,
-                 'leader': lead['method'], 'value': m['share'][0],
-                 'lo': m['share'][1], 'hi': m['share'][2]} for m in members]
-    return out
-
-
-def overlap(a, b):
-    """Whether two [value, low, high] intervals share a point (an
-    undefined end: treated as no interval, so never a tie)."""
-    if not all(math.isfinite(x) for x in a[1:] + b[1:]):
-        return False
-    return a[1] <= b[2] and b[1] <= a[2]
+    """Methods in fit.json's tie groups by share (each group's leader the
+    highest share not yet grouped; a member's share minus the leader's,
+    paired over the same resamples, holds 0), by group, then share, highest
+    first. [{'method', 'group', 'leader', 'value', 'lo', 'hi'}]."""
+    rows = sorted((m for m in methods if m['group'] is not None),
+                  key=lambda m: (m['group'], -m['share'][0], m['method']))
+    return [{'method': m['method'], 'group': m['group'],
+             'leader': m['leader'], 'value': m['share'][0],
+             'lo': m['share'][1], 'hi': m['share'][2]} for m in rows]
 
 
 def share_caption(fit):
@@ -220,7 +238,8 @@ def share_caption(fit):
             'variants; bars: 95 % percentile bootstrap over variants. '
             'Bands: tie groups, in order: the highest share not yet '
             'grouped leads the next group, which holds every lower one '
-            'whose interval overlaps the leader\'s. † not bounded by 1: '
+            'whose share minus the leader\'s, paired over the same '
+            'resamples, has a 95 % interval holding 0. † not bounded by 1: '
             + more +
             '; methods that are not factors of these inputs (microfacet, '
             'adjustment) are not bounded either.')

@@ -10,7 +10,7 @@ fitted with it, appears only beside it and labelled in-sample.
 """
 import math
 
-from penumbra_achievable import MORE_INPUTS, overlap, share_caption
+from penumbra_achievable import MORE_INPUTS, share_caption
 from penumbra_context import ci_cell, figure_file, table
 from penumbra_data import fmt
 
@@ -50,42 +50,41 @@ def absent_context(fit_file):
             'and held out by scene family).'}
 
 
-def shipped_best(fit):
-    """The shipped method with the lowest pooled error (not raw bump, not a
-    fitted table), or None."""
-    rows = [m for m in fit['methods'] if m['method'] != 'none' and not
-            m['method'].startswith('fitted') and math.isfinite(m['error'][0])]
-    return min(rows, key=lambda m: (m['error'][0], m['method']),
-               default=None)
+def verdict(paired, first, second):
+    """The project's tie rule on a paired difference (first - second, both
+    pooled over the same resamples): a tie when its 95 % interval holds 0,
+    else the lower one is named."""
+    if paired is None:
+        return 'n/a'
+    if paired['tie']:
+        return 'tie'
+    return f'{first} lower' if paired['difference'][0] < 0 else f'{second} lower'
 
 
-def verdict(fitted, best, best_name):
-    """The tie rule on intervals: overlapping intervals are a tie; else
-    the lower one is named."""
-    if overlap(fitted, best):
-        return 'tie (intervals overlap)'
-    return ('fitted table lower' if fitted[0] < best[0]
-            else f'{best_name} lower')
+def difference_cell(paired):
+    """A paired difference in percentage points, with its interval."""
+    return pct_cell(paired['difference']) if paired else pct_value(math.nan)
 
 
 def comparison_sentence(fit):
     """Whether the held-out table beats the best shipped method out of
-    sample, pooled over the study; None without a shipped method or
-    without held-out families."""
-    best = shipped_best(fit)
-    if best is None or not fit['held_out']:
+    sample, pooled over the study, by their paired difference; None without
+    a shipped method or without held-out families."""
+    paired, name = fit['held_out_minus_best'], fit['best_method']
+    if paired is None or name is None:
         return None
-    h, b, name = fit['held_out_pooled'], best['error'], best['method']
+    best = next(m for m in fit['methods'] if m['method'] == name)
+    h, d = fit['held_out_pooled'], paired['difference']
     head = (f'Out of sample, the fitted table held out by scene family '
             f'has E = {pct(h)} {PCT} over {fit["variants"]} variants; the '
-            f'best shipped method, {name}, has E = {pct(b)} {PCT}: ')
-    if overlap(h, b):
-        text = ('their 95 % intervals overlap, so the held-out table and '
-                f'{name} are tied.')
+            f'best shipped method, {name}, has E = {pct(best["error"])} '
+            f'{PCT}. Paired over the same resamples, held-out minus {name} '
+            f'is {pct(d)} percentage points: ')
+    if paired['tie']:
+        text = f'the interval holds 0, so the held-out table and {name} are tied.'
     else:
-        lower = 'the held-out table' if h[0] < b[0] else name
-        text = (f'their 95 % intervals do not overlap, and {lower} is '
-                'lower.')
+        lower = 'the held-out table' if d[0] < 0 else name
+        text = f'the interval excludes 0, and {lower} is lower.'
     return head + text + ' ' + family_tally(fit)
 
 
@@ -94,8 +93,8 @@ def family_tally(fit):
     in 3, fitted table lower in 1 (of 4).'"""
     counts = {}
     for f in fit['held_out']:
-        v = verdict(f['held_out'], f['best'], 'best shipped method')
-        v = v.replace(' (intervals overlap)', '')
+        v = verdict(f['held_out_minus_best'], 'fitted table',
+                    'best shipped method')
         counts[v] = counts.get(v, 0) + 1
     return ('Per held-out family, against the best shipped method there: ' +
             ', '.join(f'{v} in {n}' for v, n in sorted(counts.items())) +
@@ -106,12 +105,15 @@ def held_out_table(fit):
     head = ['held-out family', 'variants',
             f'fitted table, held out: E ({PCT})',
             'best shipped method there',
-            f'its E ({PCT})', f'raw bump E ({PCT})', 'held-out vs best',
+            f'its E ({PCT})', f'raw bump E ({PCT})',
+            'held-out − best, paired (percentage points)', 'held-out vs best',
             f'in-sample (the study floor, fitted with the family): E '
             f'({PCT}; not an out-of-sample error)']
     rows = [[h['family'], h['variants'], pct_cell(h['held_out']),
              h['best_method'], pct_cell(h['best']), pct_cell(h['none']),
-             verdict(h['held_out'], h['best'], h['best_method']),
+             difference_cell(h['held_out_minus_best']),
+             verdict(h['held_out_minus_best'], 'fitted table',
+                     h['best_method']),
              pct_value(h['in_sample'])]
             for h in fit['held_out']]
     return table(head, rows)
@@ -187,13 +189,18 @@ def constants_context(fit):
                           'cls': 'n'},
                          frac_cell(c['fitted'], digits),
                          'yes' if inside(c) else 'no',
-                         pct_value(c['error_published']),
-                         pct_value(c['error_held_out']),
-                         pct_value(c['error_in_sample'])])
+                         pct_cell(c['error_published']),
+                         pct_cell(c['error_held_out']),
+                         difference_cell(c['held_out_minus_published']),
+                         verdict(c['held_out_minus_published'],
+                                 'fitted', 'published'),
+                         pct_cell(c['error_in_sample'])])
     head = ['method', 'published (dimensionless)',
             'fitted [95 % interval] (dimensionless)',
             'published inside', f'E at published ({PCT})',
             f'E fitted, held out by family ({PCT})',
+            'held out − published, paired (percentage points)',
+            'held out vs published',
             f'E fitted, in-sample ({PCT}; fitted on these variants)']
     return {'sentences': sentences,
             'table': table(head, rows) if rows else None}

@@ -172,6 +172,17 @@ PooledError pooled_error(const std::vector<double>& values, const std::vector<st
                    [&](const std::vector<std::size_t>& s) { return pooled(values, s); });
 }
 
+PairedError paired_error(const std::vector<double>& a, const std::vector<double>& b,
+                         const std::vector<std::size_t>& index, const FitOptions& o) {
+  const PooledError d = bootstrap(index, o.resamples, o.seed, [&](const std::vector<std::size_t>& s) {
+    return pooled(a, s) - pooled(b, s);
+  });
+  return {d, d.interval.contains(0.0)};
+}
+
+// A method a renderer ships: not a table fitted to some study's truth.
+bool shipped(const std::string& method) { return method.rfind("fitted", 0) != 0; }
+
 std::vector<TallyVariant> data_of(const std::vector<FitVariant>& variants,
                                   const std::vector<std::size_t>& index) {
   std::vector<TallyVariant> data;
@@ -515,16 +526,65 @@ void fit_held_out(const FitOptions& o, const std::vector<double>& none,
     h.none = pooled_error(none, index, o);
     double best = std::numeric_limits<double>::infinity();
     for (const auto& [method, values] : methods)
-      if (const double e = pooled(values, index); e < best) best = e, h.best_method = method;
-    if (!h.best_method.empty()) h.best = pooled_error(methods.at(h.best_method), index, o);
+      if (const double e = pooled(values, index); shipped(method) && e < best)
+        best = e, h.best_method = method;
     r->held_out.push_back(h);
   }
-  r->held_out_pooled = pooled_error(held, all_of(r->variants.size()), o);
+  // Paired differences once every family's held-out errors are in `held`.
+  for (HeldOutFit& h : r->held_out)
+    if (!h.best_method.empty()) {
+      const std::vector<std::size_t>& index = by_family.at(h.family);
+      h.best = pooled_error(methods.at(h.best_method), index, o);
+      h.held_out_minus_best = paired_error(held, methods.at(h.best_method), index, o);
+    }
+  const std::vector<std::size_t> all = all_of(r->variants.size());
+  r->held_out_pooled = pooled_error(held, all, o);
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& [method, values] : methods)
+    if (const double e = pooled(values, all); shipped(method) && e < best)
+      best = e, r->best_method = method;
+  if (!r->held_out.empty() && !r->best_method.empty())
+    r->held_out_minus_best = paired_error(held, methods.at(r->best_method), all, o);
 }
 
 }  // namespace
 
 namespace {
+
+// The shares' tie groups (MethodShare::group), by paired differences of
+// shares over the same resamples as the shares' own intervals.
+void share_groups(const FitOptions& o, const std::vector<double>& none,
+                  const std::map<std::string, std::vector<double>>& methods, FitResult* r) {
+  const std::vector<double>& floor = r->study_floor.solution.variant_rmse;
+  const std::vector<std::size_t> index = all_of(r->variants.size());
+  const auto share = [&](const std::string& m, const std::vector<std::size_t>& k) {
+    const double e_none = pooled(none, k);
+    return (e_none - pooled(methods.at(m), k)) / (e_none - pooled(floor, k));
+  };
+  std::vector<MethodShare*> order;
+  for (MethodShare& s : r->shares)
+    if (std::isfinite(s.share.value)) order.push_back(&s);
+  std::stable_sort(order.begin(), order.end(), [](const MethodShare* a, const MethodShare* b) {
+    return a->share.value != b->share.value ? a->share.value > b->share.value
+                                            : a->method < b->method;
+  });
+  int group = 0;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    MethodShare& lead = *order[i];
+    if (lead.group) continue;
+    lead.group = ++group, lead.leader = lead.method;
+    lead.versus_leader = {{0.0, {0.0, 0.0}}, true};
+    for (std::size_t j = i + 1; j < order.size(); ++j) {
+      MethodShare& m = *order[j];
+      if (m.group) continue;
+      const PooledError d = bootstrap(index, o.resamples, o.seed, [&](const std::vector<std::size_t>& k) {
+        return share(m.method, k) - share(lead.method, k);
+      });
+      if (!d.interval.contains(0.0)) continue;
+      m.group = group, m.leader = lead.method, m.versus_leader = {d, true};
+    }
+  }
+}
 
 // Each shipped method's pooled error and its share of the improvement the
 // study floor achieves over raw bump, paired over the same resamples.
@@ -552,6 +612,7 @@ void fit_shares(const FitOptions& o, const std::vector<double>& none,
   std::sort(r->shares.begin(), r->shares.end(), [](const MethodShare& a, const MethodShare& b) {
     return a.error.value < b.error.value;
   });
+  share_groups(o, none, methods, r);
 }
 
 // estevez2019's 1/8 refitted: on every variant, per bootstrap resample
@@ -568,8 +629,10 @@ void fit_estevez2019_constant(const FitOptions& o, FitResult* r) {
   // The golden section's range, [1e-3, 10], to its 1e-4 in log k.
   for (const double end : {1e-3, 10.0})
     if (std::abs(std::log(c.fitted / end)) < 1e-3) c.at_bound = fmt::format("k = {:g}", end);
-  c.in_sample = pooled(rmse_of(r->variants, estevez2019_table(r->grid, c.fitted)), index);
-  c.at_published = pooled(rmse_of(r->variants, estevez2019_table(r->grid, c.published)), index);
+  c.in_sample = pooled_error(rmse_of(r->variants, estevez2019_table(r->grid, c.fitted)), index, o);
+  const std::vector<double> published =
+      rmse_of(r->variants, estevez2019_table(r->grid, c.published));
+  c.at_published = pooled_error(published, index, o);
   const int resamples = std::min(o.resamples, 200);
   c.interval = bootstrap(index, resamples, o.seed, [&](const std::vector<std::size_t>& k) {
                  return fit_estevez2019_k(data_of(r->variants, k), r->grid);
@@ -581,7 +644,8 @@ void fit_estevez2019_constant(const FitOptions& o, FitResult* r) {
     const std::vector<double> g = estevez2019_table(r->grid, k);
     for (std::size_t i : members) held[i] = tally_rmse(r->variants[i].data, g);
   }
-  c.held_out = pooled(held, index);
+  c.held_out = pooled_error(held, index, o);
+  c.held_out_minus_published = paired_error(held, published, index, o);
   r->constants.push_back(c);
 }
 
@@ -607,9 +671,12 @@ void fit_deshmukh2020_constants(const FitOptions& o, FitResult* r) {
   }
   FittedConstant c;
   c.method = "deshmukh2020";
-  c.in_sample = pooled(rmse_of(r->variants, deshmukh2020_table(r->grid, fitted)), index);
-  c.at_published = pooled(rmse_of(r->variants, deshmukh2020_table(r->grid, published)), index);
-  c.held_out = pooled(held, index);
+  c.in_sample = pooled_error(rmse_of(r->variants, deshmukh2020_table(r->grid, fitted)), index, o);
+  const std::vector<double> at_published =
+      rmse_of(r->variants, deshmukh2020_table(r->grid, published));
+  c.at_published = pooled_error(at_published, index, o);
+  c.held_out = pooled_error(held, index, o);
+  c.held_out_minus_published = paired_error(held, at_published, index, o);
   c.at_bound = search.bound_reached(fitted);
   // No comma: fit.csv writes this as its unit column.
   const char* lerp = " in d = d0 + (d1 - d0) cos(delta)";
@@ -736,6 +803,10 @@ json interval_json(const PooledError& e) {
   return {e.value, e.interval.low, e.interval.high};
 }
 
+json paired_json(const PairedError& p) {
+  return {{"difference", interval_json(p.difference)}, {"tie", p.tie}};
+}
+
 json floor_json(const FloorFit& f) {
   return {{"scope", f.scope},
           {"variants", f.variants},
@@ -794,6 +865,10 @@ json result_json(const FitResult& r) {
          {"floor", floor_json(r.study_floor)},
          {"pictures", pictures_json(r)},
          {"held_out_pooled", r.held_out.empty() ? json() : interval_json(r.held_out_pooled)},
+         {"best_method", r.best_method.empty() ? json() : json(r.best_method)},
+         {"held_out_minus_best", r.held_out.empty() || r.best_method.empty()
+                                     ? json()
+                                     : paired_json(r.held_out_minus_best)},
          {"table_smoothness", r.table_smoothness},
          {"seconds", r.seconds},
          // Arrays even when empty (one scene family: nothing to hold out).
@@ -810,10 +885,17 @@ json result_json(const FitResult& r) {
                              {"in_sample_floor", h.in_sample},
                              {"none", interval_json(h.none)},
                              {"best_method", h.best_method},
-                             {"best", interval_json(h.best)}});
+                             {"best", interval_json(h.best)},
+                             {"held_out_minus_best", h.best_method.empty()
+                                                         ? json()
+                                                         : paired_json(h.held_out_minus_best)}});
   for (const MethodShare& s : r.shares) {
-    json m{
-        {"method", s.method}, {"error", interval_json(s.error)}, {"share", interval_json(s.share)}};
+    json m{{"method", s.method},
+           {"error", interval_json(s.error)},
+           {"share", interval_json(s.share)},
+           {"group", s.group ? json(s.group) : json()},
+           {"leader", s.group ? json(s.leader) : json()},
+           {"versus_leader", s.group ? paired_json(s.versus_leader) : json()}};
     if (s.on_grid_inputs)
       m["on_grid"] = {{"error", s.grid_error}, {"resolution_error", s.resolution_error}};
     j["methods"].push_back(m);
@@ -823,9 +905,10 @@ json result_json(const FitResult& r) {
                               {"constant", c.constant},
                               {"published", c.published},
                               {"fitted", {c.fitted, c.interval.low, c.interval.high}},
-                              {"error_fitted_in_sample", c.in_sample},
-                              {"error_published", c.at_published},
-                              {"error_fitted_held_out", c.held_out},
+                              {"error_fitted_in_sample", interval_json(c.in_sample)},
+                              {"error_published", interval_json(c.at_published)},
+                              {"error_fitted_held_out", interval_json(c.held_out)},
+                              {"held_out_minus_published", paired_json(c.held_out_minus_published)},
                               {"at_bound", c.at_bound.empty() ? json() : json(c.at_bound)}});
   return j;
 }
@@ -842,8 +925,14 @@ std::string result_csv(const FitResult& r) {
   row("floor", "study", r.study_floor.floor, unit);
   row("none", "study", r.study_floor.none, unit);
   for (const FloorFit& f : r.family_floors) row("floor", f.scope, f.floor, unit);
-  for (const HeldOutFit& h : r.held_out) row("fitted_table_held_out", h.family, h.held_out, unit);
+  for (const HeldOutFit& h : r.held_out) {
+    row("fitted_table_held_out", h.family, h.held_out, unit);
+    if (!h.best_method.empty())
+      row("held_out_minus_best:" + h.best_method, h.family, h.held_out_minus_best.difference, unit);
+  }
   row("fitted_table_held_out", "study", r.held_out_pooled, unit);
+  if (!r.held_out.empty() && !r.best_method.empty())
+    row("held_out_minus_best:" + r.best_method, "study", r.held_out_minus_best.difference, unit);
   for (const MethodShare& s : r.shares) {
     row("error:" + s.method, "study", s.error, unit);
     row("share:" + s.method, "study", s.share, "fraction of the floor's improvement on raw bump");
@@ -856,6 +945,16 @@ std::string result_csv(const FitResult& r) {
     const std::string symbol = c.constant.substr(0, c.constant.find(' '));
     row("constant:" + c.method + (per_method[c.method] > 1 ? ":" + symbol : ""), "study",
         {c.fitted, c.interval}, c.constant);
+  }
+  // The errors are the method's set of constants': one row each per method.
+  std::set<std::string> errors_written;
+  for (const FittedConstant& c : r.constants) {
+    if (!errors_written.insert(c.method).second) continue;
+    row("constant_error_published:" + c.method, "study", c.at_published, unit);
+    row("constant_error_in_sample:" + c.method, "study", c.in_sample, unit);
+    row("constant_error_held_out:" + c.method, "study", c.held_out, unit);
+    row("held_out_minus_published:" + c.method, "study", c.held_out_minus_published.difference,
+        unit);
   }
   return csv;
 }
@@ -875,8 +974,9 @@ void write_fit(const FitResult& r, const std::filesystem::path& out) {
 }
 
 // What fit.json holds, raised when it gains a quantity, so that a study's
-// fit step redoes a fit written without it (2: deshmukh2020's constants).
-constexpr const char* kFitContents = "2";
+// fit step redoes a fit written without it (2: deshmukh2020's constants;
+// 3: intervals on the constants' errors, paired differences, share groups).
+constexpr const char* kFitContents = "3";
 
 std::string fit_inputs_digest(const std::filesystem::path& study) {
   std::uint64_t h = fnv1a(without_run_keys(read_file((study / "report.json").string())));

@@ -54,6 +54,13 @@ struct PooledError {
   Interval interval;
 };
 
+// A pooled error minus another over the same variants, paired: both are
+// recomputed on each resample. A tie when its interval holds 0.
+struct PairedError {
+  PooledError difference;
+  bool tie = true;
+};
+
 struct FitVariant {
   std::string id, family;  // family: the variant's scene
   TallyVariant data;
@@ -75,6 +82,7 @@ struct HeldOutFit {
   PooledError none;
   std::string best_method;  // the shipped method with the lowest E on the family
   PooledError best;
+  PairedError held_out_minus_best;  // held_out - best, paired over the family's variants
 };
 
 struct MethodShare {
@@ -87,6 +95,12 @@ struct MethodShare {
   // and how far that is from their rendered E (the grid's resolution error).
   bool on_grid_inputs = false;
   double grid_error = 0.0, resolution_error = 0.0;
+  // Tie groups by share: the highest share not yet grouped leads group 1,
+  // 2, ...; each group holds every later method whose share minus the
+  // leader's, paired over the same resamples, holds 0 (the leader: 0, a tie).
+  int group = 0;
+  std::string leader;
+  PairedError versus_leader;
 };
 
 // One constant of a method, refitted. A method with several constants (deshmukh2020's d0
@@ -95,10 +109,11 @@ struct MethodShare {
 struct FittedConstant {
   std::string method, constant;  // constant: its symbol first, then where it enters
   double published = 0.0, fitted = 0.0;
-  Interval interval;          // bootstrap over variants, refitted per resample
-  double in_sample = 0.0;     // E at the fitted value, all variants
-  double at_published = 0.0;  // E at the published value, all variants
-  double held_out = 0.0;      // E with the value fitted without each family, pooled
+  Interval interval;         // bootstrap over variants, refitted per resample
+  PooledError in_sample;     // E at the fitted value, all variants
+  PooledError at_published;  // E at the published value, all variants
+  PooledError held_out;      // E with the value fitted without each family, pooled
+  PairedError held_out_minus_published;  // paired over all variants
   // Which edge of the search's range the fit on every variant reached
   // ("d at deviation 60 degrees = 1"), "" where none: E would fall further
   // outside the range, and the interval holds within it.
@@ -115,6 +130,10 @@ struct FitResult {
   std::vector<FloorFit> family_floors;
   std::vector<HeldOutFit> held_out;
   PooledError held_out_pooled;  // every family's held-out errors pooled
+  // The shipped method (not raw bump, not a fitted table) with the lowest E
+  // over every variant, and the held-out table against it, paired.
+  std::string best_method;
+  PairedError held_out_minus_best;
   std::vector<MethodShare> shares;
   std::vector<FittedConstant> constants;
   FactorTable table;  // fitted on every variant, smoothness chosen by leave-one-family-out

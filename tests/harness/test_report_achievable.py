@@ -34,11 +34,13 @@ import unittest
 SOURCE = os.path.abspath(sys.argv[1]) if len(sys.argv) > 1 else os.path.join(
     os.path.dirname(os.path.abspath(__file__)), '..', '..')
 REPORT = os.path.join(SOURCE, 'harness', 'report.py')
-sys.path[:0] = [os.path.dirname(os.path.abspath(__file__))]
+sys.path[:0] = [os.path.dirname(os.path.abspath(__file__)),
+                os.path.join(SOURCE, 'harness')]
 sys.dont_write_bytecode = True
 
 import fit_fixture as ff  # noqa: E402
 import report_fixture as fx  # noqa: E402
+from penumbra_achievable import load_fit, share_groups  # noqa: E402
 
 TMP = tempfile.mkdtemp(prefix='penumbra-report-achievable.')
 BASE = os.path.join(TMP, 'base')
@@ -137,10 +139,15 @@ class Section(unittest.TestCase):
         self.assertEqual([r[0] for r in rows],
                          ['deshmukh2020 d0', 'deshmukh2020 d1'])
         for row, c in zip(rows, (d0, d1)):
-            self.assertEqual(row[3:], ['yes' if c is d0 else 'no'] + [
-                f'{c[k] * 100:.2f}' for k in ('error_published',
-                                              'error_fitted_held_out',
-                                              'error_fitted_in_sample')])
+            self.assertEqual(row[3:], [
+                'yes' if c is d0 else 'no', pct(c['error_published']),
+                pct(c['error_fitted_held_out']),
+                pct(c['held_out_minus_published']['difference']), 'tie',
+                pct(c['error_fitted_in_sample'])])
+        k = [r for r in rows_of(page, 'achievable-constants')
+             if r[0] == 'estevez2019'][0]
+        self.assertEqual(k[6:8], [pct(d['constants'][0][
+            'held_out_minus_published']['difference']), 'fitted lower'])
 
     def test_held_out_is_the_fitted_figure(self):
         rows = rows_of(self.pages['tie'], 'achievable-held-out')
@@ -148,9 +155,22 @@ class Section(unittest.TestCase):
             self.assertEqual(row[:6], [
                 h['family'], str(h['variants']), pct(h['held_out']),
                 h['best_method'], pct(h['best']), pct(h['none'])])
-            self.assertEqual(row[7], f'{h["in_sample_floor"] * 100:.2f}')
+            self.assertEqual(row[6], pct(h['held_out_minus_best']['difference']))
+            self.assertEqual(row[8], f'{h["in_sample_floor"] * 100:.2f}')
         self.assertIn('in-sample (the study floor, fitted with the family)',
                       self.pages['tie'])
+
+    def test_share_groups_are_fit_json(self):
+        # The fixture's mitsuba3 overlaps chiang2019's interval but is not
+        # tied with it paired: a rule by overlap would put it in group 1.
+        fit = load_fit(os.path.join(TMP, 'tie', 'fit', 'fit.json'))
+        self.assertEqual([(p['method'], p['group'], p['leader'])
+                          for p in share_groups(fit['methods'])],
+                         [('chiang2019', 1, 'chiang2019'),
+                          ('mitsuba3', 2, 'mitsuba3'),
+                          ('estevez2019', 2, 'mitsuba3'),
+                          ('shading-offset(s=0.3)', 3,
+                           'shading-offset(s=0.3)')])
 
     def test_report_writes_both_figures(self):
         figs = os.listdir(os.path.join(TMP, 'tie', 'figures'))
@@ -163,16 +183,20 @@ class Section(unittest.TestCase):
         pooled = self.doc['held_out_pooled']
         self.assertIn(f'fitted table held out by scene family has E = '
                       f'{pct(pooled)}', tie)
-        self.assertIn('their 95 % intervals overlap, so the held-out table '
-                      'and chiang2019 are tied.', tie)
-        self.assertIn('their 95 % intervals do not overlap, and the held-out '
-                      'table is lower.', apart)
+        self.assertIn('Paired over the same resamples, held-out minus '
+                      'chiang2019 is 0.20 [-0.30, 0.70] percentage points: '
+                      'the interval holds 0, so the held-out table and '
+                      'chiang2019 are tied.', tie)
+        # The two errors' own intervals overlap in `apart`: the paired
+        # difference, not the overlap, decides.
+        self.assertIn('held-out minus chiang2019 is -0.60 [-0.90, -0.30] '
+                      'percentage points: the interval excludes 0, and the '
+                      'held-out table is lower.', apart)
         self.assertNotIn('are tied', apart)
         self.assertIn('Per held-out family, against the best shipped method '
                       'there: fitted table lower in 1, tie in 1 (of 2).', tie)
-        verdicts = [r[6] for r in rows_of(tie, 'achievable-held-out')]
-        self.assertEqual(verdicts, ['tie (intervals overlap)',
-                                    'fitted table lower'])
+        verdicts = [r[7] for r in rows_of(tie, 'achievable-held-out')]
+        self.assertEqual(verdicts, ['tie', 'fitted table lower'])
 
 
 class Figures(unittest.TestCase):
@@ -231,6 +255,11 @@ BAD = [  # (name, fit.json document or text, the pointer named)
      '/pictures/light_deg'),
     ('held-out-best', broken(lambda d: d['held_out'][1].update(best=None)),
      '/held_out/1/best'),
+    # a fit.json from before paired differences
+    ('no-paired', broken(lambda d: d['constants'][0].pop(
+        'held_out_minus_published')), '/constants/0/held_out_minus_published'),
+    ('paired-tie', broken(lambda d: d['held_out_minus_best'].update(tie=1)),
+     '/held_out_minus_best/tie'),
     ('malformed', '{"floor": ', 'malformed JSON')]
 
 

@@ -10,6 +10,7 @@
 #include <limits>
 #include <map>
 #include <sstream>
+#include <string>
 
 #include <nlohmann/json.hpp>
 
@@ -62,6 +63,67 @@ class Fit : public TempDirTest {
   }
 };
 
+// A paired difference is the difference of the two pooled errors it pairs,
+// its interval is an interval, and a tie is exactly an interval holding 0.
+void expect_paired(const PairedError& p, double a, double b, const std::string& what) {
+  EXPECT_NEAR(p.difference.value, a - b, 1e-15) << what;
+  EXPECT_LE(p.difference.interval.low, p.difference.interval.high) << what;
+  EXPECT_EQ(p.tie, p.difference.interval.low <= 0.0 && 0.0 <= p.difference.interval.high)
+      << what;
+}
+
+// Share groups: numbered from 1 in order of their leaders' shares; a
+// leader has the highest share of its group and every member is tied with
+// it, paired (the difference of the two shares).
+void expect_share_groups(const FitResult& r) {
+  std::map<std::string, const MethodShare*> by_method;
+  for (const MethodShare& s : r.shares) by_method[s.method] = &s;
+  int groups = 0;
+  for (const MethodShare& s : r.shares) {
+    if (!std::isfinite(s.share.value)) {
+      EXPECT_EQ(s.group, 0) << s.method;
+      continue;
+    }
+    ASSERT_GT(s.group, 0) << s.method;
+    ASSERT_TRUE(by_method.count(s.leader)) << s.leader;
+    const MethodShare& lead = *by_method.at(s.leader);
+    EXPECT_EQ(lead.group, s.group) << s.method;
+    EXPECT_EQ(lead.leader, lead.method);
+    EXPECT_LE(s.share.value, lead.share.value) << s.method;
+    EXPECT_TRUE(s.versus_leader.tie) << s.method;
+    EXPECT_NEAR(s.versus_leader.difference.value, s.share.value - lead.share.value, 1e-12);
+    groups = std::max(groups, s.group);
+  }
+  // Leaders in order of share: group g + 1's leader has a lower share than g's.
+  for (const MethodShare& a : r.shares)
+    for (const MethodShare& b : r.shares) {
+      if (a.leader == a.method && b.leader == b.method && a.group < b.group) {
+        EXPECT_GE(a.share.value, b.share.value) << a.method << " " << b.method;
+      }
+    }
+  EXPECT_GT(groups, 1) << "every method in one group: the test shows nothing";
+}
+
+// The held-out table against the best shipped method (study and each
+// family), and each refitted constant held out against its published value.
+void expect_paired_differences(const FitResult& r) {
+  const MethodShare* best = nullptr;
+  for (const MethodShare& s : r.shares)
+    if (s.method.rfind("fitted", 0) != 0 && (!best || s.error.value < best->error.value))
+      best = &s;
+  ASSERT_NE(best, nullptr);
+  EXPECT_EQ(r.best_method, best->method);
+  expect_paired(r.held_out_minus_best, r.held_out_pooled.value, best->error.value, "study");
+  for (const HeldOutFit& h : r.held_out)
+    expect_paired(h.held_out_minus_best, h.held_out.value, h.best.value, h.family);
+  ASSERT_EQ(r.constants.size(), 3u);  // k, d0, d1
+  for (const FittedConstant& c : r.constants) {
+    for (const PooledError* e : {&c.in_sample, &c.at_published, &c.held_out})
+      EXPECT_LE(e->interval.low, e->interval.high) << c.constant;
+    expect_paired(c.held_out_minus_published, c.held_out.value, c.at_published.value, c.constant);
+  }
+}
+
 TEST_F(Fit, FloorIsBelowTheShippedFactorsAndHeldOutTablesNeverSawTheirFamily) {
   const std::string folder = run_small_study("study");
   const FitResult r = fit(folder);
@@ -78,6 +140,8 @@ TEST_F(Fit, FloorIsBelowTheShippedFactorsAndHeldOutTablesNeverSawTheirFamily) {
   }
   EXPECT_EQ(on_grid, 2);  // estevez2019, deshmukh2020
   ASSERT_EQ(r.held_out.size(), 3u);
+  expect_paired_differences(r);
+  expect_share_groups(r);
 
   // Delete one family's renders and fit again: the table fitted on what is
   // left (its smoothness chosen among the same two families) is the table
@@ -160,9 +224,9 @@ TEST_F(Fit, Deshmukh2020FitIsNeverWorseThanItsPublishedConstants) {
   EXPECT_EQ(pair[0].published, kDeshmukh2020Published.d0);
   EXPECT_EQ(pair[1].published, kDeshmukh2020Published.d1);
   for (const FittedConstant& c : pair) {
-    EXPECT_EQ(c.at_published, on_grid);
-    EXPECT_LE(c.in_sample, c.at_published) << c.constant;
-    EXPECT_TRUE(std::isfinite(c.held_out)) << c.constant;
+    EXPECT_EQ(c.at_published.value, on_grid);
+    EXPECT_LE(c.in_sample.value, c.at_published.value) << c.constant;
+    EXPECT_TRUE(std::isfinite(c.held_out.value)) << c.constant;
     EXPECT_LE(c.interval.low, c.interval.high) << c.constant;
   }
   // d in (0, 1] at both ends of the grid's deviation axis.
