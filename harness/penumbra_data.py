@@ -298,7 +298,7 @@ class Report:
         self.uris = {}
         for v in self.variants:
             for r in objs(v.get('renders')):
-                for key in ('image', 'difference'):
+                for key in ('image', 'difference', 'flip_map'):
                     ctx = f'variant {v.get("id")}: {key}'
                     if r.get(key) is not None:
                         path = inside(out, r[key], src, ctx)
@@ -376,7 +376,7 @@ class LowPoly:
         self.units = obj(lp.get('units'))
         for v in self.variants:  # every image path, before any drawing
             for r in objs(v.get('renders')):
-                for key in ('image', 'difference'):
+                for key in ('image', 'difference', 'flip_map'):
                     if r.get(key) is not None:
                         inside(out, r[key], src,
                                f'lowpoly variant {v.get("id")}: {key}')

@@ -11,7 +11,8 @@ Columns: the displacement ground truth, then methods; rows: each renderer's
 renders, each followed by its difference images (method minus the same
 renderer's ground truth, as the page shows them), with a labelled
 diverging colour bar (the map the C++ side draws them with,
-study/previews.h). A column no renderer provides is dropped. The images are
+study/previews.h), and its HDR-FLIP maps against that truth, with the
+magma colour bar the FLIP papers use. A column no renderer provides is dropped. The images are
 the study's own PNGs (images/), drawn at their pixel size without
 resampling artefacts (nearest neighbour).
 """
@@ -19,6 +20,9 @@ import re
 
 import matplotlib.image as mpimg
 from matplotlib.colors import LinearSegmentedColormap, Normalize
+
+# The two kinds of picture rows below a renderer's renders, by their heads.
+PICTURE_ROWS = ('difference', 'FLIP')
 
 from penumbra_data import FRACTION, GROUND_TRUTH, column, inside, objs, stem
 from penumbra_plot import plt, save
@@ -56,7 +60,8 @@ def grid_renders(var, renderers, methods=None):
 
 def _cells(var, renderers, methods=None):
     """(columns, rows): rows of (head, [image path relative to OUT or None,
-    per column]), each renderer's images, then its differences."""
+    per column]), each renderer's images, then its differences, then its
+    FLIP maps."""
     cols, renders = grid_renders(var, renderers, methods)
     rows = []
     for rend, rs in renders:
@@ -64,6 +69,9 @@ def _cells(var, renderers, methods=None):
         diffs = [r.get('difference') if r else None for r in rs]
         if any(d is not None for d in diffs):
             rows.append((f'{rend}\ndifference', diffs))
+        flips = [r.get('flip_map') if r else None for r in rs]
+        if any(f is not None for f in flips):
+            rows.append((f'{rend}\nFLIP', flips))
     return cols, rows
 
 
@@ -155,19 +163,23 @@ def _draw_band(ax, var, out, src, cols, rows, cell):
                 img = mpimg.imread(inside(out, rel, src, ctx))
                 ax.imshow(img, interpolation='nearest', aspect='auto',
                           extent=_extent(img.shape, i, j, *cell))
-            elif not head.endswith('difference'):
+            elif not head.endswith(PICTURE_ROWS):
                 ax.text(j + 0.5, i + 0.5, 'not\nprovided', ha='center',
                         va='center', fontsize=7, color='0.5')
     ax.set_xlim(0, len(cols))  # after imshow, which sets them per image
     ax.set_ylim(len(rows), 0)
 
 
-def _difference_bar(fig, bottom, left):
+# Inches of the strip a colour bar and its label take at the figure's foot.
+BAR_STRIP = 0.9
+
+
+def _difference_bar(fig, base, left):
     """The difference images' colour bar, labelled with its unit, in a
-    strip `bottom` inches high at the foot of the figure, `left` inches
-    from its left edge."""
+    strip BAR_STRIP inches high `base` inches above the foot of the
+    figure, `left` inches from its left edge."""
     h, w = fig.get_figheight(), fig.get_figwidth()
-    cax = fig.add_axes((left / w, 0.62 * bottom / h,
+    cax = fig.add_axes((left / w, (base + 0.62 * BAR_STRIP) / h,
                         min(0.9 - left / w, 4.0 / w), 0.12 / h))
     bar = fig.colorbar(plt.cm.ScalarMappable(
         Normalize(-DIFF_LIMIT, DIFF_LIMIT), DIFF_MAP), cax=cax,
@@ -175,6 +187,19 @@ def _difference_bar(fig, bottom, left):
     bar.set_label(f'difference: method − the same renderer\'s ground truth\n'
                   f'({FRACTION}); saturates at ±{DIFF_LIMIT:g}; grey: no '
                   'object', fontsize=8)
+    bar.ax.tick_params(labelsize=8)
+
+
+def _flip_bar(fig, base, left):
+    """The FLIP maps' colour bar, as _difference_bar places its own."""
+    h, w = fig.get_figheight(), fig.get_figwidth()
+    cax = fig.add_axes((left / w, (base + 0.62 * BAR_STRIP) / h,
+                        min(0.9 - left / w, 4.0 / w), 0.12 / h))
+    bar = fig.colorbar(plt.cm.ScalarMappable(Normalize(0, 1), 'magma'),
+                       cax=cax, orientation='horizontal')
+    bar.set_label('HDR-FLIP against the same renderer\'s ground truth\n'
+                  '(0 no visible difference; 67.02 pixels per degree)',
+                  fontsize=8)
     bar.ax.tick_params(labelsize=8)
 
 
@@ -188,6 +213,7 @@ def grid_fig(var, out, src, renderers, methods=None, width=None):
         return None
     parts = bands(cols, rows) if methods is None else [(cols, rows)]
     diffs = any(h.endswith('difference') for _, rs in parts for h, _ in rs)
+    flips = any(h.endswith('FLIP') for _, rs in parts for h, _ in rs)
     nc = max(len(c) for c, _ in parts)
     head = HEAD_W if width is None else 0.3
     cw = CELL_W if width is None else (width - head) / nc
@@ -195,7 +221,7 @@ def grid_fig(var, out, src, renderers, methods=None, width=None):
     title = 0.5 if width is None else 0.0
     # A band: its rows and, above them, its column heads (two lines).
     heights = [ch * len(rs) + _head_height(bc, cw) for bc, rs in parts]
-    bottom = 0.9 if diffs else 0.0
+    bottom = BAR_STRIP * (diffs + flips)
     fig = plt.figure(figsize=(cw * nc + head, sum(heights) + bottom + title))
     fw, fh = fig.get_figwidth(), fig.get_figheight()
     top = fh - title
@@ -207,7 +233,9 @@ def grid_fig(var, out, src, renderers, methods=None, width=None):
                            cw * len(bc) / fw, ch * len(rs) / fh))
         _draw_band(ax, var, out, src, bc, rs, (cw, ch))
     if diffs:
-        _difference_bar(fig, bottom, head)
+        _difference_bar(fig, BAR_STRIP * flips, head)
+    if flips:
+        _flip_bar(fig, 0.0, head)
     if width is None:
         fig.suptitle(str(var.get('label', var.get('id'))), fontsize=9,
                      wrap=True, va='bottom', y=(fh - 0.45) / fh)

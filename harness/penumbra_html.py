@@ -50,7 +50,7 @@ VARIANT_METRICS = (               # (metric, scale, column head)
 def image_grid(var, uris, missing, renderers):
     """Every method's images, in bands of at most BAND_COLUMNS columns
     (ground truth, then methods; Chiang 2019, Fig. 4): per band, rows of
-    renderers (image row, then difference row) with something in it."""
+    renderers (image row, difference row, FLIP row) with something in it."""
     cols, renders = grid_renders(var, renderers)
     return [band_cells(bc, rs, uris, missing)
             for bc, rs in bands(cols, renders)]
@@ -67,11 +67,13 @@ def band_cells(cols, renders, uris, missing):
             img(r.get('image'), f'{rend} {c}', f'{rend} / {c}') if r else
             grid_cell(na=missing.get((rend, c), 'not rendered'))
             for c, r in zip(cols, rs)]})
-        if any(r and r.get('difference') is not None for r in rs):
-            rows.append({'head': 'difference', 'cells': [
-                img(r.get('difference'), f'{rend} {c} difference',
-                    f'{c} − displacement ({rend})') if r else grid_cell()
-                for c, r in zip(cols, rs)]})
+        for key, head, cap in (
+                ('difference', 'difference', '{} − displacement ({})'),
+                ('flip_map', 'FLIP', 'FLIP, {} against displacement ({})')):
+            if any(r and r.get(key) is not None for r in rs):
+                rows.append({'head': head, 'cells': [
+                    img(r.get(key), f'{rend} {c} {head}', cap.format(c, rend))
+                    if r else grid_cell() for c, r in zip(cols, rs)]})
     return {'cols': cols, 'rows': rows}
 
 

@@ -122,7 +122,8 @@ def shadow_context(lp, figs):
 
 def image_grid(lp, var, uris):
     """Columns: the analytic truth, then each offset; rows: per renderer
-    its images, then their differences from its analytic render."""
+    its images, then their differences from its analytic render and their
+    FLIP maps against it."""
     renders = objs(var.get('renders'))
     at = {(str(r.get('renderer')), str(r.get('offset'))): r for r in renders}
     cols = list(dict.fromkeys([LP_TRUTH] + [
@@ -144,12 +145,13 @@ def image_grid(lp, var, uris):
             if r and r.get('image') is not None else
             grid_cell(na=why.get((rend, c), 'not rendered'))
             for c, r in zip(cols, rs)]})
-        if any(r and r.get('difference') is not None for r in rs):
-            rows.append({'head': 'difference', 'cells': [grid_cell(
-                figure(uris[r['difference']], f'{rend} {c} difference',
-                            f'{c} − analytic ({rend})'))
-                if r and r.get('difference') is not None else grid_cell()
-                for c, r in zip(cols, rs)]})
+        for key, head, cap in (('difference', 'difference', '{} − analytic ({})'),
+                               ('flip_map', 'FLIP', 'FLIP, {} against analytic ({})')):
+            if any(r and r.get(key) is not None for r in rs):
+                rows.append({'head': head, 'cells': [grid_cell(
+                    figure(uris[r[key]], f'{rend} {c} {head}', cap.format(c, rend)))
+                    if r and r.get(key) is not None else grid_cell()
+                    for c, r in zip(cols, rs)]})
     return {'cols': ['analytic surface (truth)' if c == LP_TRUTH else c
                      for c in cols], 'rows': rows}
 
@@ -157,7 +159,7 @@ def image_grid(lp, var, uris):
 def _embed(v, uris, out, src):
     """Read a variant's images into uris (their page URLs), once each."""
     for r in objs(v.get('renders')):
-        for key in ('image', 'difference'):
+        for key in ('image', 'difference', 'flip_map'):
             rel = r.get(key)
             if rel is not None and rel not in uris:
                 ctx = f'lowpoly variant {v.get("id")}: {key}'

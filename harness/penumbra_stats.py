@@ -25,7 +25,8 @@ from penumbra_data import (
     obj, objs)
 
 MEAN_METRICS = (PRIMARY, 'profile.rmse_terminator', 'view.rmse_grazing',
-                'profile.position_error_deg', 'image.rmse', 'image.ssim')
+                'profile.position_error_deg', 'image.rmse', 'image.ssim',
+                'image.flip')
 BOOTSTRAP = 2000
 # The handful of methods a profile, line or grid figure shows by default
 # (raw bump included): more lines than this in one panel no longer read.

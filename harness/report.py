@@ -81,7 +81,7 @@ report.json ("format": "penumbra-report", "version": 1; any number may be
 null): penumbra, study{name,file}, units{}, axes[{pointer,label,values}],
 renderers[{id,version,methods[],note}], variants[{id,scene,label,
 axis_values[], renders[{renderer,representation,method,image,difference,
-profile{bin_degrees,value[],count[]}}]}], comparisons[{variant,scene,
+flip_map,profile{bin_degrees,value[],count[]}}]}], comparisons[{variant,scene,
 renderer,method,reference,profile{rmse_terminator,...},image{rmse,ssim,...}}],
 ranking{metric,reference,renderer,per_scene[{scene,methods[{method,mean,
 count}]}],overall[...]}, missing[{renderer,method,why}],
@@ -89,7 +89,7 @@ failures[{render,error}], plots[{metric,x,y,kind,renderer}], lowpoly (null,
 or the low-poly section: axes[], convergence_axis (an axes pointer or null),
 renderers[{id,offsets[]}], missing[{renderer,offset or scene,why}],
 variants[{id,scene,label,axis_values[],renders[{renderer,offset ("analytic":
-the untessellated truth),triangles,image,difference,exr,profile{}}]}],
+the untessellated truth),triangles,image,difference,flip_map,exr,profile{}}]}],
 comparisons[{variant,scene,axis_values[],renderer,offset,reference
 ("<renderer>:analytic"),shadow{darkened_fraction,max_darkening,
 lost_shadow_fraction,shadow_shift_px,shadowed_pixels,...},profile{},

@@ -51,7 +51,7 @@ Command add_figure_command(CLI::App& app, SharedOptions&) {
   cmd->add_option(
       "--metric", a->metric,
       "line and ranking: combined_relative_error (default), profile.rmse_terminator, "
-      "view.rmse_grazing, profile.position_error_deg, image.rmse or image.ssim; "
+      "view.rmse_grazing, profile.position_error_deg, image.rmse, image.ssim or image.flip; "
       "heatmap: any comparison metric");
   cmd->add_option("--methods", a->methods,
                   "comma-separated method labels in the order to draw, or all (default: none, the "

@@ -13,7 +13,7 @@
 //              filtering section of a study, study/filtering_study.h);
 //   comparison the metrics of one comparison of two images (kept between a
 //              study's runs, study/comparison_store.h);
-//   previews   the drawing of a study's preview and difference PNGs (kept
+//   previews   the drawing of a study's preview, difference and FLIP PNGs (kept
 //              between a study's runs, study/previews.h).
 #pragma once
 

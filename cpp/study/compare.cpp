@@ -33,6 +33,11 @@ RenderRow render_row(const Plan& plan, const RenderedImages& r,
     row.difference = "images/" + stem + "-diff.png";
     pictures.difference(r.images[i], digests[i], r.images[truth], digests[truth], scale,
                         row.difference);
+    // A folder of their own: "-flip.png" is also how the preview of method
+    // mitsuba3-flip ends.
+    const std::string flip = "images/flip/" + stem + ".png";
+    if (pictures.flip(r.images[i], digests[i], r.images[truth], digests[truth], flip))
+      row.flip_map = flip;
   }
   row.profile = terminator_profile(r.images[i], scale, ProfileOptions{});
   return row;

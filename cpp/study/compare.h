@@ -29,6 +29,7 @@ struct RenderRow {
   std::size_t job = 0;
   std::string image;       // preview PNG, relative to the study folder
   std::string difference;  // difference PNG against the truth, "" if none
+  std::string flip_map;    // HDR-FLIP map PNG against the truth, "" if none
   Profile profile;
 };
 

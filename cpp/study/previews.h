@@ -1,6 +1,6 @@
 // The PNG pictures of a study's renders in its images/ folder: each render's
-// preview (NAME.png) and its difference from its ground truth
-// (NAME-diff.png). Encoding some 3,700 PNGs was a third of a warm run of the
+// preview (NAME.png), its difference from its ground truth (NAME-diff.png)
+// and its HDR-FLIP map against that truth (flip/NAME.png). Encoding some 3,700 PNGs was a third of a warm run of the
 // default study, so a stamp (images/.inputs) records what each picture was
 // drawn from, and a picture drawn from the same pixels by the same drawing
 // code is kept rather than drawn again.
@@ -39,6 +39,12 @@ class PreviewFolder {
   // The same for the difference of `test` from `reference`.
   void difference(const Image& test, std::uint64_t test_digest, const Image& reference,
                   std::uint64_t reference_digest, double scale, const std::string& relative);
+
+  // The HDR-FLIP map of `test` against `reference` (analysis/flip.h, the
+  // study's viewer) in magma colours, as the FLIP papers show them. False,
+  // and nothing written, where FLIP refuses the images (no R, G and B).
+  bool flip(const Image& test, std::uint64_t test_digest, const Image& reference,
+            std::uint64_t reference_digest, const std::string& relative);
 
   // Writes the stamp: every picture drawn or kept since construction.
   void save() const;

@@ -41,11 +41,13 @@ double quantity_of(const ComparisonRow& row, std::size_t q) {
       return row.image.rmse;
     case 5:
       return row.image.ssim;
+    case 6:
+      return row.image.flip;
     default:
       return row.view.bias_grazing;
   }
 }
-constexpr std::size_t kTerm = 1, kView = 2, kBias = 6, kQuantities = 7;
+constexpr std::size_t kTerm = 1, kView = 2, kBias = 7, kQuantities = 8;
 
 ErrorTable error_table(const Plan& plan, const std::vector<ComparisonRow>& rows,
                        const std::vector<char>& selected) {
@@ -193,7 +195,8 @@ const std::vector<RankedQuantity>& ranked_quantities() {
       {"view.rmse_grazing", "fraction of albedo*E/pi"},
       {"profile.position_error_deg", "degrees"},
       {"image.rmse", "W m^-2 sr^-1"},
-      {"image.ssim", "unitless, [-1, 1], 1 = identical"}};
+      {"image.ssim", "unitless, [-1, 1], 1 = identical"},
+      {"image.flip", "unitless, [0, 1], 0 = identical (HDR-FLIP at 67.02 pixels per degree)"}};
   return q;
 }
 

@@ -512,6 +512,7 @@ json render_json(const ReportInputs& in, const RenderRow& r) {
   json out = {{"renderer", to_string(job.renderer)},
               {"image", r.image},
               {"difference", r.difference.empty() ? json() : json(r.difference)},
+              {"flip_map", r.flip_map.empty() ? json() : json(r.flip_map)},
               {"exr", RenderCache::relative_exr(job.key)},
               {"profile", profile_json(r.profile)}};
   if (in.plan.variants[job.variant].section == SectionKind::kBump) {

@@ -157,7 +157,7 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
 
 // The study folder's subfolders, cleared of what killed runs left.
 void prepare_folders(const fs::path& out, const StudyOptions& options, StudyRunStats& stats) {
-  for (const char* sub : {"cache", "images"}) {
+  for (const char* sub : {"cache", "images", "images/flip"}) {
     std::error_code ec;
     fs::create_directories(out / sub, ec);
     if (ec)
@@ -175,7 +175,7 @@ void prepare_folders(const fs::path& out, const StudyOptions& options, StudyRunS
 // found bad late) leaves no empty folders behind, nor one it created.
 void remove_empty_folders(const fs::path& out, bool out_existed) {
   std::error_code ec;
-  for (const char* sub : {"cache", "images"})
+  for (const char* sub : {"cache", "images/flip", "images"})
     if (fs::is_empty(out / sub, ec) && !ec) fs::remove(out / sub, ec);
   // The lock file of a folder this run made (its lock is released by now).
   if (!out_existed) fs::remove(out / kFolderLockName, ec);

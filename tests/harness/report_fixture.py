@@ -83,12 +83,14 @@ def renders_and_comparisons(v, out, methods):
             name = f'images/{v["id"]}-{rend}-{rep}-{meth}'.replace('(', '_').replace(')', '_')
             png(os.path.join(out, name + '.png'), (120, 120, 120))
             r = {'renderer': rend, 'representation': rep, 'method': meth,
-                 'image': name + '.png', 'difference': None,
+                 'image': name + '.png', 'difference': None, 'flip_map': None,
                  'profile': profile('displacement' if rep == 'displacement' else meth,
                                     methods.index(meth) if meth in methods else 0, v['wiggle'])}
             if rep == 'bump':
                 png(os.path.join(out, name + '-diff.png'), (255, 200, 200))
                 r['difference'] = name + '-diff.png'
+                png(os.path.join(out, name + '-flip.png'), (60, 15, 100))
+                r['flip_map'] = name + '-flip.png'
                 f = factor(meth, methods.index(meth), v['amp'])
                 term = 0.05 * (1 + v['wiggle']) * f
                 comps.append({
@@ -124,7 +126,7 @@ def ranking_stats(vs, methods, scene=None):
         means = {'combined_relative_error': {'mean': c, 'ci': ci}}
         for key, unit_scale in (('profile.rmse_terminator', 0.05), ('view.rmse_grazing', 0.02),
                                 ('profile.position_error_deg', 2.0), ('image.rmse', 0.01),
-                                ('image.ssim', 0.9)):
+                                ('image.ssim', 0.9), ('image.flip', 0.05)):
             mm, mci = mean_ci([x * unit_scale for x in cs])
             means[key] = {'mean': mm, 'ci': mci}
         imp, ici = mean_ci([1 - x for x in cs])

@@ -1,4 +1,4 @@
-// A study's preview and difference PNGs (study/previews.h): a picture drawn
+// A study's preview, difference and FLIP PNGs (study/previews.h): a picture drawn
 // from the same pixels is kept, byte for byte what drawing it again would
 // give; anything else that feeds it, and a picture that is gone, draws it
 // again; a run stopped while drawing keeps nothing.
@@ -9,6 +9,8 @@
 #include <fstream>
 #include <string>
 
+#include "analysis/flip.h"
+#include "analysis/magma.h"
 #include "image/image_io.h"
 #include "study/comparison_store.h"
 #include "study/previews.h"
@@ -102,6 +104,43 @@ TEST_F(PreviewFolderTest, DrawsAgainWhatChanged) {
   mark("images/t-diff.png");
   EXPECT_EQ(draw(changed, ramp(0.8f), 0.5), 1u) << "so does the scale";
   EXPECT_EQ(text("images/t-diff.png"), fresh_difference(changed, ramp(0.8f), 0.5));
+}
+
+// The FLIP map is drawn from the pixels of both renders, is the magma PNG of
+// the map the study's mean FLIP is taken from (HDR, the default viewer), and
+// is kept like the others.
+TEST_F(PreviewFolderTest, FlipMapsAreTheMeasuredMapsAndAreKeptLikeTheOthers) {
+  const Image test = ramp(1.0f), truth = ramp(0.9f);
+  const auto flip = [&](const Image& t, const Image& r, std::size_t* drawn) {
+    PreviewFolder folder(dir_);
+    const bool made = folder.flip(t, pixel_digest(t), r, pixel_digest(r), "images/t-flip.png");
+    folder.save();
+    *drawn = folder.drawn();
+    return made;
+  };
+  const auto fresh = [&](const Image& t, const Image& r) {
+    FlipOptions options;
+    options.range = FlipRange::kHdr;
+    const FlipImage map = flip_map(t, r, options);
+    write_png_rgb8(path("fresh-flip.png"), map.width, map.height, magma_rgb8(map.error));
+    return text("fresh-flip.png");
+  };
+  std::size_t drawn = 0;
+  ASSERT_TRUE(flip(test, truth, &drawn));
+  EXPECT_EQ(drawn, 1u);
+  EXPECT_EQ(text("images/t-flip.png"), fresh(test, truth));
+  mark("images/t-flip.png");
+  EXPECT_TRUE(flip(test, truth, &drawn));
+  EXPECT_EQ(drawn, 0u);
+  EXPECT_EQ(text("images/t-flip.png"), "kept");
+  EXPECT_TRUE(flip(test, ramp(0.8f), &drawn));
+  EXPECT_EQ(drawn, 1u) << "the truth feeds the map";
+  EXPECT_EQ(text("images/t-flip.png"), fresh(test, ramp(0.8f)));
+
+  // FLIP is defined against an all-black truth too (flip.h: its exposures
+  // are then [0, 0]), so such a render still gets its map.
+  EXPECT_TRUE(flip(test, ramp(0.0f), &drawn));
+  EXPECT_EQ(text("images/t-flip.png"), fresh(test, ramp(0.0f)));
 }
 
 TEST_F(PreviewFolderTest, DrawsAgainWhatIsGoneOrEmpty) {

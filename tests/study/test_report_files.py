@@ -279,6 +279,7 @@ def main():
                       f'no file {r["reference_exr"]}')
                 check((r['width_px'], r['height_px']) == ('24', '24'), 'resolution')
             check_flip(out, table[:3])
+            check_flip_maps(out, report, table)
             truths = {r['truth'] for r in table}
             check(truths == ({'own', 'evaluator'} if with_povray else {'own'}), f'truths {truths}')
         print(f'{"FAILED" if failures else "ok"}: {len(failures)} failures '
@@ -307,6 +308,38 @@ def check_flip(out, rows):
                               ('image_flip_ci_high', flip['mean_ci'][1])):
             check(math.isclose(float(r[column]), value, rel_tol=1e-12, abs_tol=1e-15),
                   f'{column} {r[column]} against compare --flip {value}')
+
+
+def check_flip_maps(out, report, rows):
+    """Each render's FLIP map in the report is the PNG `penumbra compare
+    --flip-map` draws for the render against its own renderer's truth
+    (same bytes); truths have none."""
+    maps, pictures = {}, []
+    for v in report['variants'] + report['lowpoly']['variants']:
+        for r in v['renders']:
+            pictures += [r[k] for k in ('image', 'difference', 'flip_map') if r[k]]
+            truth = r.get('representation') == 'displacement' or r.get('offset') == 'analytic'
+            check((r['flip_map'] is None) == truth,
+                  f'{r["exr"]}: flip_map {r["flip_map"]} (a truth has none, a test one)')
+            maps[r['exr']] = r['flip_map']
+    # A picture of one render never overwrites another's (a FLIP map named
+    # NAME-flip.png was the preview of method mitsuba3-flip).
+    check(len(set(pictures)) == len(pictures), 'two pictures share a file name')
+    own = [r for r in rows if r['truth'] == 'own'][:3]
+    check(len(own) == 3, 'three rows against their own renderer\'s truth')
+    for k, r in enumerate(own):
+        drawn = os.path.join(out, f'flip-check-{k}.png')
+        run = subprocess.run(
+            [BINARY, 'compare', os.path.join(out, r['reference_exr']),
+             os.path.join(out, r['exr']), '--flip-map', drawn],
+            capture_output=True, text=True, check=False)
+        check(run.returncode == 0, f'compare --flip-map exited {run.returncode}: {run.stderr[-300:]}')
+        study = maps.get(r['exr'])
+        check(study is not None, f'{r["exr"]}: no flip_map in report.json')
+        if run.returncode != 0 or study is None:
+            continue
+        with open(drawn, 'rb') as a, open(os.path.join(out, study), 'rb') as b:
+            check(a.read() == b.read(), f'{study} differs from compare --flip-map\'s')
 
 
 if __name__ == '__main__':

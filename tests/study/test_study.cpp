@@ -151,8 +151,9 @@ TEST_F(Study, ComparisonsAreKeptBetweenRunsAndGiveTheSameReport) {
   ASSERT_TRUE(first.complete());
   EXPECT_EQ(first.comparisons_kept, 0u);
   EXPECT_EQ(first.comparisons_measured, 2u * 3);  // 3 methods x 2 variants
-  // Every render's preview, and each test render's difference from its truth.
-  EXPECT_EQ(first.pictures_drawn, 2u * (1 + 3 + 3));
+  // Every render's preview, and each test render's difference from its truth
+  // and FLIP map against it.
+  EXPECT_EQ(first.pictures_drawn, 2u * (1 + 3 + 3 + 3));
   EXPECT_EQ(first.pictures_kept, 0u);
   const std::string report = report_without_provenance(path("out/report.json"));
   const std::string csv = read_text(path("out/metrics.csv"));
@@ -195,8 +196,8 @@ TEST_F(Study, ComparisonsAreKeptBetweenRunsAndGiveTheSameReport) {
   const StudyRunStats changed = run_study(study, o);
   EXPECT_EQ(changed.comparisons_measured, 1u);
   EXPECT_EQ(changed.comparisons_kept, first.comparisons_measured - 1);
-  EXPECT_EQ(changed.pictures_drawn, 2u) << "its preview and its difference";
-  EXPECT_EQ(changed.pictures_kept, first.pictures_drawn - 2);
+  EXPECT_EQ(changed.pictures_drawn, 3u) << "its preview, its difference and its FLIP map";
+  EXPECT_EQ(changed.pictures_kept, first.pictures_drawn - 3);
 }
 
 // The evaluator renders the methods of a variant in one pass; each cache
