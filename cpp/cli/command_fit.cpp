@@ -74,6 +74,7 @@ int fit_into(const FitArgs& a, const CommandContext& c) {
   FitOptions options;
   options.folder = a.folder;
   options.resamples = a.resamples;
+  options.jobs = c.parallelism.threads();
   const auto start = std::chrono::steady_clock::now();
   options.progress = [&c, start](const std::string& line) {
     const std::chrono::duration<double> s = std::chrono::steady_clock::now() - start;

@@ -4,12 +4,14 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <fstream>
 #include <map>
 #include <optional>
 #include <random>
 #include <set>
 #include <stdexcept>
+#include <thread>
 #include <tuple>
 
 #include <fmt/format.h>
@@ -21,6 +23,7 @@
 #include "image/image_io.h"
 #include "renderers/code_digest.h"
 #include "scene/factor_table_file.h"
+#include "util/parallel.h"
 #include "scene/scene_json.h"
 #include "study/provenance.h"
 #include "util/files.h"
@@ -471,31 +474,87 @@ FloorFit floor_over(const FitResult& r, const std::string& scope,
   return f;
 }
 
-// Per variant of `test`, the RMSE of the table fitted on `train` with
-// smoothness w.
-void held_out_rmse(const FitResult& r, const std::vector<std::size_t>& train,
-                   const std::vector<std::size_t>& test, double w, std::vector<double>* rmse) {
-  FloorOptions options;
-  options.smoothness = w;
-  const FloorSolution s = solve_floor(r.grid, data_of(r.variants, train), options);
-  for (std::size_t i : test) (*rmse)[i] = tally_rmse(r.variants[i].data, s.g);
+// The smoothed floor solves of a fit, each (training variants, smoothness)
+// solved once: the leave-one-family-out choice of smoothness within each
+// held-out family's complement solves the same pairs of families left out
+// again, and the table's choice repeats the held-out fits. A solve is
+// deterministic, so sharing and the order of solving change no bit.
+class FloorSolves {
+ public:
+  using Key = std::pair<std::vector<std::size_t>, double>;
+  FloorSolves(const FitResult& r, int jobs) : r_(r), jobs_(jobs) {}
+
+  // Solves the keys not solved yet, `jobs` at a time.
+  void solve(const std::vector<Key>& wanted) {
+    std::vector<Key> missing;
+    for (const Key& k : wanted)
+      if (!solved_.count(k) && std::find(missing.begin(), missing.end(), k) == missing.end())
+        missing.push_back(k);
+    std::vector<FloorSolution> out(missing.size());
+    std::vector<std::exception_ptr> failed(missing.size());
+    run_parallel(jobs_, missing.size(), [&](std::size_t i) {
+      try {
+        FloorOptions options;
+        options.smoothness = missing[i].second;
+        out[i] = solve_floor(r_.grid, data_of(r_.variants, missing[i].first), options);
+      } catch (...) {
+        failed[i] = std::current_exception();
+      }
+    });
+    for (const std::exception_ptr& e : failed)
+      if (e) std::rethrow_exception(e);
+    for (std::size_t i = 0; i < missing.size(); ++i) solved_[missing[i]] = std::move(out[i]);
+  }
+
+  // Per variant of `test`, the RMSE of the table fitted on `train` with
+  // smoothness w (solved first where it is not yet).
+  void held_out_rmse(const std::vector<std::size_t>& train, const std::vector<std::size_t>& test,
+                     double w, std::vector<double>* rmse) {
+    solve({{train, w}});
+    const FloorSolution& s = solved_.at({train, w});
+    for (std::size_t i : test) (*rmse)[i] = tally_rmse(r_.variants[i].data, s.g);
+  }
+
+ private:
+  const FitResult& r_;
+  int jobs_;
+  std::map<Key, FloorSolution> solved_;
+};
+
+// The training variants of family f's fold when choosing a smoothness
+// within `within`: every family of `within` but f.
+std::vector<std::size_t> fold_train(const FitResult& r, const std::set<std::string>& within,
+                                    const std::string& f) {
+  std::set<std::string> left_out;
+  for (const FitVariant& v : r.variants)
+    if (!within.count(v.family) || v.family == f) left_out.insert(v.family);
+  return without(r.variants, left_out);
+}
+
+// The solves choose_smoothness(within) needs.
+std::vector<FloorSolves::Key> smoothness_solves(const FitResult& r,
+                                                const std::set<std::string>& within,
+                                                const FitOptions& o) {
+  std::vector<FloorSolves::Key> keys;
+  if (within.size() < 2) return keys;
+  for (const double w : o.smoothness)
+    for (const std::string& f : within) keys.push_back({fold_train(r, within, f), w});
+  return keys;
 }
 
 // The candidate smoothness with the lowest leave-one-family-out error
 // within `within` (families); the middle candidate when there is one family.
 double choose_smoothness(const FitResult& r, const std::set<std::string>& within,
-                         const FitOptions& o) {
+                         const FitOptions& o, FloorSolves& solves) {
   if (within.size() < 2) return o.smoothness[o.smoothness.size() / 2];
+  solves.solve(smoothness_solves(r, within, o));
   const auto by_family = families(r.variants);
   double best = o.smoothness.front(), best_error = std::numeric_limits<double>::infinity();
   for (const double w : o.smoothness) {
     std::vector<double> rmse(r.variants.size(), std::numeric_limits<double>::quiet_NaN());
     std::vector<std::size_t> scored;
     for (const std::string& f : within) {
-      std::set<std::string> left_out;
-      for (const auto& [name, _] : by_family)
-        if (!within.count(name) || name == f) left_out.insert(name);
-      held_out_rmse(r, without(r.variants, left_out), by_family.at(f), w, &rmse);
+      solves.held_out_rmse(fold_train(r, within, f), by_family.at(f), w, &rmse);
       scored.insert(scored.end(), by_family.at(f).begin(), by_family.at(f).end());
     }
     const double e = pooled(rmse, scored);
@@ -507,20 +566,41 @@ double choose_smoothness(const FitResult& r, const std::set<std::string>& within
 // Each family held out: the table fitted on the others (smoothness chosen
 // among them) on it, beside the floor and the best shipped method there.
 void fit_held_out(const FitOptions& o, const std::vector<double>& none,
-                  const std::map<std::string, std::vector<double>>& methods, FitResult* r) {
+                  const std::map<std::string, std::vector<double>>& methods, FloorSolves& solves,
+                  FitResult* r) {
   const auto by_family = families(r->variants);
+  const auto others = [&](const std::string& family) {
+    std::set<std::string> out;
+    for (const auto& [name, _] : by_family)
+      if (name != family) out.insert(name);
+    return out;
+  };
+  // Every family's folds at once: each pair of families left out is shared
+  // by two of them.
+  if (by_family.size() >= 2) {
+    say(o, fmt::format("held out: choosing the smoothness of {} families' tables",
+                       by_family.size()));
+    std::vector<FloorSolves::Key> keys;
+    for (const auto& [family, _] : by_family)
+      for (FloorSolves::Key& k : smoothness_solves(*r, others(family), o)) keys.push_back(k);
+    solves.solve(keys);
+  }
   std::vector<double> held(r->variants.size(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<FloorSolves::Key> held_keys;
   for (const auto& [family, index] : by_family) {
     if (by_family.size() < 2) break;
-    say(o, fmt::format("held out: {}", family));
-    std::set<std::string> others;
-    for (const auto& [name, _] : by_family)
-      if (name != family) others.insert(name);
     HeldOutFit h;
     h.family = family;
     h.variants = index.size();
-    h.smoothness = choose_smoothness(*r, others, o);
-    held_out_rmse(*r, without(r->variants, {family}), index, h.smoothness, &held);
+    h.smoothness = choose_smoothness(*r, others(family), o, solves);
+    held_keys.push_back({without(r->variants, {family}), h.smoothness});
+    r->held_out.push_back(h);
+  }
+  if (!held_keys.empty()) say(o, "held out: fitting each family's table without it");
+  solves.solve(held_keys);
+  for (HeldOutFit& h : r->held_out) {
+    const std::vector<std::size_t>& index = by_family.at(h.family);
+    solves.held_out_rmse(without(r->variants, {h.family}), index, h.smoothness, &held);
     h.held_out = pooled_error(held, index, o);
     h.in_sample = pooled(rmse_of(r->variants, r->study_floor.solution.g), index);
     h.none = pooled_error(none, index, o);
@@ -528,7 +608,6 @@ void fit_held_out(const FitOptions& o, const std::vector<double>& none,
     for (const auto& [method, values] : methods)
       if (const double e = pooled(values, index); shipped(method) && e < best)
         best = e, h.best_method = method;
-    r->held_out.push_back(h);
   }
   // Paired differences once every family's held-out errors are in `held`.
   for (HeldOutFit& h : r->held_out)
@@ -784,10 +863,14 @@ FitResult fit_study(const FitOptions& o) {
   for (const auto& [family, index] : families(r.variants))
     r.family_floors.push_back(floor_over(r, family, index, none, o));
   fit_shares(o, none, methods, &r);
-  fit_held_out(o, none, methods, &r);
+  const int jobs =
+      o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  FloorSolves solves(r, jobs);
+  fit_held_out(o, none, methods, solves, &r);
   std::set<std::string> all_families;
   for (const FitVariant& v : r.variants) all_families.insert(v.family);
-  r.table_smoothness = choose_smoothness(r, all_families, o);
+  say(o, "the table: choosing its smoothness over every family");
+  r.table_smoothness = choose_smoothness(r, all_families, o, solves);
   FloorOptions options;
   options.smoothness = r.table_smoothness;
   r.table = {r.grid,

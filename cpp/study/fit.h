@@ -44,6 +44,8 @@ struct FitOptions {
   std::vector<double> smoothness = {0.1, 1.0, 10.0};
   int resamples = 2000;  // bootstrap over variants
   std::uint64_t seed = 1;
+  // Floor solves at once (0: the cores). The result does not depend on it.
+  int jobs = 0;
   std::function<void(const std::string&)> progress;  // one line per step
 };
 

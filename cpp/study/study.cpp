@@ -394,6 +394,7 @@ void fit_study_folder(const fs::path& out, const StudyOptions& options, StudyRun
   const auto start = std::chrono::steady_clock::now();
   FitOptions fit;
   fit.folder = out.string();
+  fit.jobs = options.parallelism.threads();
   fit.progress = [&](const std::string& line) { log(line); };
   FitResult result;
   try {
