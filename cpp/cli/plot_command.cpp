@@ -22,7 +22,8 @@ int run_plot_command(const std::vector<std::string>& arguments, const CommandCon
       fs::remove(path, ignored);
     }
   } remove{log};
-  const ProcessResult p = run_plot_process(arguments, log, "", kFiguresTimeoutS);
+  // In the caller's folder: the study folder and -o are paths as typed.
+  const ProcessResult p = run_plot_process(arguments, log, "", kFiguresTimeoutS, nullptr, ".");
   std::ifstream in(log);
   std::ostream& to = p.ok() ? c.out : c.err;
   for (std::string line; std::getline(in, line);)

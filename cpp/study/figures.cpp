@@ -73,7 +73,8 @@ class ProgressTail {
 
 ProcessResult run_plot_process(const std::vector<std::string>& arguments,
                                const std::string& log_path, const std::string& python,
-                               double timeout_s, const ProgressLog& progress) {
+                               double timeout_s, const ProgressLog& progress,
+                               const std::string& working_dir) {
   std::error_code ignored;
   fs::remove(log_path, ignored);
   const std::string name = python_executable(python);
@@ -88,7 +89,7 @@ ProcessResult run_plot_process(const std::vector<std::string>& arguments,
     throw RendererError(fmt::format("the report script {} is missing", script));
   std::vector<std::string> argv{*exe, script};
   argv.insert(argv.end(), arguments.begin(), arguments.end());
-  fs::path dir = fs::path(log_path).parent_path();
+  fs::path dir = working_dir.empty() ? fs::path(log_path).parent_path() : fs::path(working_dir);
   // A coprocess, polled, so that its progress lines reach the user while
   // it runs (its stdin is unused: the script never reads it).
   Coprocess child(argv, dir.empty() ? "." : dir.string(), log_path);

@@ -27,9 +27,12 @@ void run_plot_script(const std::vector<std::string>& arguments, const std::strin
 // As run_plot_script, but returns how the script ended instead of throwing
 // on a failure (RendererError only when Python or the script is missing):
 // for commands that pass the script's own exit status on (2: bad input).
+// It runs in `working_dir`, by default the log's folder; a command given
+// paths as its user typed them runs it in "." so that they resolve as typed.
 ProcessResult run_plot_process(const std::vector<std::string>& arguments,
                                const std::string& log_path, const std::string& python = "",
-                               double timeout_s = 600.0, const ProgressLog& progress = nullptr);
+                               double timeout_s = 600.0, const ProgressLog& progress = nullptr,
+                               const std::string& working_dir = "");
 // A log line the script wrote as progress ("progress: ..."), not output.
 bool is_progress_line(std::string_view line);
 

@@ -57,6 +57,29 @@ class Cli : public TempDirTest {
   }
 };
 
+// figure and table run harness/report.py on a finished study: a folder and
+// an output given relative to where the user stands resolve from there, not
+// from wherever the script runs (they once resolved from the temporary
+// folder, and `penumbra figure results/default` found no report.json).
+TEST_F(Cli, FigureAndTableTakePathsRelativeToTheWorkingFolder) {
+  const std::string harness = std::string(PENUMBRA_SOURCE_DIR) + "/tests/harness";
+  const std::string make = fmt::format(
+      "/usr/bin/python3 -c \"import sys; sys.path.insert(0, '{}'); import report_fixture as fx; "
+      "fx.write_fixture('{}', scenes=fx.SCENES[:1], lights=fx.LIGHTS[:1], "
+      "methods=fx.METHODS[:4])\"",
+      harness, path("study"));
+  ASSERT_EQ(std::system(make.c_str()), 0) << make;
+  const fs::path before = fs::current_path();
+  fs::current_path(dir_);
+  const Result table = run({"table", "study", "--format", "csv"});
+  const Result figure = run({"figure", "study", "--kind", "ranking", "-o", "ranking.png"});
+  fs::current_path(before);
+  EXPECT_EQ(table.code, kExitOk) << table.err;
+  EXPECT_NE(table.out.find("method"), std::string::npos) << table.out;
+  EXPECT_EQ(figure.code, kExitOk) << figure.err;
+  EXPECT_GT(fs::file_size(dir_ / "ranking.png"), 0u);
+}
+
 // bench --povray: one line per round whose ratio is POV-Ray's CPU seconds
 // over the evaluator's, then their range and median; its renders go to a
 // folder under TMPDIR that is gone afterwards. Times are not checked.
