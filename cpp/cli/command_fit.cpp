@@ -56,12 +56,14 @@ void print_summary(const FitResult& r, std::ostream& out) {
   out << fmt::format("  fitted table, each scene family held out: {}\n", pct(r.held_out_pooled));
   if (!r.held_out.empty() && !r.best_method.empty()) {
     const PairedError& d = r.held_out_minus_best;
-    out << fmt::format("    minus the best shipped method, {}, paired: {:.2f} [{:.2f}, {:.2f}] "
-                       "percentage points: {}\n",
-                       r.best_method, 100 * d.difference.value, 100 * d.difference.interval.low,
-                       100 * d.difference.interval.high,
-                       d.tie ? "a tie" : d.difference.value < 0 ? "the table is lower"
-                                                                 : "the method is lower");
+    out << fmt::format(
+        "    minus the best shipped method, {}, paired: {:.2f} [{:.2f}, {:.2f}] "
+        "percentage points: {}\n",
+        r.best_method, 100 * d.difference.value, 100 * d.difference.interval.low,
+        100 * d.difference.interval.high,
+        d.tie                    ? "a tie"
+        : d.difference.value < 0 ? "the table is lower"
+                                 : "the method is lower");
   }
   for (const MethodShare& s : r.shares)
     out << fmt::format("  {:<26} {}   share of the achievable {:.0f} % [{:.0f}, {:.0f}]\n",

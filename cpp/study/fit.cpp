@@ -23,11 +23,11 @@
 #include "image/image_io.h"
 #include "renderers/code_digest.h"
 #include "scene/factor_table_file.h"
-#include "util/parallel.h"
 #include "scene/scene_json.h"
 #include "study/provenance.h"
 #include "util/files.h"
 #include "util/hash.h"
+#include "util/parallel.h"
 #include "util/strict_json.h"
 #include "util/version.h"
 
@@ -177,14 +177,16 @@ PooledError pooled_error(const std::vector<double>& values, const std::vector<st
 
 PairedError paired_error(const std::vector<double>& a, const std::vector<double>& b,
                          const std::vector<std::size_t>& index, const FitOptions& o) {
-  const PooledError d = bootstrap(index, o.resamples, o.seed, [&](const std::vector<std::size_t>& s) {
-    return pooled(a, s) - pooled(b, s);
-  });
+  const PooledError d =
+      bootstrap(index, o.resamples, o.seed,
+                [&](const std::vector<std::size_t>& s) { return pooled(a, s) - pooled(b, s); });
   return {d, d.interval.contains(0.0)};
 }
 
 // A method a renderer ships: not a table fitted to some study's truth.
-bool shipped(const std::string& method) { return method.rfind("fitted", 0) != 0; }
+bool shipped(const std::string& method) {
+  return method.rfind("fitted", 0) != 0;
+}
 
 std::vector<TallyVariant> data_of(const std::vector<FitVariant>& variants,
                                   const std::vector<std::size_t>& index) {
@@ -578,8 +580,8 @@ void fit_held_out(const FitOptions& o, const std::vector<double>& none,
   // Every family's folds at once: each pair of families left out is shared
   // by two of them.
   if (by_family.size() >= 2) {
-    say(o, fmt::format("held out: choosing the smoothness of {} families' tables",
-                       by_family.size()));
+    say(o,
+        fmt::format("held out: choosing the smoothness of {} families' tables", by_family.size()));
     std::vector<FloorSolves::Key> keys;
     for (const auto& [family, _] : by_family)
       for (FloorSolves::Key& k : smoothness_solves(*r, others(family), o)) keys.push_back(k);
@@ -656,9 +658,10 @@ void share_groups(const FitOptions& o, const std::vector<double>& none,
     for (std::size_t j = i + 1; j < order.size(); ++j) {
       MethodShare& m = *order[j];
       if (m.group) continue;
-      const PooledError d = bootstrap(index, o.resamples, o.seed, [&](const std::vector<std::size_t>& k) {
-        return share(m.method, k) - share(lead.method, k);
-      });
+      const PooledError d =
+          bootstrap(index, o.resamples, o.seed, [&](const std::vector<std::size_t>& k) {
+            return share(m.method, k) - share(lead.method, k);
+          });
       if (!d.interval.contains(0.0)) continue;
       m.group = group, m.leader = lead.method, m.versus_leader = {d, true};
     }
@@ -935,43 +938,43 @@ json pictures_json(const FitResult& r) {
 }
 
 json result_json(const FitResult& r) {
-  json j{{"study", r.study},
-         {"unit",
-          "terminator-profile RMSE, fraction of albedo*E/pi, pooled over variants as a "
-          "root mean square; intervals: 95 % percentile bootstrap over variants"},
-         {"grid", factor_grid_json(r.grid)},
-         {"variants", r.variants.size()},
-         {"skipped", r.skipped},
-         {"retraced", r.retraced},
-         {"retraced_different", r.retraced_different},
-         {"outside_grid_share", r.outside_share},
-         {"floor", floor_json(r.study_floor)},
-         {"pictures", pictures_json(r)},
-         {"held_out_pooled", r.held_out.empty() ? json() : interval_json(r.held_out_pooled)},
-         {"best_method", r.best_method.empty() ? json() : json(r.best_method)},
-         {"held_out_minus_best", r.held_out.empty() || r.best_method.empty()
-                                     ? json()
-                                     : paired_json(r.held_out_minus_best)},
-         {"table_smoothness", r.table_smoothness},
-         {"seconds", r.seconds},
-         // Arrays even when empty (one scene family: nothing to hold out).
-         {"family_floors", json::array()},
-         {"held_out", json::array()},
-         {"methods", json::array()},
-         {"constants", json::array()}};
+  json j{
+      {"study", r.study},
+      {"unit",
+       "terminator-profile RMSE, fraction of albedo*E/pi, pooled over variants as a "
+       "root mean square; intervals: 95 % percentile bootstrap over variants"},
+      {"grid", factor_grid_json(r.grid)},
+      {"variants", r.variants.size()},
+      {"skipped", r.skipped},
+      {"retraced", r.retraced},
+      {"retraced_different", r.retraced_different},
+      {"outside_grid_share", r.outside_share},
+      {"floor", floor_json(r.study_floor)},
+      {"pictures", pictures_json(r)},
+      {"held_out_pooled", r.held_out.empty() ? json() : interval_json(r.held_out_pooled)},
+      {"best_method", r.best_method.empty() ? json() : json(r.best_method)},
+      {"held_out_minus_best",
+       r.held_out.empty() || r.best_method.empty() ? json() : paired_json(r.held_out_minus_best)},
+      {"table_smoothness", r.table_smoothness},
+      {"seconds", r.seconds},
+      // Arrays even when empty (one scene family: nothing to hold out).
+      {"family_floors", json::array()},
+      {"held_out", json::array()},
+      {"methods", json::array()},
+      {"constants", json::array()}};
   for (const FloorFit& f : r.family_floors) j["family_floors"].push_back(floor_json(f));
   for (const HeldOutFit& h : r.held_out)
-    j["held_out"].push_back({{"family", h.family},
-                             {"variants", h.variants},
-                             {"smoothness", h.smoothness},
-                             {"held_out", interval_json(h.held_out)},
-                             {"in_sample_floor", h.in_sample},
-                             {"none", interval_json(h.none)},
-                             {"best_method", h.best_method},
-                             {"best", interval_json(h.best)},
-                             {"held_out_minus_best", h.best_method.empty()
-                                                         ? json()
-                                                         : paired_json(h.held_out_minus_best)}});
+    j["held_out"].push_back(
+        {{"family", h.family},
+         {"variants", h.variants},
+         {"smoothness", h.smoothness},
+         {"held_out", interval_json(h.held_out)},
+         {"in_sample_floor", h.in_sample},
+         {"none", interval_json(h.none)},
+         {"best_method", h.best_method},
+         {"best", interval_json(h.best)},
+         {"held_out_minus_best",
+          h.best_method.empty() ? json() : paired_json(h.held_out_minus_best)}});
   for (const MethodShare& s : r.shares) {
     json m{{"method", s.method},
            {"error", interval_json(s.error)},

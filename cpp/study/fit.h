@@ -111,10 +111,10 @@ struct MethodShare {
 struct FittedConstant {
   std::string method, constant;  // constant: its symbol first, then where it enters
   double published = 0.0, fitted = 0.0;
-  Interval interval;         // bootstrap over variants, refitted per resample
-  PooledError in_sample;     // E at the fitted value, all variants
-  PooledError at_published;  // E at the published value, all variants
-  PooledError held_out;      // E with the value fitted without each family, pooled
+  Interval interval;                     // bootstrap over variants, refitted per resample
+  PooledError in_sample;                 // E at the fitted value, all variants
+  PooledError at_published;              // E at the published value, all variants
+  PooledError held_out;                  // E with the value fitted without each family, pooled
   PairedError held_out_minus_published;  // paired over all variants
   // Which edge of the search's range the fit on every variant reached
   // ("d at deviation 60 degrees = 1"), "" where none: E would fall further

@@ -1,9 +1,10 @@
 // The PNG pictures of a study's renders in its images/ folder: each render's
 // preview (NAME.png), its difference from its ground truth (NAME-diff.png)
-// and its HDR-FLIP map against that truth (flip/NAME.png). Encoding some 3,700 PNGs was a third of a warm run of the
-// default study, so a stamp (images/.inputs) records what each picture was
-// drawn from, and a picture drawn from the same pixels by the same drawing
-// code is kept rather than drawn again.
+// and its HDR-FLIP map against that truth (flip/NAME.png). Encoding some
+// 3,700 PNGs was a third of a warm run of the default study, so a stamp
+// (images/.inputs) records what each picture was drawn from, and a picture
+// drawn from the same pixels by the same drawing code is kept rather than
+// drawn again.
 #pragma once
 
 #include <cstdint>

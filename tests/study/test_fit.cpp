@@ -69,8 +69,7 @@ class Fit : public TempDirTest {
 void expect_paired(const PairedError& p, double a, double b, const std::string& what) {
   EXPECT_NEAR(p.difference.value, a - b, 1e-15) << what;
   EXPECT_LE(p.difference.interval.low, p.difference.interval.high) << what;
-  EXPECT_EQ(p.tie, p.difference.interval.low <= 0.0 && 0.0 <= p.difference.interval.high)
-      << what;
+  EXPECT_EQ(p.tie, p.difference.interval.low <= 0.0 && 0.0 <= p.difference.interval.high) << what;
 }
 
 // Share groups: numbered from 1 in order of their leaders' shares; a
@@ -110,8 +109,7 @@ void expect_share_groups(const FitResult& r) {
 void expect_paired_differences(const FitResult& r) {
   const MethodShare* best = nullptr;
   for (const MethodShare& s : r.shares)
-    if (s.method.rfind("fitted", 0) != 0 && (!best || s.error.value < best->error.value))
-      best = &s;
+    if (s.method.rfind("fitted", 0) != 0 && (!best || s.error.value < best->error.value)) best = &s;
   ASSERT_NE(best, nullptr);
   EXPECT_EQ(r.best_method, best->method);
   expect_paired(r.held_out_minus_best, r.held_out_pooled.value, best->error.value, "study");
