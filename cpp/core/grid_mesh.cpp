@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -180,6 +181,8 @@ TriangleMesh make_grid_mesh(const Shape& shape, const HeightFunction& height, do
     case ShapeType::kPlane:
       plane_grid(w);
       break;
+    case ShapeType::kMesh:  // core/mesh_surface.h subdivides meshes
+      throw std::logic_error("make_grid_mesh: a mesh shape has no (u, v) grid");
   }
   return std::move(w.mesh);
 }

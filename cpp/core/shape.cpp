@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <utility>
 
 namespace penumbra {
@@ -114,6 +115,13 @@ void for_each_cylinder_hit(const Shape& s, const Vec3& o, const Vec3& d, Visit&&
     if (visit(candidates[i], kinds[i])) return;
 }
 
+// A mesh has no closed form: a caller that reached here routed it wrong.
+void refuse_mesh(const Shape& s) {
+  if (s.type == ShapeType::kMesh)
+    throw std::logic_error(
+        "a mesh shape is traced by the evaluator's mesh tracers, not analytically");
+}
+
 }  // namespace
 
 Shape with_frame(Shape shape) {
@@ -122,6 +130,7 @@ Shape with_frame(Shape shape) {
 }
 
 bool intersect(const Shape& s, const Ray& ray, double t_min, double t_max, Hit* hit) {
+  refuse_mesh(s);
   const Vec3 o = s.frame.to_local(ray.origin - s.center);
   const Vec3 d = s.frame.to_local(ray.direction);
   if (s.type == ShapeType::kPlane) {
@@ -154,6 +163,7 @@ bool intersect(const Shape& s, const Ray& ray, double t_min, double t_max, Hit* 
 }
 
 bool occluded(const Shape& s, const Ray& ray, double t_min, double t_max) {
+  refuse_mesh(s);
   const Vec3 o = s.frame.to_local(ray.origin - s.center);
   const Vec3 d = s.frame.to_local(ray.direction);
   if (s.type == ShapeType::kPlane) {
@@ -175,6 +185,7 @@ bool occluded(const Shape& s, const Ray& ray, double t_min, double t_max) {
 }
 
 SurfaceGeometry surface_at(const Shape& s, double u, double v) {
+  refuse_mesh(s);
   const double sin_v = std::sin(v);
   SurfaceGeometry g =
       s.type == ShapeType::kPlane ? plane_at(s, u, v)
@@ -187,6 +198,7 @@ SurfaceGeometry surface_at(const Shape& s, double u, double v) {
 }
 
 SurfaceGeometry base_geometry_under(const Shape& s, const Vec3& p, int cap) {
+  refuse_mesh(s);
   const Vec3 local = s.frame.to_local(p - s.center);
   if (cap != 0) return cylinder_cap(s, local, cap);
   if (s.type == ShapeType::kPlane)

@@ -2,6 +2,8 @@
 // bump and displacement representations need. Scene units throughout.
 #pragma once
 
+#include <memory>
+
 #include "core/enum_names.h"
 #include "core/height.h"
 #include "core/vec.h"
@@ -13,10 +15,13 @@ struct Ray {
   Vec3 direction;  // unit length
 };
 
-enum class ShapeType { kCylinder, kSphere, kPlane };
+enum class ShapeType { kCylinder, kSphere, kPlane, kMesh };
 inline constexpr EnumName<ShapeType> kShapeTypeNames[] = {{"cylinder", ShapeType::kCylinder},
                                                           {"sphere", ShapeType::kSphere},
-                                                          {"plane", ShapeType::kPlane}};
+                                                          {"plane", ShapeType::kPlane},
+                                                          {"mesh", ShapeType::kMesh}};
+
+struct MeshSurface;  // core/mesh_surface.h
 
 // Cylinder: side of the given radius around `axis` through `center`, from
 // -height/2 to +height/2 along the axis, optionally closed by flat caps.
@@ -25,6 +30,9 @@ inline constexpr EnumName<ShapeType> kShapeTypeNames[] = {{"cylinder", ShapeType
 // Plane: a width x height rectangle through `center` with normal `axis`,
 // spanning frame.s (width) and frame.t (height); its `radius` is half its
 // longer side, the size scale every epsilon and default edge length uses.
+// Mesh: triangles read from a file (core/mesh_surface.h), traced by the
+// evaluator's mesh tracers only (intersect() and the other functions here
+// refuse it); `center` and `radius` are its bounding sphere's.
 struct Shape {
   ShapeType type = ShapeType::kSphere;
   Vec3 center;
@@ -33,6 +41,7 @@ struct Shape {
   double height = 2.0;
   double width = 2.0;  // plane only
   bool caps = false;
+  std::shared_ptr<const MeshSurface> mesh;  // mesh only
 
   // Frame whose n is the axis; set by with_frame() before intersecting.
   Frame frame = Frame::from_z({0, 1, 0});

@@ -107,6 +107,7 @@ SurfaceGeometry surface_at_parameters(const Shape& s, double u, double v) {
     case ShapeType::kCylinder:
       return surface_at(s, 2.0 * kPi * u, (v - 0.5) * s.height);
     case ShapeType::kSphere:
+    case ShapeType::kMesh:  // refused by surface_at: image maps on meshes are not read yet
       break;
   }
   return surface_at(s, 2.0 * kPi * u, kPi * (1.0 - v));
@@ -119,6 +120,7 @@ MapLengths map_lengths(const Shape& s) {
     case ShapeType::kCylinder:
       return {2.0 * kPi * s.radius, s.height};
     case ShapeType::kSphere:
+    case ShapeType::kMesh:
       break;
   }
   return {2.0 * kPi * s.radius, kPi * s.radius};

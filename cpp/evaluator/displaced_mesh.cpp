@@ -1,6 +1,7 @@
 #include "evaluator/displaced_mesh.h"
 
 #include "core/grid_mesh.h"
+#include "core/mesh_surface.h"
 
 #include <algorithm>
 #include <cmath>
@@ -25,6 +26,10 @@ struct DisplacedMesh::Impl {
   std::shared_ptr<const SurfaceMap> map;
   unsigned nu = 0, nv = 0;
   unsigned side_primitives = 0;
+  // Mesh shapes: how each base triangle is split.
+  MeshSubdivision plan;
+
+  MeshHit decode_mesh(const TriangleHit& triangle) const;
 
   double u_at(unsigned i) const { return grid_u(shape, {nu, nv}, i); }
   double v_at(unsigned j) const { return grid_v(shape, {nu, nv}, j); }
@@ -71,6 +76,10 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
   m.shape = scene.shape;
   m.amplitude = scene.height.amplitude;
   m.height = scene.height.function;
+  if (m.shape.type == ShapeType::kMesh) {
+    build_mesh_shape(scene);
+    return;
+  }
   if (scene.height.height_map()) m.map = scene.height.map;
   const double e = scene.displacement.edge_length;
   const HeightBounds bounds = height_bounds(m.height, m.map.get(), m.shape);
@@ -89,10 +98,46 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
   m.bvh = std::make_unique<EmbreeMesh>(std::move(mesh), bvh_build_for(triangles_));
 }
 
+void DisplacedMesh::build_mesh_shape(const Scene& scene) {
+  Impl& m = *impl_;
+  const MeshSurface& base = *m.shape.mesh;
+  const double e = scene.displacement.edge_length;
+  m.plan = plan_subdivision(base.mesh, e);
+  TriangleMesh mesh = subdivide_displaced(base.mesh, m.plan, m.height, m.amplitude);
+  m.side_primitives = static_cast<unsigned>(mesh.triangle_count());
+  vertices_ = mesh.vertex_count();
+  triangles_ = mesh.triangle_count();
+  // How far a flat sub-triangle of side e' strays from P + A h Ni, per
+  // base triangle: e'^2 kappa / 8 with kappa bounding |d2P'/ds2| along it,
+  // from the turn of Ni there (k), h's gradient and Hessian:
+  //   (1 + A|h|) k + 2 A |grad h| k + A |Hess h|.
+  const double a = m.amplitude, h_max = max_abs_height(m.height);
+  const double gradient = max_gradient_norm(m.height), hessian = max_hessian_norm(m.height);
+  offsets_.resize(base.mesh.triangle_count());
+  for (std::uint32_t t = 0; t < offsets_.size(); ++t) {
+    const double k = normal_curvature(base.mesh, t);
+    const double kappa = (1.0 + a * h_max) * k + 2.0 * a * gradient * k + a * hessian;
+    const double e2 = double(m.plan.sub_edges[t]) * m.plan.sub_edges[t];
+    offsets_[t] = float(e2 * kappa / 8.0 + 1e-9 * m.shape.radius);
+  }
+  m.bvh = std::make_unique<EmbreeMesh>(std::move(mesh), bvh_build_for(triangles_));
+}
+
 DisplacedMesh::~DisplacedMesh() = default;
+
+// The base triangle under sub-triangle prim and the hit's barycentrics in it.
+MeshHit DisplacedMesh::Impl::decode_mesh(const TriangleHit& triangle) const {
+  MeshHit hit;
+  hit.t = triangle.t;
+  locate_in_base(plan, triangle.triangle, triangle.b1, triangle.b2, &hit.base_triangle, hit.base_b);
+  hit.on_mesh = true;
+  hit.geometry = mesh_surface_at(shape.mesh->mesh, hit.base_triangle, hit.base_b);
+  return hit;
+}
 
 // The hit of `ray` on primitive triangle.triangle, from its barycentrics.
 MeshHit DisplacedMesh::Impl::decode(const Ray& ray, const TriangleHit& triangle) const {
+  if (shape.type == ShapeType::kMesh) return decode_mesh(triangle);
   MeshHit hit;
   hit.t = triangle.t;
   const unsigned prim = triangle.triangle;
@@ -147,6 +192,7 @@ std::string displaced_mesh_key(const Scene& scene) {
                   scene.height.amplitude, static_cast<int>(scene.height.function.combine));
   for (const SineTerm& t : scene.height.function.terms)
     key += fmt::format(" {:a} {:a} {:a} {:a} {:a}", t.k.x, t.k.y, t.k.z, t.phase, t.weight);
+  if (s.mesh) key += " | mesh " + s.mesh->digest;
   if (const SurfaceMap* map = scene.height.height_map())
     key += fmt::format(" | map {} {:a} {:a} {}", map->digest, map->tiles_u, map->tiles_v,
                        static_cast<int>(map->edge));

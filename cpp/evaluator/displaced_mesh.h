@@ -5,12 +5,16 @@
 // parameters follow from the primitive id and barycentrics without storing
 // anything per triangle; shading then evaluates the exact displaced normal at
 // those parameters. Only the occlusion test relies on the flat triangles.
+// A mesh shape's truth is its triangles split on a barycentric lattice
+// (core/mesh_surface.h, subdivide_displaced), decoded the same way.
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/shape.h"
 #include "evaluator/embree_mesh.h"
@@ -21,6 +25,11 @@ namespace penumbra {
 struct MeshHit {
   double t = 0.0;
   SurfaceGeometry geometry;  // base-surface geometry under the hit
+  // A mesh shape's truth: the base triangle and barycentrics under the hit
+  // (mesh_displaced_normal's arguments).
+  bool on_mesh = false;
+  std::uint32_t base_triangle = 0;
+  double base_b[3] = {1.0, 0.0, 0.0};
 };
 
 class DisplacedMesh {
@@ -45,13 +54,21 @@ class DisplacedMesh {
   // Distance by which a shadow ray leaves the exact surface point: an upper
   // bound of how far a triangle's interior deviates from the surface (chord
   // sagitta e^2 kappa / 8), so the ray clears the local facets.
-  double shadow_offset() const { return shadow_offset_; }
+  // A mesh shape's bound is its base triangle's (`triangle`, MeshHit::
+  // base_triangle): one curved corner of an asset must not lift every
+  // shadow ray of the others over their own detail.
+  double shadow_offset(std::uint32_t triangle = 0) const {
+    return offsets_.empty() ? shadow_offset_ : offsets_[triangle];
+  }
 
  private:
+  void build_mesh_shape(const Scene& scene);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::size_t triangles_ = 0, vertices_ = 0;
   double shadow_offset_ = 0.0;
+  std::vector<float> offsets_;  // per base triangle of a mesh shape
 };
 
 // What a mesh is built from: the shape, the height field, its amplitude and

@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "core/light_sampling.h"
+#include "core/mesh_surface.h"
 #include "core/random.h"
 #include "core/ray_packet.h"
 #include "core/shading.h"
@@ -114,6 +115,10 @@ struct SurfaceHit {
   Vec3 ng, ni;
   LowPolyHit triangle;  // low-poly meshes only
   bool on_prop = false;
+  // A mesh shape's truth: the exact normal of its displaced surface, which
+  // the tracer knows from the base triangle (mesh_displaced_normal).
+  bool has_exact_ns = false;
+  Vec3 exact_ns;
 };
 
 // Where a shadow ray starts, and which mesh triangle it ignores.
@@ -188,7 +193,7 @@ class MeshTracer {
       if (found[k]) set_hit(hits[k], &out[k]);
   }
   ShadowRay shadow_ray(const SurfaceHit& hit, const FacingNormals& n, const Vec3&) const {
-    return {hit.shading_point + n.ns * mesh_.shadow_offset()};
+    return {hit.shading_point + n.ns * mesh_.shadow_offset(hit.triangle.triangle)};
   }
   bool occluded(const ShadowRay& ray, const Vec3& wi, double distance) const {
     return mesh_.occluded({ray.origin, wi}, distance);
@@ -204,7 +209,14 @@ class MeshTracer {
     out->t = hit.t;
     out->geometry = hit.geometry;
     out->ng = out->ni = hit.geometry.n;
-    if (hit.geometry.displaceable)
+    if (hit.on_mesh) {
+      const HeightSample h = evaluate_height(height_, hit.geometry.p);
+      out->shading_point = displaced_point(hit.geometry, amplitude_, h);
+      out->exact_ns =
+          mesh_displaced_normal(shape_.mesh->mesh, hit.base_triangle, hit.base_b, amplitude_, h);
+      out->has_exact_ns = true;
+      out->triangle.triangle = hit.base_triangle;
+    } else if (hit.geometry.displaceable)
       out->shading_point =
           displaced_point(hit.geometry, amplitude_, height_at(height_, map_, shape_, hit.geometry));
     else
@@ -614,7 +626,7 @@ typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray&
   if (bumps() && g.displaceable) {
     // The bump perturbs the analytic normal; on a mesh it is carried
     // over to Ni, so that Ns relates to Ni as it would to N.
-    const Vec3 b = bump_.at(g, ray, hit.t, material);
+    const Vec3 b = hit.has_exact_ns ? hit.exact_ns : bump_.at(g, ray, hit.t, material);
     facing.ns = hit.ni == g.n ? b : normalize(rotate_between(g.n, hit.ni, b));
   }
   // Two-sided: the inside of an open cylinder is seen from inside.
@@ -1228,6 +1240,9 @@ void render_passes(const Scene& scene, const Tracer& tracer, const RenderOptions
 // (silhouettes, a displaced surface beyond it) or meets a prop first keep
 // the mean.
 void centre_angles(const Scene& scene, std::vector<Image>* images) {
+  // A mesh has no closed form to meet at the pixel centre: its angles stay
+  // the means over the pixel's samples.
+  if (scene.shape.type == ShapeType::kMesh) return;
   const Camera& camera = scene.camera;
   const Props props(scene);
   const Vec3 orthographic_direction = normalize(camera.direction);
@@ -1260,6 +1275,19 @@ void centre_angles(const Scene& scene, std::vector<Image>* images) {
             }
           }
       });
+}
+
+}  // namespace
+
+namespace {
+
+// The triangles a bump or smooth render traces: a tessellation's or a mesh
+// shape's; null for an analytic shape.
+std::unique_ptr<const LowPolyMesh> low_poly_mesh(const Scene& scene) {
+  if (scene.tessellation)
+    return std::make_unique<const LowPolyMesh>(scene.shape, *scene.tessellation);
+  if (scene.shape.type == ShapeType::kMesh) return std::make_unique<const LowPolyMesh>(scene.shape);
+  return nullptr;
 }
 
 }  // namespace
@@ -1297,11 +1325,10 @@ std::vector<Image> render_methods(const Scene& scene,
     const MeshTracer tracer(scene, *mesh);
     render_image(scene, tracer, options, methods, &images, &local);
     centre_angles(scene, &images);
-  } else if (scene.tessellation) {
-    const LowPolyMesh mesh(scene.shape, *scene.tessellation);
-    local.triangles = mesh.triangle_count();
+  } else if (const auto mesh = low_poly_mesh(scene)) {
+    local.triangles = mesh->triangle_count();
     local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    const LowPolyTracer tracer(scene, mesh);
+    const LowPolyTracer tracer(scene, *mesh);
     render_passes(scene, tracer, options, methods, &images, &local);
     centre_angles(scene, &images);
   } else {
@@ -1358,11 +1385,10 @@ Image render_tallied(const Scene& scene, const FactorGrid& grid, PixelTally* tal
   const std::size_t pixels = std::size_t(image.width) * image.height;
   TallyRequest request{&grid, t.lobes, std::vector<std::vector<std::pair<int, double>>>(pixels),
                        std::vector<double>(pixels, 0.0)};
-  if (scene.tessellation) {
-    const LowPolyMesh mesh(scene.shape, *scene.tessellation);
-    local.triangles = mesh.triangle_count();
+  if (const auto mesh = low_poly_mesh(scene)) {
+    local.triangles = mesh->triangle_count();
     local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    const LowPolyTracer tracer(scene, mesh);
+    const LowPolyTracer tracer(scene, *mesh);
     render_image(scene, tracer, options, {t}, &images, &local, {.tally = &request});
     centre_angles(scene, &images);
   } else {

@@ -1,6 +1,7 @@
 #include "evaluator/lowpoly_mesh.h"
 
 #include "core/consistent_normal.h"
+#include "core/mesh_surface.h"
 
 namespace penumbra {
 
@@ -10,6 +11,11 @@ LowPolyMesh::LowPolyMesh(const Shape& shape, const Tessellation& tessellation)
       mesh_(tessellate(shape, tessellation)),
       alpha_(tessellation.shading == NormalShading::kConsistent ? consistent_normal_alphas(mesh_)
                                                                 : std::vector<double>{}),
+      bvh_(mesh_, bvh_build_for(mesh_.triangle_count())) {}
+
+LowPolyMesh::LowPolyMesh(const Shape& mesh_shape)
+    : shape_(mesh_shape),
+      mesh_(mesh_shape.mesh->mesh),
       bvh_(mesh_, bvh_build_for(mesh_.triangle_count())) {}
 
 Vec3 LowPolyMesh::position(unsigned vertex) const {
@@ -50,6 +56,10 @@ std::optional<LowPolyHit> LowPolyMesh::intersect(const Ray& ray) const {
     const Vec3 wo = -ray.direction;
     const double side = dot(hit.ng, wo) < 0.0 ? -1.0 : 1.0;
     hit.ni = side * consistent_normal(wo, hit.ni * side, hit.alpha);
+  }
+  if (shape_.type == ShapeType::kMesh) {
+    hit.base = mesh_surface_at(mesh_, hit.triangle, hit.b);
+    return hit;
   }
   int cap = 0;
   if (hit.triangle >= mesh_.side_triangles)

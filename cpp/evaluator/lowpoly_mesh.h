@@ -2,7 +2,9 @@
 // production renderer sees when a modeller exports a low-poly, smooth-shaded
 // cylinder or sphere. Hits carry the flat triangle's point and normal, the
 // interpolated normal Ni, and the analytic geometry the triangle stands in for
-// (for the analysis channels and the bump frame).
+// (for the analysis channels and the bump frame). A mesh shape read from a
+// file (core/mesh_surface.h) is traced the same way; its base geometry is
+// its own (mesh_surface_at: the point on the triangle, Ni).
 #pragma once
 
 #include <cstdint>
@@ -29,6 +31,8 @@ struct LowPolyHit {
 class LowPolyMesh {
  public:
   LowPolyMesh(const Shape& shape, const Tessellation& tessellation);
+  // A mesh shape (ShapeType::kMesh), smooth-shaded by its vertex normals.
+  explicit LowPolyMesh(const Shape& mesh_shape);
 
   // Consistent shading bends ni for the ray's view (core/consistent_normal.h),
   // on whichever side of the triangle the ray sees.

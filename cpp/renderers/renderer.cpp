@@ -44,6 +44,10 @@ void refuse_unoffered(const Scene& scene, const RendererInfo& info, const char* 
     throw ExportError(std::string(name) + " export: " + info.height_maps_why_not);
   if (scene.height.normal_map() && !info.normal_maps)
     throw ExportError(std::string(name) + " export: " + info.normal_maps_why_not);
+  if (scene.shape.type == ShapeType::kMesh && info.external())
+    throw ExportError(std::string(name) +
+                      " export: a mesh shape is not exported yet (the evaluator renders it and its "
+                      "displaced truth)");
   if (scene.shape.type == ShapeType::kPlane && !info.plane)
     throw ExportError(std::string(name) + " export: " + info.plane_why_not);
   if (scene.tessellation && scene.tessellation->shading == NormalShading::kConsistent &&

@@ -19,6 +19,7 @@
 #include "image/bump_maps.h"
 #include "image/environment_file.h"
 #include "scene/factor_table_file.h"
+#include "scene/mesh_file.h"
 #include "util/json_reader.h"
 
 namespace penumbra {
@@ -261,9 +262,47 @@ OffsetSettings read_offset(Reader r) {
   return o;
 }
 
+// /shape of type "mesh": its file (a relative path made relative to the
+// scene file by resolve_map_files), transform and normals.
+Shape read_mesh_shape(Reader& r) {
+  Shape s;
+  s.type = ShapeType::kMesh;
+  const std::string file = r.string("file");
+  if (file.empty()) r.fail("file", "expected the path of a mesh file, got \"\"");
+  if (r.has("tessellation"))
+    r.fail("tessellation",
+           "expected no tessellation on a mesh (it is triangles already: its vertex normals "
+           "shade it smooth, and the offset methods act on its triangles)");
+  MeshTransform t;
+  t.scale = r.number_or("scale", 1.0, length_scale, "in [1e-6, 1e6] (uniform scale)");
+  t.rotate_deg = vec3_or(r, "rotate_deg", {0, 0, 0});
+  t.translate = vec3_or(r, "translate", {0, 0, 0});
+  const MeshNormals normals =
+      r.choice<MeshNormals>("normals", kMeshNormalsNames, MeshNormals::kFile);
+  LoadedMesh loaded;
+  try {
+    loaded = load_mesh_file(file, t, normals);
+  } catch (const MeshFileError& e) {
+    r.fail("file", fmt::format("{}: {}", file, e.what()));
+  }
+  s.mesh = loaded.surface;
+  s.center = mesh_centre(*s.mesh);
+  s.radius = mesh_radius(*s.mesh);
+  if (!length_scale(s.radius))
+    r.fail("file", fmt::format("{}: expected a mesh of size in [1e-6, 1e6] scene units, got a "
+                               "bounding sphere of radius {}",
+                               file, s.radius));
+  r.finish();
+  return with_frame(s);
+}
+
 Shape read_shape(Reader r, std::optional<Tessellation>* tessellation = nullptr) {
   Shape s;
   s.type = r.choice<ShapeType>("type", kShapeTypeNames);
+  if (s.type == ShapeType::kMesh) {
+    if (!tessellation) r.fail("type", "expected \"sphere\" (props are spheres)");
+    return read_mesh_shape(r);
+  }
   s.center = vec3_or(r, "center", {0, 0, 0});
   s.axis = r.has("axis") ? direction(r, "axis") : Vec3{0, 1, 0};
   if (s.type == ShapeType::kPlane) {
@@ -386,6 +425,10 @@ HeightSpec read_height(Reader r, const Shape& shape) {
     return h;
   }
   const bool image = h.family == HeightFamily::kHeightMap || h.family == HeightFamily::kNormalMap;
+  if (image && shape.type == ShapeType::kMesh)
+    r.fail("type",
+           "expected an analytic family (grating, weave, noise) on a mesh: its UVs are not read "
+           "yet, so an image map has nothing to be laid over");
   if (image) read_map(r, &h);
   std::optional<FilterChoice> filter;
   if (image && r.has("filter")) filter = read_filter(r.object("filter"));
@@ -565,6 +608,8 @@ TerminatorSettings read_terminator(Reader r) {
 constexpr double kMaxDisplacementTriangles = 4.0e7;
 
 double estimated_triangles(const Shape& shape, double reach, double edge) {
+  if (shape.type == ShapeType::kMesh)
+    return double(plan_subdivision(shape.mesh->mesh, edge).triangle_count());
   const double r = shape.radius + reach;
   if (shape.type == ShapeType::kPlane)
     return 2.0 * std::ceil(shape.width / edge) * std::ceil(shape.height / edge);
@@ -603,7 +648,8 @@ OffsetSettings offset_from_json(const json& j, const std::string& origin) {
 }
 
 void resolve_map_files(json& document, const std::string& scene_path) {
-  for (const char* pointer : {"/height/file", "/terminator/parameters/table", "/light/map"}) {
+  for (const char* pointer :
+       {"/height/file", "/terminator/parameters/table", "/light/map", "/shape/file"}) {
     const json::json_pointer file(pointer);
     if (!document.is_object() || !document.contains(file) || !document[file].is_string()) continue;
     const std::string text = document[file].get<std::string>();
@@ -729,7 +775,7 @@ Scene scene_from_json(const json& document, const std::string& origin) {
     throw InputError(origin, "/shape/tessellation",
                      "expected no tessellation for the displacement representation (the ground "
                      "truth is its own fine mesh; see /displacement/edge_length)");
-  if (!s.tessellation && s.offset.method != OffsetMethod::kNone)
+  if (!s.tessellation && s.shape.type != ShapeType::kMesh && s.offset.method != OffsetMethod::kNone)
     throw InputError(origin, "/offset/method",
                      fmt::format("expected \"none\" on an analytic shape, got \"{}\" (offset "
                                  "methods act on triangle meshes: set /shape/tessellation)",

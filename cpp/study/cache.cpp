@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
+#include "core/mesh_surface.h"
 #include "image/image_io.h"
 #include "scene/factor_table_file.h"
 #include "study/plan.h"
@@ -93,10 +94,11 @@ void assign_keys(std::vector<Job>& jobs,
     const Scene scene = job.scene();
     const auto& table = scene.terminator.method.table;
     nlohmann::json keyed = job.scene_json();
-    // An image map, a fitted table or a user method enters the key by its content, not by
+    // An image map, a mesh, a fitted table or a user method enters the key by its content, not by
     // where it lies: a file edited in place re-renders, a moved one does not.
     if (scene.height.map) keyed["height"]["file"] = "content:" + scene.height.map->digest;
     if (scene.light.environment) keyed["light"]["map"] = "content:" + scene.light.map_digest;
+    if (scene.shape.mesh) keyed["shape"]["file"] = "content:" + scene.shape.mesh->digest;
     if (table)
       keyed["terminator"]["parameters"]["table"] = "content:" + factor_table_digest(*table);
     // A user method by its definition: editing the function renders again.

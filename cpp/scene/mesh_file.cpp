@@ -1,0 +1,269 @@
+#include "scene/mesh_file.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <vector>
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <fmt/format.h>
+#include <assimp/Importer.hpp>
+
+#include "util/hash.h"
+
+// Debian builds Assimp with its assertions on (ASSIMP_BUILD_DEBUG), and a
+// failed one calls this function, whose library definition aborts the
+// process: a mutated OBJ trips one in the triangulation step. This
+// definition in the executable comes first in the dynamic linker's lookup,
+// so the library's calls reach it instead, and the file is refused like
+// any other it cannot read (penumbra::load_mesh_file catches the throw).
+// A host that loads Penumbra as a module (the Python extension) keeps
+// Assimp's own definition.
+namespace Assimp {
+void aiAssertViolation(const char* expression, const char* file, int line);
+void aiAssertViolation(const char* expression, const char* file, int line) {
+  throw penumbra::MeshFileError(
+      fmt::format("Assimp's reader failed its own check ({} at {}:{})", expression, file, line));
+}
+}  // namespace Assimp
+
+namespace penumbra {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Positions and normals in double before they are welded and stored.
+struct RawMesh {
+  std::vector<Vec3> positions, normals;  // normals empty: the file had none
+  std::vector<unsigned> triangles;
+};
+
+// Appends every triangle of the file's meshes; their nodes' transforms are
+// already in the vertices (aiProcess_PreTransformVertices).
+RawMesh read_triangles(const aiScene& scene) {
+  RawMesh raw;
+  bool all_normals = true;
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m)
+    if (scene.mMeshes[m]->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)
+      all_normals = all_normals && scene.mMeshes[m]->HasNormals();
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh& mesh = *scene.mMeshes[m];
+    if (!(mesh.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+    const auto first = static_cast<unsigned>(raw.positions.size());
+    for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
+      const aiVector3D& p = mesh.mVertices[v];
+      raw.positions.push_back({p.x, p.y, p.z});
+      if (all_normals) {
+        const aiVector3D& n = mesh.mNormals[v];
+        raw.normals.push_back({n.x, n.y, n.z});
+      }
+    }
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      for (int k = 0; k < 3; ++k) {
+        if (face.mIndices[k] >= mesh.mNumVertices)
+          throw MeshFileError(fmt::format("face {} of mesh {} names vertex {} of {}", f, m,
+                                          face.mIndices[k], mesh.mNumVertices));
+        raw.triangles.push_back(first + face.mIndices[k]);
+      }
+    }
+  }
+  return raw;
+}
+
+Vec3 rotate(const Vec3& v, const Vec3& degrees_xyz) {
+  const double ax = radians(degrees_xyz.x), ay = radians(degrees_xyz.y),
+               az = radians(degrees_xyz.z);
+  Vec3 r = v;
+  r = {r.x, std::cos(ax) * r.y - std::sin(ax) * r.z, std::sin(ax) * r.y + std::cos(ax) * r.z};
+  r = {std::cos(ay) * r.x + std::sin(ay) * r.z, r.y, -std::sin(ay) * r.x + std::cos(ay) * r.z};
+  r = {std::cos(az) * r.x - std::sin(az) * r.y, std::sin(az) * r.x + std::cos(az) * r.y, r.z};
+  return r;
+}
+
+// The index of the first vertex with each vertex's position (and normal,
+// when `with_normals`): equal bits, not a tolerance, so the weld never
+// merges what the file keeps apart by a hair.
+std::vector<unsigned> weld(const RawMesh& raw, bool with_normals) {
+  std::map<std::array<double, 6>, unsigned> first;
+  std::vector<unsigned> to(raw.positions.size());
+  for (std::size_t v = 0; v < raw.positions.size(); ++v) {
+    const Vec3& p = raw.positions[v];
+    const Vec3 n = with_normals ? raw.normals[v] : Vec3{};
+    to[v] = first.emplace(std::array<double, 6>{p.x, p.y, p.z, n.x, n.y, n.z}, unsigned(v))
+                .first->second;
+  }
+  return to;
+}
+
+// Area-weighted vertex normals over the triangles, shared by every vertex
+// at one position.
+std::vector<Vec3> smooth_normals(const RawMesh& raw) {
+  const std::vector<unsigned> at = weld(raw, false);
+  std::vector<Vec3> sum(raw.positions.size());
+  for (std::size_t t = 0; t < raw.triangles.size(); t += 3) {
+    const unsigned* c = &raw.triangles[t];
+    // |e1 x e2| is twice the area: the cross product itself weights by area.
+    const Vec3 n =
+        cross(raw.positions[c[1]] - raw.positions[c[0]], raw.positions[c[2]] - raw.positions[c[0]]);
+    for (int k = 0; k < 3; ++k) sum[at[c[k]]] += n;
+  }
+  std::vector<Vec3> out(raw.positions.size());
+  for (std::size_t v = 0; v < out.size(); ++v) {
+    const double l = length(sum[at[v]]);
+    out[v] = l > 0.0 ? sum[at[v]] / l : Vec3{0, 0, 1};
+  }
+  return out;
+}
+
+// The surface's arrays from the transformed raw mesh: zero-area triangles
+// dropped, vertices welded and renumbered in the order first used.
+MeshSurface surface_from(const RawMesh& raw, std::size_t* dropped) {
+  const std::vector<unsigned> at = weld(raw, true);
+  std::vector<unsigned> number(raw.positions.size(), ~0u);
+  MeshSurface s;
+  TriangleMesh& m = s.mesh;
+  for (std::size_t t = 0; t < raw.triangles.size(); t += 3) {
+    const unsigned c[3] = {at[raw.triangles[t]], at[raw.triangles[t + 1]],
+                           at[raw.triangles[t + 2]]};
+    const Vec3 n =
+        cross(raw.positions[c[1]] - raw.positions[c[0]], raw.positions[c[2]] - raw.positions[c[0]]);
+    if (!(length_squared(n) > 0.0)) {
+      ++*dropped;
+      continue;
+    }
+    for (unsigned v : c) {
+      if (number[v] == ~0u) {
+        number[v] = unsigned(m.vertex_count());
+        for (double x : {raw.positions[v].x, raw.positions[v].y, raw.positions[v].z})
+          m.positions.push_back(float(x));
+        // The file's normals as they are (Ni normalises after interpolating,
+        // and a re-normalised float would not keep the file's bits).
+        const Vec3 normal = raw.normals[v];
+        for (double x : {normal.x, normal.y, normal.z}) m.normals.push_back(float(x));
+      }
+      m.triangles.push_back(number[v]);
+    }
+  }
+  m.side_triangles = m.triangle_count();
+  return s;
+}
+
+std::string digest_of(const TriangleMesh& m) {
+  ContentDigest d;
+  d.add(m.positions.data(), m.positions.size() * sizeof(float));
+  d.add(m.normals.data(), m.normals.size() * sizeof(float));
+  d.add(m.triangles.data(), m.triangles.size() * sizeof(unsigned));
+  return d.hex();
+}
+
+// A PLY header's element counts against the bytes that follow it: every
+// element takes at least one byte, so a header that claims more elements
+// than that is refused before Assimp's reader, which would walk the
+// claimed count (a 1e8-vertex header on an empty body spins for minutes).
+void check_ply_header(const std::string& path, std::uintmax_t size) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("ply", 0) != 0) return;
+  std::uintmax_t claimed = 0;
+  while (std::getline(in, line)) {
+    std::istringstream words(line);
+    std::string keyword, name;
+    std::uintmax_t count = 0;
+    words >> keyword;
+    if (keyword == "end_header") {
+      const auto body = size - std::min<std::uintmax_t>(size, std::uintmax_t(in.tellg()));
+      if (claimed > body)
+        throw MeshFileError(fmt::format(
+            "its PLY header declares {} elements, more than the {} bytes after the header hold",
+            claimed, body));
+      return;
+    }
+    if (keyword == "element" && words >> name >> count) claimed += count;
+  }
+  throw MeshFileError("its PLY header has no end_header line");
+}
+
+LoadedMesh read_mesh_file(const std::string& path, const MeshTransform& transform,
+                          MeshNormals normals) {
+  std::error_code error;
+  if (!fs::is_regular_file(path, error)) throw MeshFileError("no such file");
+  check_ply_header(path, fs::file_size(path, error));
+  Assimp::Importer importer;
+  // Points and lines are dropped as they are sorted out; cameras, lights
+  // and animations are not read at all.
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
+                              aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  const unsigned flags = aiProcess_Triangulate | aiProcess_SortByPType |
+                         aiProcess_PreTransformVertices | aiProcess_ValidateDataStructure;
+  const aiScene* scene = importer.ReadFile(path, flags);  // may throw from aiAssertViolation
+  if (!scene)
+    throw MeshFileError(fmt::format("not a mesh Assimp reads: {}", importer.GetErrorString()));
+  RawMesh raw = read_triangles(*scene);
+  if (raw.triangles.size() / 3 > kMaxMeshTriangles)
+    throw MeshFileError(fmt::format("{} triangles, more than the {} a mesh may have",
+                                    raw.triangles.size() / 3, kMaxMeshTriangles));
+  for (std::size_t v = 0; v < raw.positions.size(); ++v)
+    if (!is_finite(raw.positions[v]))
+      throw MeshFileError(fmt::format("vertex {} is not finite", v));
+  for (Vec3& p : raw.positions)
+    p = rotate(p * transform.scale, transform.rotate_deg) + transform.translate;
+  for (std::size_t v = 0; v < raw.positions.size(); ++v)
+    if (!is_finite(raw.positions[v]) || std::abs(raw.positions[v].x) > 1e6 ||
+        std::abs(raw.positions[v].y) > 1e6 || std::abs(raw.positions[v].z) > 1e6)
+      throw MeshFileError(fmt::format("vertex {} lies beyond 1e6 scene units once transformed", v));
+  bool usable = !raw.normals.empty() && normals == MeshNormals::kFile;
+  for (const Vec3& n : raw.normals) usable = usable && is_finite(n) && length_squared(n) > 0.0;
+  if (usable)
+    for (Vec3& n : raw.normals) n = rotate(n, transform.rotate_deg);
+  else
+    raw.normals = smooth_normals(raw);
+  LoadedMesh loaded;
+  MeshSurface surface = surface_from(raw, &loaded.dropped_triangles);
+  if (surface.mesh.triangle_count() == 0)
+    throw MeshFileError(loaded.dropped_triangles > 0
+                            ? "every triangle has zero area"
+                            : "no triangles (points and lines are not surfaces)");
+  surface.digest = digest_of(surface.mesh);
+  surface.file = path;
+  measure_mesh(&surface);
+  loaded.surface = std::make_shared<const MeshSurface>(std::move(surface));
+  return loaded;
+}
+
+}  // namespace
+
+LoadedMesh load_mesh_file(const std::string& path, const MeshTransform& transform,
+                          MeshNormals normals) {
+  // A study reads each scene once per render job; the mesh behind them is
+  // read once.
+  static std::mutex mutex;
+  static std::map<std::string, LoadedMesh> loaded;
+  std::error_code error;
+  const auto size = fs::file_size(path, error);
+  const auto time = fs::last_write_time(path, error);
+  const std::string key = fmt::format(
+      "{}\n{}\n{}\n{:a} {:a} {:a} {:a} {:a} {:a} {:a}\n{}", path, error ? 0 : size,
+      error ? 0 : time.time_since_epoch().count(), transform.scale, transform.rotate_deg.x,
+      transform.rotate_deg.y, transform.rotate_deg.z, transform.translate.x, transform.translate.y,
+      transform.translate.z, static_cast<int>(normals));
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (const auto it = loaded.find(key); it != loaded.end()) return it->second;
+  }
+  LoadedMesh mesh = read_mesh_file(path, transform, normals);
+  std::lock_guard<std::mutex> lock(mutex);
+  if (loaded.size() > 16) loaded.clear();
+  loaded[key] = mesh;
+  return mesh;
+}
+
+}  // namespace penumbra
