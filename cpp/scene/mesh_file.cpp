@@ -19,12 +19,12 @@
 
 // Debian builds Assimp with its assertions on (ASSIMP_BUILD_DEBUG), and a
 // failed one calls this function, whose library definition aborts the
-// process: a mutated OBJ trips one in the triangulation step. This
-// definition in the executable comes first in the dynamic linker's lookup,
-// so the library's calls reach it instead, and the file is refused like
-// any other it cannot read (penumbra::load_mesh_file catches the throw).
-// A host that loads Penumbra as a module (the Python extension) keeps
-// Assimp's own definition.
+// process: a mutated OBJ trips one in the triangulation step. The penumbra
+// binary, the test binary and the Python extension each export this
+// definition (nm -D), and the dynamic linker searches them before
+// libassimp, so the library's calls reach it instead and the file is
+// refused like any other it cannot read (load_mesh_file's callers catch
+// the throw).
 namespace Assimp {
 void aiAssertViolation(const char* expression, const char* file, int line);
 void aiAssertViolation(const char* expression, const char* file, int line) {
