@@ -417,6 +417,14 @@ FilterChoice read_filter(Reader r) {
   return c;
 }
 
+// An image map on a mesh shape: refused until its UVs are read.
+void refuse_on_mesh(const Reader& r, const Shape& shape) {
+  if (shape.type == ShapeType::kMesh)
+    r.fail("type",
+           "expected an analytic family (grating, weave, noise) on a mesh: its UVs are not read "
+           "yet, so an image map has nothing to be laid over");
+}
+
 HeightSpec read_height(Reader r, const Shape& shape) {
   HeightSpec h;
   h.family = r.choice<HeightFamily>("type", kHeightFamilyNames);
@@ -425,10 +433,7 @@ HeightSpec read_height(Reader r, const Shape& shape) {
     return h;
   }
   const bool image = h.family == HeightFamily::kHeightMap || h.family == HeightFamily::kNormalMap;
-  if (image && shape.type == ShapeType::kMesh)
-    r.fail("type",
-           "expected an analytic family (grating, weave, noise) on a mesh: its UVs are not read "
-           "yet, so an image map has nothing to be laid over");
+  if (image) refuse_on_mesh(r, shape);
   if (image) read_map(r, &h);
   std::optional<FilterChoice> filter;
   if (image && r.has("filter")) filter = read_filter(r.object("filter"));

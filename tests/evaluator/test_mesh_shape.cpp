@@ -292,6 +292,23 @@ std::string obj_text(const TriangleMesh& mesh) {
   return text;
 }
 
+// Image maps need UVs, which a mesh does not bring yet: refused at the map.
+TEST_F(MeshShapeTest, ImageMapsOnAMeshAreRefusedUntilItsUvsAreRead) {
+  std::ofstream(path("tri.obj")) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  for (const char* family : {"height-map", "normal-map"}) {
+    json scene = small_scene();
+    scene["shape"] = {{"type", "mesh"}, {"file", path("tri.obj")}};
+    scene["height"] = {{"type", family}, {"file", path("map.exr")}, {"amplitude", 0.01}};
+    try {
+      scene_from_json(scene, "scene.json");
+      ADD_FAILURE() << family << " on a mesh was accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.pointer(), "/height/type") << e.what();
+      EXPECT_NE(e.reason().find("UVs"), std::string::npos) << e.what();
+    }
+  }
+}
+
 // Mutated OBJ and PLY files (bytes flipped, inserted, cut, numbers made
 // huge or NaN, counts changed) either load into a finite mesh that renders
 // finite pixels, or are refused with /shape/file; nothing crashes or hangs
