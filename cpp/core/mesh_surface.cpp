@@ -64,13 +64,6 @@ void measure_mesh(MeshSurface* m) {
     m->bounds_max = {std::max(m->bounds_max.x, p.x), std::max(m->bounds_max.y, p.y),
                      std::max(m->bounds_max.z, p.z)};
   }
-  m->max_edge_length = 0.0;
-  for (std::size_t t = 0; t < m->mesh.triangle_count(); ++t) {
-    const unsigned* c = corners(m->mesh, std::uint32_t(t));
-    for (int e = 0; e < 3; ++e)
-      m->max_edge_length = std::max(
-          m->max_edge_length, length(vertex(m->mesh, c[e]) - vertex(m->mesh, c[(e + 1) % 3])));
-  }
 }
 
 double normal_curvature(const TriangleMesh& mesh, std::uint32_t triangle) {

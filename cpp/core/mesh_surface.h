@@ -31,7 +31,6 @@ struct MeshSurface {
   std::string digest;
   std::string file;  // where it was read from, for messages
   Vec3 bounds_min, bounds_max;
-  double max_edge_length = 0.0;  // scene units
 };
 
 // The centre and radius of the bounding box's circumscribed sphere: the
@@ -39,7 +38,7 @@ struct MeshSurface {
 Vec3 mesh_centre(const MeshSurface& m);
 double mesh_radius(const MeshSurface& m);
 
-// Fills bounds_* and max_edge_length from the arrays.
+// Fills bounds_* from the positions.
 void measure_mesh(MeshSurface* m);
 
 // The base geometry at barycentrics b of triangle `triangle`: p = P(b),

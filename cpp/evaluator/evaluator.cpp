@@ -1277,10 +1277,6 @@ void centre_angles(const Scene& scene, std::vector<Image>* images) {
       });
 }
 
-}  // namespace
-
-namespace {
-
 // The triangles a bump or smooth render traces: a tessellation's or a mesh
 // shape's; null for an analytic shape.
 std::unique_ptr<const LowPolyMesh> low_poly_mesh(const Scene& scene) {
