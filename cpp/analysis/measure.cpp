@@ -158,13 +158,14 @@ namespace {
 // Mean HDR-FLIP of the two images as rendered (linear radiance, every
 // pixel: the background is black in both) and its interval; NaN where the
 // reference gives no exposure (an all-black reference).
-void measure_flip(const Image& test, const Image& reference, Measurement& m) {
+void measure_flip(const Image& test, const Image& reference, Measurement& m, FlipImage* out) {
   try {
     FlipOptions options;
     options.range = FlipRange::kHdr;
-    const FlipImage map = flip_map(test, reference, options);
+    FlipImage map = flip_map(test, reference, options);
     m.image.flip = mean_flip(map);
     m.intervals.flip = mean_flip_interval(map);
+    if (out) *out = std::move(map);
   } catch (const std::invalid_argument&) {
     m.image.flip = kNaN;
     m.intervals.flip = {kNaN, kNaN};
@@ -177,9 +178,9 @@ Measurement measure_covered(const Image& test_image, const Image& reference_imag
 }  // namespace
 
 Measurement measure(const Image& test_image, const Image& reference_image,
-                    const MeasureOptions& options) {
+                    const MeasureOptions& options, FlipImage* flip_map) {
   Measurement m = measure_covered(test_image, reference_image, options);
-  if (options.image && options.flip) measure_flip(test_image, reference_image, m);
+  if (options.image && options.flip) measure_flip(test_image, reference_image, m, flip_map);
   return m;
 }
 

@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "analysis/flip.h"
 #include "analysis/intervals.h"
 #include "analysis/metrics.h"
 #include "image/image.h"
@@ -84,8 +85,11 @@ double threshold_level(const MeasureOptions& options);
 // analysis channels (analysis.theta, analysis.view) come from whichever
 // image has them, the reference first: both show the same base points.
 // Throws std::invalid_argument when the sizes differ or a side's coverage
-// is kMissing or kNoScale.
-Measurement measure(const Image& test, const Image& reference, const MeasureOptions& options);
+// is kMissing or kNoScale. `flip_map`, where given, receives the HDR-FLIP
+// map behind the mean FLIP (left empty where none was computed), so that a
+// caller that also draws it need not compute it again.
+Measurement measure(const Image& test, const Image& reference, const MeasureOptions& options,
+                    FlipImage* flip_map = nullptr);
 
 // R, G, B: test - reference (W m^-2 sr^-1); A: the smaller coverage of the
 // two as `options` gives it (1 for a side without one).

@@ -286,4 +286,46 @@ TriangleMesh subdivide_displaced(const TriangleMesh& base, const MeshSubdivision
   return out;
 }
 
+namespace {
+
+// The exact normal of the truth at base barycentrics b of `triangle`; Ni
+// where it is not finite (a degenerate triangle's cross product).
+Vec3 export_normal(const TriangleMesh& base, std::uint32_t triangle, const double b[3],
+                   const HeightFunction& height, double amplitude) {
+  const SurfaceGeometry g = mesh_surface_at(base, triangle, b);
+  const Vec3 n = mesh_displaced_normal(base, triangle, b, amplitude, evaluate_height(height, g.p));
+  return std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z) ? n : g.n;
+}
+
+}  // namespace
+
+TriangleMesh displaced_mesh_for_export(const TriangleMesh& base, const MeshSubdivision& plan,
+                                       const HeightFunction& height, double amplitude) {
+  const TriangleMesh shared = subdivide_displaced(base, plan, height, amplitude);
+  TriangleMesh out;
+  std::unordered_map<unsigned, unsigned> own;  // shared vertex -> this triangle's copy
+  constexpr double kCorner[3][2] = {{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}};
+  for (std::uint32_t t = 0; t < base.triangle_count(); ++t) {
+    own.clear();
+    for (std::uint64_t prim = plan.first[t]; prim < plan.first[t + 1]; ++prim) {
+      const unsigned* v = &shared.triangles[3 * prim];
+      if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const auto [it, added] = own.emplace(v[k], unsigned(out.vertex_count()));
+        if (added) {
+          std::uint32_t in_base = 0;
+          double b[3];
+          locate_in_base(plan, prim, kCorner[k][0], kCorner[k][1], &in_base, b);
+          const float* p = &shared.positions[3 * std::size_t(v[k])];
+          out.positions.insert(out.positions.end(), p, p + 3);
+          append(&out.normals, export_normal(base, t, b, height, amplitude));
+        }
+        out.triangles.push_back(it->second);
+      }
+    }
+  }
+  out.side_triangles = out.triangle_count();
+  return out;
+}
+
 }  // namespace penumbra

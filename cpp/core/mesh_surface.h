@@ -91,4 +91,14 @@ void locate_in_base(const MeshSubdivision& plan, std::uint64_t prim, double b1, 
 TriangleMesh subdivide_displaced(const TriangleMesh& base, const MeshSubdivision& plan,
                                  const HeightFunction& height, double amplitude);
 
+// The truth's mesh as another renderer is given it (POV-Ray's mesh2,
+// Cycles): subdivide_displaced's triangles, but each base triangle with
+// vertices of its own, their normals the exact normal of the truth there
+// (mesh_displaced_normal), so that the base mesh's facets stay creases as
+// the evaluator shades them. A vertex on a base edge keeps the position
+// bits its neighbour's copy has, so the surface stays watertight; lattice
+// triangles squeezed onto an edge (zero area) are left out.
+TriangleMesh displaced_mesh_for_export(const TriangleMesh& base, const MeshSubdivision& plan,
+                                       const HeightFunction& height, double amplitude);
+
 }  // namespace penumbra

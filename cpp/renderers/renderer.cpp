@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "core/grid_mesh.h"
+#include "core/mesh_surface.h"
 #include "core/surface_map.h"
 #include "core/tessellation.h"
 #include "image/image_io.h"
@@ -44,10 +45,6 @@ void refuse_unoffered(const Scene& scene, const RendererInfo& info, const char* 
     throw ExportError(std::string(name) + " export: " + info.height_maps_why_not);
   if (scene.height.normal_map() && !info.normal_maps)
     throw ExportError(std::string(name) + " export: " + info.normal_maps_why_not);
-  if (scene.shape.type == ShapeType::kMesh && info.external())
-    throw ExportError(std::string(name) +
-                      " export: a mesh shape is not exported yet (the evaluator renders it and its "
-                      "displaced truth)");
   if (scene.shape.type == ShapeType::kPlane && !info.plane)
     throw ExportError(std::string(name) + " export: " + info.plane_why_not);
   if (scene.tessellation && scene.tessellation->shading == NormalShading::kConsistent &&
@@ -81,7 +78,14 @@ ResourceEstimate estimate_render_resources(const Scene& scene, double extra_imag
   const double image_bytes = pixels * kBytesPerPixel + extra_image_bytes;
   double triangles = 0.0;
   std::string mesh_pointer;
-  if (scene.tessellation) {
+  if (scene.shape.type == ShapeType::kMesh) {
+    const TriangleMesh& base = scene.shape.mesh->mesh;
+    const bool truth = scene.representation == Representation::kDisplacement;
+    triangles =
+        truth ? double(plan_subdivision(base, scene.displacement.edge_length).triangle_count())
+              : double(base.triangle_count());
+    mesh_pointer = truth ? "/displacement/edge_length" : "/shape/file";
+  } else if (scene.tessellation) {
     triangles = double(tessellated_triangle_count(scene.shape, *scene.tessellation));
     mesh_pointer = "/shape/tessellation";
   } else if (scene.representation == Representation::kDisplacement || always_meshed) {

@@ -18,9 +18,11 @@ const char* truth_name(SectionKind kind) {
   return kind == SectionKind::kBump ? "displacement" : "analytic";
 }
 
+// `flip`: job i's FLIP map against its renderer's truth where a comparison
+// has just computed it (else empty).
 RenderRow render_row(const Plan& plan, const RenderedImages& r,
                      const std::vector<std::uint64_t>& digests, std::size_t i,
-                     PreviewFolder& pictures) {
+                     PreviewFolder& pictures, const FlipImage& flip_map) {
   const Job& job = plan.jobs[i];
   const double scale = radiance_scale(job.scene());
   RenderRow row;
@@ -36,7 +38,7 @@ RenderRow render_row(const Plan& plan, const RenderedImages& r,
     // A folder of their own: "-flip.png" is also how the preview of method
     // mitsuba3-flip ends.
     const std::string flip = "images/flip/" + stem + ".png";
-    if (pictures.flip(r.images[i], digests[i], r.images[truth], digests[truth], flip))
+    if (pictures.flip(r.images[i], digests[i], r.images[truth], digests[truth], flip, flip_map))
       row.flip_map = flip;
   }
   row.profile = terminator_profile(r.images[i], scale, ProfileOptions{});
@@ -58,21 +60,26 @@ struct Measurer {
   const std::vector<std::uint64_t>& digests;
   ComparisonStore* store;
 
+  // `flip_map`: measure_comparison's, filled only where the metrics are
+  // computed rather than found in the store.
   Measurement operator()(std::size_t test, std::size_t reference, double scale,
-                               ComparisonExtent extent) const {
+                         ComparisonExtent extent, FlipImage* flip_map = nullptr) const {
     if (!store)
-      return measure_comparison(renders.images[test], renders.images[reference], scale, extent);
+      return measure_comparison(renders.images[test], renders.images[reference], scale, extent,
+                                flip_map);
     const std::uint64_t key = comparison_key(digests[test], digests[reference], scale, extent);
     if (std::optional<Measurement> kept = store->find(key)) return *kept;
-    Measurement m =
-        measure_comparison(renders.images[test], renders.images[reference], scale, extent);
+    Measurement m = measure_comparison(renders.images[test], renders.images[reference], scale,
+                                       extent, flip_map);
     store->insert(key, m);
     return m;
   }
 };
 
-// The test job against the same renderer's truth, and the evaluator's.
-void add_comparisons(const Plan& plan, const Measurer& measure, std::size_t i, Comparisons& c) {
+// The test job against the same renderer's truth, and the evaluator's;
+// the FLIP map against the former into *own_flip (the preview draws it).
+void add_comparisons(const Plan& plan, const Measurer& measure, std::size_t i, Comparisons& c,
+                     FlipImage* own_flip) {
   const Job& job = plan.jobs[i];
   const SectionKind kind = plan.variants[job.variant].section;
   std::vector<std::pair<RendererKind, long>> refs{
@@ -84,7 +91,8 @@ void add_comparisons(const Plan& plan, const Measurer& measure, std::size_t i, C
       kind == SectionKind::kLowPoly ? ComparisonExtent::kFullShadows : ComparisonExtent::kFull;
   for (const auto& [ref_renderer, ref] : refs) {
     if (ref < 0 || !measure.renders.done[ref]) continue;
-    Measurement m = measure(i, static_cast<std::size_t>(ref), scale, extent);
+    Measurement m = measure(i, static_cast<std::size_t>(ref), scale, extent,
+                            ref_renderer == job.renderer ? own_flip : nullptr);
     ComparisonRow row;
     row.variant = job.variant, row.job = i, row.reference_job = static_cast<std::size_t>(ref);
     row.renderer = job.renderer, row.reference_renderer = ref_renderer;
@@ -198,9 +206,12 @@ Comparisons compare_study(const Plan& plan, const RenderedImages& renders, Previ
   const Measurer measure{renders, digests, store};
   run_parallel(jobs, order.size(), [&](std::size_t k) {
     const std::size_t i = order[k];
-    slots[k].render = render_row(plan, renders, digests, i, pictures);
-    if (!plan.jobs[i].truth) add_comparisons(plan, measure, i, slots[k].rows);
+    // The comparisons first: a FLIP map they compute is the one the
+    // preview draws, not computed twice.
+    FlipImage flip;
+    if (!plan.jobs[i].truth) add_comparisons(plan, measure, i, slots[k].rows, &flip);
     add_agreement(plan, measure, i, slots[k].rows);
+    slots[k].render = render_row(plan, renders, digests, i, pictures, flip);
   });
   Comparisons c;
   c.renders.resize(plan.variants.size());

@@ -79,13 +79,13 @@ Measurement read_record(const char* in, std::uint64_t* key) {
 }  // namespace
 
 Measurement measure_comparison(const Image& test, const Image& reference, double scale,
-                               ComparisonExtent extent) {
+                               ComparisonExtent extent, FlipImage* flip_map) {
   MeasureOptions options;
   options.scale = scale;
   options.image = options.view = extent != ComparisonExtent::kProfileOnly;
   options.shadows = extent == ComparisonExtent::kFullShadows;
   options.flip = options.image;
-  return measure(test, reference, options);
+  return measure(test, reference, options, flip_map);
 }
 
 std::uint64_t pixel_digest(const Image& image) {

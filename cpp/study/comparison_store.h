@@ -27,8 +27,9 @@ enum class ComparisonExtent : std::uint8_t {
 
 // The metrics of `test` against `reference` (radiance scale in W m^-2 sr^-1):
 // measure() asked for what `extent` names.
+// `flip_map`: as measure's (analysis/measure.h).
 Measurement measure_comparison(const Image& test, const Image& reference, double scale,
-                               ComparisonExtent extent);
+                               ComparisonExtent extent, FlipImage* flip_map = nullptr);
 
 // A digest of an image's size, channel names and pixel bits, independent of
 // the channels' order (a render and its cache entry read back differ in it).

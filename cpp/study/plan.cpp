@@ -206,6 +206,18 @@ std::string cannot_render_variant(RendererKind r, const json& scene) {
   return "";
 }
 
+// Why renderer r renders a bump section's truth of this scene but none of
+// its methods ("" when it renders them): an external renderer's bump on a
+// mesh shape is not the evaluator's (its exporter says why).
+std::string cannot_bump(RendererKind r, SectionKind kind, const json& scene) {
+  const json::json_pointer shape("/shape/type");
+  if (kind != SectionKind::kBump || !renderer_info(r).external() || !scene.contains(shape) ||
+      scene[shape] != "mesh")
+    return "";
+  return "bump on a mesh shape is evaluator-only (the renderer differentiates the height "
+         "elsewhere than across the interpolated normal); the displaced truth is rendered";
+}
+
 // ---- expansion ------------------------------------------------------------------
 
 // The override lists a section shares between its variants: the truth's and
@@ -293,6 +305,12 @@ void add_renderer_jobs(const VariantContext& c, RendererKind r, Variant& v, std:
   }
   std::shared_ptr<const Scene> shared;
   add_job(c, r, std::nullopt, v, index, shared, plan);
+  if (const std::string why = cannot_bump(r, c.section.kind, scene); !why.empty()) {
+    const SkippedRenderer skipped{c.section.kind, r, v.scene, why, ""};
+    if (std::find(plan.skipped.begin(), plan.skipped.end(), skipped) == plan.skipped.end())
+      plan.skipped.push_back(skipped);
+    return;
+  }
   for (std::size_t m = 0; m < c.section.methods.size(); ++m)
     if (section_offers(c.section.kind, r, c.section.methods[m]))
       add_job(c, r, m, v, index, shared, plan);

@@ -109,20 +109,22 @@ void PreviewFolder::difference(const Image& test, std::uint64_t test_digest, con
 }
 
 bool PreviewFolder::flip(const Image& test, std::uint64_t test_digest, const Image& reference,
-                         std::uint64_t reference_digest, const std::string& relative) {
+                         std::uint64_t reference_digest, const std::string& relative,
+                         const FlipImage& given) {
   std::uint64_t inputs = fnv1a(&test_digest, sizeof test_digest);
   inputs = fnv1a(&reference_digest, sizeof reference_digest, inputs);
   const std::uint64_t key = drawing_key('f', inputs);
   if (!needs_drawing(relative, key)) return true;
-  FlipImage map;
-  try {
-    // The options measure_comparison's mean FLIP uses (analysis/measure.cpp).
-    FlipOptions options;
-    options.range = FlipRange::kHdr;
-    map = flip_map(test, reference, options);
-  } catch (const ImageMismatch&) {
-    return false;
-  }
+  FlipImage computed;
+  if (given.error.empty()) try {
+      // The options measure_comparison's mean FLIP uses (analysis/measure.cpp).
+      FlipOptions options;
+      options.range = FlipRange::kHdr;
+      computed = flip_map(test, reference, options);
+    } catch (const ImageMismatch&) {
+      return false;
+    }
+  const FlipImage& map = given.error.empty() ? computed : given;
   write_png_rgb8((folder_ / relative).string(), map.width, map.height, magma_rgb8(map.error));
   std::lock_guard<std::mutex> lock(mutex_);
   now_[relative] = key;

@@ -13,6 +13,7 @@
 #include <mutex>
 #include <string>
 
+#include "analysis/flip.h"
 #include "image/image.h"
 
 namespace penumbra {
@@ -44,8 +45,10 @@ class PreviewFolder {
   // The HDR-FLIP map of `test` against `reference` (analysis/flip.h, the
   // study's viewer) in magma colours, as the FLIP papers show them. False,
   // and nothing written, where FLIP refuses the images (no R, G and B).
+  // `map`: that map where the caller has it already (measure_comparison's),
+  // else empty.
   bool flip(const Image& test, std::uint64_t test_digest, const Image& reference,
-            std::uint64_t reference_digest, const std::string& relative);
+            std::uint64_t reference_digest, const std::string& relative, const FlipImage& map = {});
 
   // Writes the stamp: every picture drawn or kept since construction.
   void save() const;

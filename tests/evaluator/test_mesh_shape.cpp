@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -27,6 +28,7 @@
 #include "core/shadow_origin.h"
 #include "core/tessellation.h"
 #include "evaluator/evaluator.h"
+#include "mesh_files.h"
 #include "scene/scene_json.h"
 #include "temp_dir_test.h"
 
@@ -141,27 +143,62 @@ TEST(MeshSurface, AdaptiveSubdivisionOfAClosedMeshIsClosed) {
   }
 }
 
-// Writes `mesh` as a binary little-endian PLY: floats exactly as stored,
-// so the file's vertices are the mesh's bits (a text format would depend
-// on the reader's rounding).
-void write_ply(const TriangleMesh& mesh, const std::string& path) {
-  std::ofstream out(path, std::ios::binary);
-  out << "ply\nformat binary_little_endian 1.0\nelement vertex " << mesh.vertex_count()
-      << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\n"
-         "property float ny\nproperty float nz\nelement face "
-      << mesh.triangle_count() << "\nproperty list uchar int vertex_indices\nend_header\n";
-  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
-    out.write(reinterpret_cast<const char*>(&mesh.positions[3 * v]), 3 * sizeof(float));
-    out.write(reinterpret_cast<const char*>(&mesh.normals[3 * v]), 3 * sizeof(float));
+// The truth as another renderer gets it: the same surface (every vertex
+// one of the shared subdivision's, bit for bit, and every edge, by its
+// end points' bits, shared by two triangles in opposite directions), each
+// vertex's normal the exact one of the base triangle it belongs to, and the
+// base mesh's creases kept: a point on a base edge has a copy per side,
+// whose normals differ by about the facets' own angle.
+TEST(MeshSurface, ExportedTruthIsTheSameSurfaceWithItsCreases) {
+  const TriangleMesh base = octahedron();
+  const double amplitude = 0.005;
+  const MeshSubdivision plan = plan_subdivision(base, 0.37);
+  const TriangleMesh shared = subdivide_displaced(base, plan, test_height(), amplitude);
+  const TriangleMesh out = displaced_mesh_for_export(base, plan, test_height(), amplitude);
+  ASSERT_EQ(out.normals.size(), out.positions.size());
+  using Point = std::array<float, 3>;
+  const auto point = [](const TriangleMesh& m, unsigned v) {
+    return Point{m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]};
+  };
+  std::map<Point, int> shared_points;
+  for (unsigned v = 0; v < shared.vertex_count(); ++v) shared_points[point(shared, v)] = 0;
+  std::map<Point, std::vector<Vec3>> copies;
+  for (unsigned v = 0; v < out.vertex_count(); ++v) {
+    ASSERT_EQ(shared_points.count(point(out, v)), 1u) << "vertex " << v;
+    const float* n = &out.normals[3 * v];
+    copies[point(out, v)].push_back({n[0], n[1], n[2]});
   }
-  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const unsigned char three = 3;
-    out.write(reinterpret_cast<const char*>(&three), 1);
-    for (int k = 0; k < 3; ++k) {
-      const std::int32_t index = std::int32_t(mesh.triangles[3 * t + k]);
-      out.write(reinterpret_cast<const char*>(&index), sizeof index);
-    }
+  EXPECT_EQ(copies.size(), shared.vertex_count());
+  std::map<std::pair<Point, Point>, int> directed;
+  for (std::size_t t = 0; t < out.triangle_count(); ++t)
+    for (int k = 0; k < 3; ++k)
+      ++directed[{point(out, out.triangles[3 * t + k]),
+                  point(out, out.triangles[3 * t + (k + 1) % 3])}];
+  for (const auto& [e, count] : directed) {
+    EXPECT_EQ(count, 1);
+    EXPECT_EQ(directed.count({e.second, e.first}), 1u) << "an open edge";
   }
+  // The octahedron's facets meet at 109.5 degrees (normals 70.5 degrees
+  // apart): a point inside an edge has one copy per side, whose normals
+  // the displacement tilts by at most atan(A |grad h|) each.
+  double largest_crease = 0.0, smallest_crease = 180.0;
+  for (const auto& [p, normals] : copies) {
+    if (normals.size() != 2) continue;
+    const double angle = degrees(angle_between(normals[0], normals[1]));
+    largest_crease = std::max(largest_crease, angle);
+    smallest_crease = std::min(smallest_crease, angle);
+  }
+  const double tilt = degrees(std::atan(amplitude * max_gradient_norm(test_height())));
+  std::printf("creases %.2f to %.2f degrees (facets 70.53, tilt up to %.2f)\n", smallest_crease,
+              largest_crease, tilt);
+  EXPECT_GT(smallest_crease, 70.53 - 2 * tilt);
+  EXPECT_LT(largest_crease, 70.53 + 2 * tilt);
+  std::size_t squeezed = 0;
+  for (std::size_t t = 0; t < shared.triangle_count(); ++t) {
+    const unsigned* c = &shared.triangles[3 * t];
+    squeezed += c[0] == c[1] || c[1] == c[2] || c[2] == c[0];
+  }
+  EXPECT_EQ(out.triangle_count(), shared.triangle_count() - squeezed);
 }
 
 json small_scene() {

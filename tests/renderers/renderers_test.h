@@ -5,9 +5,11 @@
 // as a pass.
 #pragma once
 
+#include <gtest/gtest.h>
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -16,7 +18,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "analysis/metrics.h"
+#include "core/tessellation.h"
 #include "image/image_io.h"
+#include "mesh_files.h"
+#include "renderers/external/external.h"
 #include "renderers/renderers.h"
 #include "scene/scene_json.h"
 #include "temp_dir_test.h"
@@ -90,6 +96,75 @@ inline Scene lowpoly_sphere(std::vector<std::string> overrides) {
     parsed.push_back(parse_override(o));
   for (const std::string& o : overrides) parsed.push_back(parse_override(o));
   return load_scene(kSource + "/scenes/lowpoly/sphere.json", parsed);
+}
+
+// A mesh shape read from a file the test writes: the calibration sphere's
+// 24-segment UV tessellation as a PLY (scenes/calibration/sphere.json, its
+// weave at A = 0.01), 96 x 96 px at 4 samples on the strata's centres, its
+// truth split at edge length 0.02 (about 0.2 M triangles: what another
+// renderer loads in seconds). `representation`: smooth, bump or displacement.
+inline json mesh_sphere_doc(const std::string& ply, const std::string& representation,
+                            const std::vector<std::string>& overrides = {}) {
+  json doc = calibration_scene("sphere");
+  const Scene analytic = scene_from_json(doc, "calibration sphere");
+  Tessellation t;
+  t.segments = 24;
+  write_ply(tessellate(analytic.shape, t), ply);
+  doc["shape"] = {{"type", "mesh"}, {"file", ply}};
+  doc["representation"] = representation;
+  doc["displacement"] = {{"edge_length", 0.02}};
+  doc["camera"]["width"] = doc["camera"]["height"] = 96;
+  doc["camera"]["spp"] = 4;
+  std::vector<Override> parsed;
+  for (const std::string& o : overrides) parsed.push_back(parse_override(o));
+  apply_overrides(doc, parsed, "mesh sphere");
+  return doc;
+}
+inline Scene mesh_sphere(const std::string& ply, const std::string& representation,
+                         const std::vector<std::string>& overrides = {}) {
+  return scene_from_json(mesh_sphere_doc(ply, representation, overrides), "mesh sphere");
+}
+
+// The triangles and normals `scene` exports as its truth
+// (external::mesh_shape_triangles), written to `ply` and read back as a
+// smooth-shaded mesh shape with offset `none`: what POV-Ray and Cycles are
+// given, rendered by the evaluator as they render it (shading normals
+// interpolated, shadow rays from the flat triangles).
+// The terminator-profile RMSE of `test` against `reference` (fraction of
+// albedo*E/pi), printed with `what`; the profiles must share 100 bins or more.
+inline double mesh_profile_rmse(const Image& test, const Image& reference, double scale,
+                                const char* what) {
+  const ProfileMetrics m =
+      compare_profiles(terminator_profile(test, scale), terminator_profile(reference, scale));
+  std::printf(
+      "[ mesh     ] %s: profile RMSE terminator %.6f overall %.6f, terminator at %.3f deg "
+      "(reference %.3f)\n",
+      what, m.rmse_terminator, m.rmse_overall, m.position, m.reference_position);
+  EXPECT_GE(m.common_bins, 100u) << what;
+  return m.rmse_terminator;
+}
+
+// `image` with `from`'s analysis channels: a mesh's analysis angles are
+// measured from its own interpolated normals, so the exported truth read
+// back as a smooth mesh (above) is binned by the truth's angles, not by its
+// bumpy normals', to be compared with the truth.
+inline Image with_analysis_of(Image image, const Image& from) {
+  for (const char* name : {"analysis.theta", "analysis.view"}) {
+    const int to = image.channel_index(name), source = from.channel_index(name);
+    if (to < 0 || source < 0) continue;
+    for (int y = 0; y < image.height; ++y)
+      for (int x = 0; x < image.width; ++x) image.at(x, y, to) = from.at(x, y, source);
+  }
+  return image;
+}
+
+inline Scene exported_truth_as_mesh(json doc, const std::string& ply) {
+  const Scene scene = scene_from_json(doc, "mesh sphere");
+  write_ply(external::mesh_shape_triangles(scene, /*truth=*/true), ply);
+  doc["shape"] = {{"type", "mesh"}, {"file", ply}};
+  doc["representation"] = "smooth";
+  doc["offset"] = {{"method", "none"}};
+  return scene_from_json(doc, "exported truth");
 }
 
 }  // namespace penumbra::renderer_test

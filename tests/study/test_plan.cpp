@@ -167,6 +167,38 @@ TEST(Plan, ConsistentNormalVariantsAreLeftOutOfTheExternalRenderers) {
   EXPECT_EQ(consistent, plan.variants.size() / 2);
 }
 
+// Bump on a mesh shape is evaluator-only (the external exporters say why):
+// a study with POV-Ray and Cycles plans their truth of each mesh variant
+// and none of their methods, and says so once per renderer, not as failed
+// renders.
+class PlanMesh : public TempDirTest {};
+TEST_F(PlanMesh, ExternalRenderersRenderAMeshTruthAndNoBump) {
+  std::ofstream(path("study.json")) << json{
+      {"version", 1},
+      {"name", "mesh"},
+      {"scenes", {kSource + "/scenes/meshes/wuson.json"}},
+      {"axes", {{{"pointer", "/height/amplitude"}, {"label", "A"}, {"values", {0.005, 0.01}}}}},
+      {"methods", {"none", "chiang2019"}},
+      {"renderers", {"evaluator", "povray", "blender"}}};
+  const Plan plan = plan_study(load_study(path("study.json")), 8.0 * (1ull << 30));
+  ASSERT_EQ(plan.variants.size(), 2u);
+  for (const Variant& v : plan.variants)
+    for (RendererKind r : {RendererKind::kPovray, RendererKind::kBlender}) {
+      std::size_t truths = 0, methods = 0;
+      for (std::size_t j : v.jobs)
+        if (plan.jobs[j].renderer == r) (plan.jobs[j].truth ? truths : methods) += 1;
+      EXPECT_EQ(truths, 1u) << v.id << " " << to_string(r);
+      EXPECT_EQ(methods, 0u) << v.id << " " << to_string(r);
+    }
+  std::size_t notes = 0;
+  for (const SkippedRenderer& s : plan.skipped) {
+    EXPECT_NE(s.why.find("mesh shape"), std::string::npos) << s.why;
+    EXPECT_TRUE(s.variant.empty());
+    ++notes;
+  }
+  EXPECT_EQ(notes, 2u);
+}
+
 class PlanMemory : public TempDirTest {};
 
 // 100,002 renders (4,762 amplitudes x the 20 methods and the truth of the

@@ -141,6 +141,24 @@ TEST_F(PreviewFolderTest, FlipMapsAreTheMeasuredMapsAndAreKeptLikeTheOthers) {
   // are then [0, 0]), so such a render still gets its map.
   EXPECT_TRUE(flip(test, ramp(0.0f), &drawn));
   EXPECT_EQ(text("images/t-flip.png"), fresh(test, ramp(0.0f)));
+
+  // A study hands the preview the map its comparison computed
+  // (study/compare.cpp) rather than computing it twice: measure_comparison
+  // gives the map behind its mean FLIP, and the picture drawn from it is the
+  // same bytes.
+  FlipImage measured;
+  const Measurement m = measure_comparison(test, truth, 1.0, ComparisonExtent::kFull, &measured);
+  ASSERT_EQ(measured.error.size(), std::size_t(test.width * test.height));
+  EXPECT_EQ(m.image.flip, mean_flip(measured));
+  fs::remove(path("images/t-flip.png"));
+  PreviewFolder folder(dir_);
+  ASSERT_TRUE(folder.flip(test, pixel_digest(test), truth, pixel_digest(truth), "images/t-flip.png",
+                          measured));
+  EXPECT_EQ(text("images/t-flip.png"), fresh(test, truth));
+  // Profile-only comparisons compute no map, and say so by leaving it empty.
+  FlipImage none;
+  measure_comparison(test, truth, 1.0, ComparisonExtent::kProfileOnly, &none);
+  EXPECT_TRUE(none.error.empty());
 }
 
 TEST_F(PreviewFolderTest, DrawsAgainWhatIsGoneOrEmpty) {

@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "core/mesh_surface.h"
 #include "image/image_io.h"
 #include "renderers/renderers.h"
 #include "util/files.h"
@@ -146,6 +147,13 @@ RendererRun with_geometry(const RendererInfo& info, const Image& colour, double 
   run.image = merge_with_geometry(colour, run.image, info);
   work.keep = false;
   return run;
+}
+
+TriangleMesh mesh_shape_triangles(const Scene& scene, bool truth) {
+  const TriangleMesh& base = scene.shape.mesh->mesh;
+  if (!truth) return base;
+  return displaced_mesh_for_export(base, plan_subdivision(base, scene.displacement.edge_length),
+                                   scene.height.function, scene.height.amplitude);
 }
 
 }  // namespace penumbra::external

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/grid_mesh.h"
 #include "renderers/renderer.h"
 
 namespace penumbra::external {
@@ -53,5 +54,12 @@ ExternalRun run_external(const RendererInfo& info, const std::vector<std::string
 // camera; marks `work` for removal.
 RendererRun with_geometry(const RendererInfo& info, const Image& colour, double seconds,
                           const Scene& scene, const RenderSettings& settings, WorkDir& work);
+
+// A mesh shape's triangles as an external renderer is given them, in scene
+// coordinates: its own vertices and normals, or (`truth`) its displaced
+// truth at the scene's edge length, split as the evaluator splits it and
+// shaded with the truth's exact normals (displaced_mesh_for_export,
+// core/mesh_surface.h).
+TriangleMesh mesh_shape_triangles(const Scene& scene, bool truth);
 
 }  // namespace penumbra::external

@@ -49,34 +49,37 @@ std::string export_blender_files(const Scene& scene, const std::string& folder) 
 
 const RendererEntry& blender_entry() {
   static const RendererEntry entry{
-      .info = {.id = "blender",
-               .name = "Blender 3.4 Cycles",
-               .debian_package = "blender",
-               .executable = "blender",
-               .executable_variable = "PENUMBRA_BLENDER",
-               .version_marker = "Blender ",
-               .note = "Blender 3.4 Cycles: bump via ray-differential finite differences, ground "
-                       "truth via a displaced mesh; its chiang2019 is the Bump node, which is "
-                       "cycles34 (Chiang's term against Ni after ensure_valid_reflection turns "
-                       "the bumped normal towards Ng at grazing views); both ids render the same "
-                       "Blender scene",
-               .bump_methods = {TerminatorMethod::kNone, TerminatorMethod::kChiang2019,
-                                TerminatorMethod::kCycles34, TerminatorMethod::kShadingOffset},
-               .other_methods = {TerminatorMethod::kNone, TerminatorMethod::kShadingOffset},
-               .methods_why_not = "Blender Cycles 3.4 offers only none, chiang2019 and cycles34 "
-                                  "(both the Bump node: Cycles 3.4's own term) and "
-                                  "shading-offset",
-               .offsets = {OffsetMethod::kNone, OffsetMethod::kCyclesGeometryOffset},
-               .offsets_why_not = "Blender Cycles 3.4 offers only its geometry offset",
-               .props_why_not = "props (extra spheres) are evaluator-only",
-               .specular_why_not = "the GGX lobe is evaluator-only: the Blender export is "
-                                   "Lambertian (Cycles' Glossy BSDF uses Fresnel and "
-                                   "multiple-scattering options the evaluator does not model)",
-               .height_maps = true,
-               .normal_maps = true,
-               .plane = true,
-               .consistent_normals_why_not = "Cycles interpolates a smooth mesh's normals "
-                                             "linearly; it has no consistent normal interpolation"},
+      .info =
+          {.id = "blender",
+           .name = "Blender 3.4 Cycles",
+           .debian_package = "blender",
+           .executable = "blender",
+           .executable_variable = "PENUMBRA_BLENDER",
+           .version_marker = "Blender ",
+           .note =
+               "Blender 3.4 Cycles: bump via ray-differential finite differences, ground "
+               "truth via a displaced mesh (a mesh shape's: the evaluator's subdivision; "
+               "bump on a mesh shape is evaluator-only); its chiang2019 is the Bump node, which is "
+               "cycles34 (Chiang's term against Ni after ensure_valid_reflection turns "
+               "the bumped normal towards Ng at grazing views); both ids render the same "
+               "Blender scene",
+           .bump_methods = {TerminatorMethod::kNone, TerminatorMethod::kChiang2019,
+                            TerminatorMethod::kCycles34, TerminatorMethod::kShadingOffset},
+           .other_methods = {TerminatorMethod::kNone, TerminatorMethod::kShadingOffset},
+           .methods_why_not = "Blender Cycles 3.4 offers only none, chiang2019 and cycles34 "
+                              "(both the Bump node: Cycles 3.4's own term) and "
+                              "shading-offset",
+           .offsets = {OffsetMethod::kNone, OffsetMethod::kCyclesGeometryOffset},
+           .offsets_why_not = "Blender Cycles 3.4 offers only its geometry offset",
+           .props_why_not = "props (extra spheres) are evaluator-only",
+           .specular_why_not = "the GGX lobe is evaluator-only: the Blender export is "
+                               "Lambertian (Cycles' Glossy BSDF uses Fresnel and "
+                               "multiple-scattering options the evaluator does not model)",
+           .height_maps = true,
+           .normal_maps = true,
+           .plane = true,
+           .consistent_normals_why_not = "Cycles interpolates a smooth mesh's normals "
+                                         "linearly; it has no consistent normal interpolation"},
       .render = render_blender,
       .version = external::probe_version,
       .pixel_code_digest = blender_code_digest,

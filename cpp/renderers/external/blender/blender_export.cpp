@@ -10,6 +10,7 @@
 #include "core/tessellation.h"
 #include "image/image_io.h"
 #include "renderers/external/blender/blender.h"
+#include "renderers/external/external.h"
 #include "scene/scene_json.h"
 
 namespace penumbra {
@@ -119,6 +120,14 @@ BlenderShading blender_shading(const Scene& scene, bool has_height) {
     throw ExportError(
         "Blender export: bump on a tessellated shape is evaluator-only (use the smooth "
         "representation, or no /shape/tessellation)");
+  // The same on a mesh shape: Cycles differentiates h over the flat
+  // triangle, the evaluator across the plane normal to Ni.
+  if (scene.shape.type == ShapeType::kMesh && scene.representation == Representation::kBump &&
+      has_height)
+    throw ExportError(
+        "Blender export: bump on a mesh shape is evaluator-only (Cycles differentiates h over "
+        "the flat triangle, the evaluator across the interpolated normal); its smooth and "
+        "displacement representations are exported");
   switch (scene.representation) {
     case Representation::kSmooth:
       return BlenderShading::kSmooth;
@@ -148,8 +157,13 @@ const char* mode_name(BlenderShading shading) {
   return "smooth";
 }
 
-// The mesh Blender loads, in Blender coordinates with outward winding.
-TriangleMesh blender_mesh(const Scene& scene, bool displaced) {
+// The mesh Blender loads, in scene coordinates.
+TriangleMesh scene_mesh(const Scene& scene, bool displaced) {
+  // A mesh shape's truth is its subdivision whatever the height, as the
+  // evaluator's is: with no height it shows the mesh's facets.
+  if (scene.shape.type == ShapeType::kMesh)
+    return external::mesh_shape_triangles(scene,
+                                          scene.representation == Representation::kDisplacement);
   const HeightFunction& hf = scene.height.function;
   const double amplitude = scene.height.amplitude;
   const SurfaceMap* height_map = scene.height.height_map();
@@ -168,10 +182,14 @@ TriangleMesh blender_mesh(const Scene& scene, bool displaced) {
               : GridResolution{512, scene.shape.type == ShapeType::kCylinder ? 1u : 256u};
   // A tessellated shape is sent as the evaluator's own triangles (its normals
   // are the exact ones at the vertices), through the same coordinate change.
-  TriangleMesh mesh =
-      scene.tessellation
-          ? tessellate(scene.shape, *scene.tessellation)
-          : make_grid_mesh(scene.shape, hf, displaced ? amplitude : 0.0, res, height_map);
+  return scene.tessellation
+             ? tessellate(scene.shape, *scene.tessellation)
+             : make_grid_mesh(scene.shape, hf, displaced ? amplitude : 0.0, res, height_map);
+}
+
+// The mesh Blender loads, in Blender coordinates with outward winding.
+TriangleMesh blender_mesh(const Scene& scene, bool displaced) {
+  TriangleMesh mesh = scene_mesh(scene, displaced);
   // Swap y and z (a mirror), then restore outward winding: Cycles flips the
   // shading normal on back faces, so a reversed triangle would shade dark.
   for (std::size_t i = 0; i < mesh.positions.size(); i += 3) {

@@ -49,8 +49,8 @@ const RendererEntry& povray_entry() {
                .version_marker = "POV-Ray 3",
                .note = "POV-Ray 3.7: bump via normal{function} (image height maps: the same cubic "
                        "B-spline as SDL functions over nearest-texel lookups), ground truth via "
-                       "isosurface (image maps and the plane: the evaluator's displaced grid as "
-                       "a mesh2)",
+                       "isosurface (image maps, the plane and mesh shapes: the evaluator's "
+                       "displaced mesh as a mesh2; bump on a mesh shape is evaluator-only)",
                .bump_methods = {TerminatorMethod::kNone},
                .other_methods = {TerminatorMethod::kNone},
                .methods_why_not = "POV-Ray has no shadow-terminator method (raw bump only)",

@@ -10,6 +10,7 @@
 #include "core/surface_map.h"
 #include "core/tessellation.h"
 #include "image/image_io.h"
+#include "renderers/external/external.h"
 #include "renderers/external/povray/povray.h"
 #include "scene/scene_json.h"
 
@@ -256,6 +257,28 @@ std::string mesh_sdl(const SdlContext& c) {
          mesh2_sdl(mesh, smooth, c.texture);
 }
 
+// A mesh shape: its own triangles and normals, or its displaced truth's
+// (mesh_shape_triangles). Bump is refused as on a tessellated shape: POV-Ray
+// differentiates h in 3D around the hit, the evaluator across the plane
+// normal to Ni, and h of a mesh is not constant along Ni.
+std::string mesh_shape_sdl(const SdlContext& c) {
+  const Scene& scene = c.scene;
+  if (scene.representation == Representation::kBump && c.has_height)
+    throw ExportError(
+        "POV-Ray export: bump on a mesh shape is evaluator-only (POV-Ray's bump pattern "
+        "differentiates h in 3D, the evaluator across the interpolated normal); its smooth and "
+        "displacement representations are exported");
+  const bool truth = scene.representation == Representation::kDisplacement;
+  const TriangleMesh mesh = external::mesh_shape_triangles(scene, truth);
+  return fmt::format(
+             "// Mesh shape{}: {} vertices, {} triangles. POV-Ray starts shadow rays on\n"
+             "// the flat triangle.\n",
+             truth ? ", its displaced truth at the evaluator's subdivision with the exact normals"
+                   : "",
+             mesh.vertex_count(), mesh.triangle_count()) +
+         mesh2_sdl(mesh, /*normals=*/true, c.texture);
+}
+
 // The displaced surface as the evaluator's own grid (make_grid_mesh at the
 // scene's edge length), its vertex normals the exact displaced normals: the
 // ground truth of image height maps and of the plane, which have no closed
@@ -490,10 +513,14 @@ PovrayExport export_povray(const Scene& scene) {
   const SdlContext c = sdl_context(scene);
   const bool displaced = scene.representation == Representation::kDisplacement && c.has_height;
   const bool grid = displaced && (c.map || scene.shape.type == ShapeType::kPlane);
-  out.single_thread = displaced && !grid;  // the isosurface
+  out.single_thread = displaced && !grid && scene.shape.type != ShapeType::kMesh;  // the isosurface
   out.sdl = sdl_header(scene, out);
   if (scene.tessellation) {
     out.sdl += mesh_sdl(c);
+    return out;
+  }
+  if (scene.shape.type == ShapeType::kMesh) {
+    out.sdl += mesh_shape_sdl(c);
     return out;
   }
   if (grid) {
