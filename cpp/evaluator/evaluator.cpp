@@ -1239,10 +1239,31 @@ void render_passes(const Scene& scene, const Tracer& tracer, const RenderOptions
 // method's error alike. Pixels whose centre ray misses the base shape
 // (silhouettes, a displaced surface beyond it) or meets a prop first keep
 // the mean.
-void centre_angles(const Scene& scene, std::vector<Image>* images) {
-  // A mesh has no closed form to meet at the pixel centre: its angles stay
-  // the means over the pixel's samples.
-  if (scene.shape.type == ShapeType::kMesh) return;
+// The base surface under the pixel-centre ray: the analytic shape's (a
+// tessellation's too), or a mesh shape's flat triangle with Ni as its
+// normal, so that a mesh's angles do not depend on the samples either.
+std::optional<Hit> centre_hit(const Scene& scene, const LowPolyMesh* mesh, const Ray& ray) {
+  Hit hit;
+  if (scene.shape.type != ShapeType::kMesh)
+    return penumbra::intersect(scene.shape, ray, 0.0, std::numeric_limits<double>::infinity(), &hit)
+               ? std::optional<Hit>(hit)
+               : std::nullopt;
+  const std::optional<LowPolyHit> h = mesh->intersect(ray);
+  if (!h) return std::nullopt;
+  hit.t = h->t;
+  hit.geometry = h->base;
+  return hit;
+}
+
+// `mesh`: a mesh shape's base triangles where the caller has them (built
+// here otherwise).
+void centre_angles(const Scene& scene, std::vector<Image>* images,
+                   const LowPolyMesh* mesh = nullptr) {
+  std::unique_ptr<const LowPolyMesh> own;
+  if (scene.shape.type == ShapeType::kMesh && !mesh) {
+    own = std::make_unique<const LowPolyMesh>(scene.shape);
+    mesh = own.get();
+  }
   const Camera& camera = scene.camera;
   const Props props(scene);
   const Vec3 orthographic_direction = normalize(camera.direction);
@@ -1252,12 +1273,10 @@ void centre_angles(const Scene& scene, std::vector<Image>* images) {
         for (int j = rows.begin(); j != rows.end(); ++j)
           for (int i = 0; i < camera.width; ++i) {
             const Ray ray = camera_ray(camera, orthographic_direction, i, j, 0, 0, 1, 1, Jitter{});
-            Hit hit;
-            if (!penumbra::intersect(scene.shape, ray, 0.0, std::numeric_limits<double>::infinity(),
-                                     &hit))
-              continue;
-            if (!props.empty() && props.occluded(ray.origin, ray.direction, hit.t)) continue;
-            const SurfaceGeometry& g = hit.geometry;
+            const std::optional<Hit> hit = centre_hit(scene, mesh, ray);
+            if (!hit) continue;
+            if (!props.empty() && props.occluded(ray.origin, ray.direction, hit->t)) continue;
+            const SurfaceGeometry& g = hit->geometry;
             const Vec3 wo = -ray.direction;
             const Vec3 n =
                 dot(g.n, wo) < 0.0 ? -g.n : g.n;  // seen from inside, as prepare() turns it
@@ -1326,7 +1345,7 @@ std::vector<Image> render_methods(const Scene& scene,
     local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     const LowPolyTracer tracer(scene, *mesh);
     render_passes(scene, tracer, options, methods, &images, &local);
-    centre_angles(scene, &images);
+    centre_angles(scene, &images, mesh.get());
   } else {
     const BaseTracer tracer(scene);
     render_passes(scene, tracer, options, methods, &images, &local);
@@ -1386,7 +1405,7 @@ Image render_tallied(const Scene& scene, const FactorGrid& grid, PixelTally* tal
     local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     const LowPolyTracer tracer(scene, *mesh);
     render_image(scene, tracer, options, {t}, &images, &local, {.tally = &request});
-    centre_angles(scene, &images);
+    centre_angles(scene, &images, mesh.get());
   } else {
     const BaseTracer tracer(scene);
     render_image(scene, tracer, options, {t}, &images, &local, {.tally = &request});
