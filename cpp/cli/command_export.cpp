@@ -62,7 +62,10 @@ Command add_export_command(CLI::App& app, SharedOptions&) {
   cmd->add_option("--to", a->to, fmt::format("{}", fmt::join(ids, " or ")))
       ->required()
       ->check(CLI::IsMember(ids));
-  cmd->add_option("scene", a->scene, "scene JSON file")->required();
+  cmd->add_option("scene", a->scene,
+                  "scene JSON file, or a mesh file (OBJ, PLY, glTF, ...) framed by a default "
+                  "scene")
+      ->required();
   cmd->add_option("-o,--output", a->output, "output folder")->required();
   add_scene_options(cmd, a->scene_args);
   return {cmd, [a](const CommandContext& c) { return export_scene(*a, c.out); }};

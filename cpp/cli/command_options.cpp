@@ -78,6 +78,7 @@ std::vector<Override> collect_overrides(const SceneArgs& a) {
 }  // namespace
 
 LoadedScene read_scene(const std::string& path, const SceneArgs& a) {
+  if (!is_scene_file_name(path)) return read_scene_document(asset_scene_document(path), path, a);
   return read_scene_document(read_json_file(path), path, a);
 }
 

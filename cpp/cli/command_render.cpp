@@ -165,7 +165,10 @@ Command add_render_command(CLI::App& app, SharedOptions&) {
   auto a = std::make_shared<RenderArgs>();
   CLI::App* cmd = app.add_subcommand(
       "render", "render a scene with the evaluator, POV-Ray or Blender Cycles (--renderer)");
-  cmd->add_option("scene", a->scene, "scene JSON file")->required();
+  cmd->add_option("scene", a->scene,
+                  "scene JSON file, or a mesh file (OBJ, PLY, glTF, ...) framed by a default "
+                  "scene")
+      ->required();
   cmd->add_option("-o,--output", a->output, "output OpenEXR file")->required();
   cmd->add_option("--preview", a->preview, "also write an sRGB PNG preview");
   add_scene_options(cmd, a->scene_args);

@@ -1,6 +1,7 @@
 #include "scene/scene_json.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -830,6 +831,46 @@ const char* to_string(Representation r) {
 
 const char* to_string(HeightFamily f) {
   return name_of<HeightFamily>(kHeightFamilyNames, f);
+}
+
+bool is_scene_file_name(const std::string& path) {
+  std::string extension = std::filesystem::path(path).extension().string();
+  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return extension == ".json";
+}
+
+nlohmann::json asset_scene_document(const std::string& path) {
+  const std::string file = std::filesystem::absolute(path).lexically_normal().string();
+  LoadedMesh loaded;
+  try {
+    loaded = load_mesh_file(file, MeshTransform{}, MeshNormals::kFile);
+  } catch (const MeshFileError& e) {
+    throw InputError(
+        path, "",
+        fmt::format("expected a scene file (.json) or a mesh file Assimp reads: {}", e.what()));
+  }
+  const MeshSurface& m = *loaded.surface;
+  const Vec3 c = mesh_centre(m), extent = m.bounds_max - m.bounds_min;
+  const double r = mesh_radius(m);
+  // The box's face towards the camera, with 10 % to spare; a flat mesh seen
+  // edge-on still gets a view of its size.
+  const double side = 1.1 * std::max({extent.x, extent.y, 0.1 * r});
+  return {{"version", 1},
+          {"name", std::filesystem::path(path).stem().string()},
+          {"camera",
+           {{"projection", "orthographic"},
+            {"position", {c.x, c.y, c.z - 3.0 * r}},
+            {"direction", {0, 0, 1}},
+            {"right", {side, 0, 0}},
+            {"up", {0, side, 0}},
+            {"width", 256},
+            {"height", 256},
+            {"spp", 16},
+            {"seed", 1}}},
+          {"light", {{"type", "distant"}, {"direction", {-1, 0.3, -0.2}}, {"irradiance", kPi}}},
+          {"shape", {{"type", "mesh"}, {"file", file}}},
+          {"material", {{"albedo", 0.8}}},
+          {"representation", "bump"}};
 }
 
 }  // namespace penumbra

@@ -52,4 +52,17 @@ Scene load_scene(const std::string& path, const std::vector<Override>& overrides
 const char* to_string(Representation r);
 const char* to_string(HeightFamily f);
 
+// Whether `path` names a scene file (.json) rather than a mesh file.
+bool is_scene_file_name(const std::string& path);
+
+// A scene for a mesh file given where a scene file is expected (`penumbra
+// render asset.glb`): the mesh (absolute path) as the shape, seen along +z
+// by an orthographic camera that frames its bounding box with a margin of
+// 10 % (a square view, 256 x 256 px, 16 spp), lit by the sun from the calibration
+// scenes' direction (towards the light (-1, 0.3, -0.2): a terminator crosses
+// the view), albedo 0.8, the bump representation with no height (smooth
+// until a height is set with --set). InputError naming the file when it is
+// not a mesh Assimp reads.
+nlohmann::json asset_scene_document(const std::string& path);
+
 }  // namespace penumbra

@@ -153,6 +153,47 @@ TEST_F(Cli, RenderWritesExrWithAnalysisChannelsAndPreview) {
   expect_only({"out.exr", "out.png"});
 }
 
+// A mesh file where a scene is expected renders with a default scene that
+// frames it: the whole mesh inside the image, a terminator across it, and
+// --set on top (a height makes `--method` act on bumps); a file that is
+// not a mesh is refused with its name, exit 2, nothing written.
+TEST_F(Cli, RenderTakesAMeshFileFramedByADefaultScene) {
+  std::ofstream(path("octahedron.obj"))
+      << "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n"
+         "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n";
+  const Result r = run({"render", path("octahedron.obj"), "-o", path("out.exr"), "--width", "48",
+                        "--height", "48", "--method", "estevez2019", "--set",
+                        R"(/height={"type": "grating", "amplitude": 0.01, "frequency": 4,)"
+                        R"( "direction": [1, 0, 0]})"});
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  std::map<std::string, std::string> attributes;
+  const Image image = read_image(path("out.exr"), &attributes);
+  const nlohmann::json scene = nlohmann::json::parse(attributes.at("penumbra:scene"));
+  EXPECT_EQ(scene.at("shape").at("type"), "mesh");
+  EXPECT_EQ(scene.at("terminator").at("method"), "estevez2019");
+  // Framed: no covered pixel on the border, and the mesh's lit and dark
+  // sides both in view.
+  std::size_t covered = 0, lit = 0, dark = 0;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const float a = image.at(x, y, 3);
+      if (x == 0 || y == 0 || x == image.width - 1 || y == image.height - 1) {
+        EXPECT_EQ(a, 0.0f) << x << ", " << y;
+      }
+      if (a < 1.0f) continue;
+      ++covered;
+      (image.at(x, y, 0) > 0.0f ? lit : dark) += 1;
+    }
+  EXPECT_GT(covered, 800u);  // the diamond fills 2 of the 2.2^2 square units
+  EXPECT_GT(lit, 100u);
+  EXPECT_GT(dark, 20u);
+  std::ofstream(path("garbage.obj")) << "this is not a mesh\n";
+  const Result bad = run({"render", path("garbage.obj"), "-o", path("bad.exr")});
+  EXPECT_EQ(bad.code, kExitBadInput);
+  EXPECT_NE(bad.err.find("garbage.obj"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(path("bad.exr")));
+}
+
 TEST_F(Cli, GlobalOptionsWorkAfterTheSubcommand) {
   const Result r = run({"render", kScenes + "/sphere-grating.json", "-o", path("out.exr"),
                         "--width", "8", "--height", "8", "--threads", "1"});
