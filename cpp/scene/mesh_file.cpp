@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 #include <assimp/Importer.hpp>
 
+#include "util/files.h"
 #include "util/hash.h"
 
 // Debian builds Assimp with its assertions on (ASSIMP_BUILD_DEBUG), and a
@@ -194,8 +195,10 @@ void check_ply_header(const std::string& path, std::uintmax_t size) {
 
 LoadedMesh read_mesh_file(const std::string& path, const MeshTransform& transform,
                           MeshNormals normals) {
+  // A folder, FIFO or device is called what it is (a FIFO would block the
+  // reader, /dev/zero never end).
+  if (const std::string why = input_file_problem(path); !why.empty()) throw MeshFileError(why);
   std::error_code error;
-  if (!fs::is_regular_file(path, error)) throw MeshFileError("no such file");
   check_ply_header(path, fs::file_size(path, error));
   Assimp::Importer importer;
   // Points and lines are dropped as they are sorted out; cameras, lights
