@@ -25,7 +25,7 @@ constexpr AddCommand kCommands[] = {
     add_compare_command, add_calibrate_command, add_run_command,       add_run_batch_command,
     add_status_command,  add_report_command,    add_figure_command,    add_table_command,
     add_fit_command,     add_contour_command,   add_bench_command,     add_pyramid_command,
-    add_bake_command,    add_filtering_command, add_exit_codes_command};
+    add_bake_command,    add_mesh_command,      add_filtering_command, add_exit_codes_command};
 
 // "penumbra rendr": name the unknown subcommand and list the real ones
 // (CLI11 only says the argument was not expected).

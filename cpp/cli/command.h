@@ -78,6 +78,7 @@ Command add_pyramid_command(CLI::App& app, SharedOptions& shared);
 Command add_bake_command(CLI::App& app, SharedOptions& shared);
 Command add_filtering_command(CLI::App& app, SharedOptions& shared);
 Command add_exit_codes_command(CLI::App& app, SharedOptions& shared);
+Command add_mesh_command(CLI::App& app, SharedOptions& shared);
 
 // Helpers that several commands share (cli/command_options.cpp).
 

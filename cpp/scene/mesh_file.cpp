@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -267,6 +270,65 @@ LoadedMesh load_mesh_file(const std::string& path, const MeshTransform& transfor
   if (loaded.size() > 16) loaded.clear();
   loaded[key] = mesh;
   return mesh;
+}
+
+}  // namespace penumbra
+
+namespace penumbra {
+
+namespace {
+
+void write_ply_body(const TriangleMesh& mesh, const std::string& comment, CheckedFile& out) {
+  const std::string header = fmt::format(
+      "ply\nformat binary_little_endian 1.0\ncomment {}\nelement vertex {}\nproperty float x\n"
+      "property float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty "
+      "float nz\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+      comment, mesh.vertex_count(), mesh.triangle_count());
+  out.write(header.data(), header.size());
+  std::vector<float> vertices(6 * mesh.vertex_count());
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v)
+    for (std::size_t k = 0; k < 3; ++k) {
+      vertices[6 * v + k] = mesh.positions[3 * v + k];
+      vertices[6 * v + 3 + k] = mesh.normals[3 * v + k];
+    }
+  out.write(vertices.data(), vertices.size() * sizeof(float));
+  std::vector<unsigned char> faces(13 * mesh.triangle_count());
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    faces[13 * t] = 3;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::int32_t index = std::int32_t(mesh.triangles[3 * t + k]);
+      std::memcpy(&faces[13 * t + 1 + 4 * k], &index, sizeof index);
+    }
+  }
+  out.write(faces.data(), faces.size());
+}
+
+void write_obj_body(const TriangleMesh& mesh, const std::string& comment, CheckedFile& out) {
+  fmt::memory_buffer text;
+  fmt::format_to(std::back_inserter(text), "# {}\n", comment);
+  const std::vector<float>& p = mesh.positions;
+  const std::vector<float>& n = mesh.normals;
+  for (std::size_t i = 0; i < p.size(); i += 3)
+    fmt::format_to(std::back_inserter(text), "v {:.9g} {:.9g} {:.9g}\n", p[i], p[i + 1], p[i + 2]);
+  for (std::size_t i = 0; i < n.size(); i += 3)
+    fmt::format_to(std::back_inserter(text), "vn {:.9g} {:.9g} {:.9g}\n", n[i], n[i + 1], n[i + 2]);
+  // OBJ counts from 1; a vertex's normal has its index.
+  for (std::size_t i = 0; i < mesh.triangles.size(); i += 3)
+    fmt::format_to(std::back_inserter(text), "f {0}//{0} {1}//{1} {2}//{2}\n",
+                   mesh.triangles[i] + 1, mesh.triangles[i + 1] + 1, mesh.triangles[i + 2] + 1);
+  out.write(text.data(), text.size());
+}
+
+}  // namespace
+
+void write_mesh_file(const TriangleMesh& mesh, const std::string& path,
+                     const std::string& comment) {
+  std::string extension = fs::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const bool ply = extension == ".ply";
+  write_atomically(path, [&](CheckedFile& out) {
+    ply ? write_ply_body(mesh, comment, out) : write_obj_body(mesh, comment, out);
+  });
 }
 
 }  // namespace penumbra

@@ -35,11 +35,18 @@ OverrideList sampling(double edge_length, int spp) {
 }
 
 // The plan's truth job with other settings; nullopt (and why) when the scene
-// would need more memory than allowed.
+// would need more memory than allowed or more triangles than a truth may
+// have (the reader's limit, kMaxDisplacementTriangles): the budget ends
+// there for that variant instead of the study.
 std::optional<Job> truth_at(const Job& truth, double edge_length, int spp, double max_memory_bytes,
                             std::string* why) {
   Job job = truth;
-  job.refine(sampling(edge_length, spp), nullptr);  // renders once: kept as its recipe
+  try {
+    job.refine(sampling(edge_length, spp), nullptr);  // renders once: kept as its recipe
+  } catch (const InputError& e) {
+    *why = fmt::format("a check at edge length {:g} cannot be rendered: {}", edge_length, e.what());
+    return std::nullopt;
+  }
   job.label = fmt::format("{}-e{:g}-s{}", truth.label, edge_length, spp);
   if (job.resources.memory_bytes > max_memory_bytes) {
     *why = fmt::format("a check at edge length {:g} needs {:.1f} GiB, above the limit of {:.1f}",
@@ -174,9 +181,12 @@ VariantConvergence continue_chain(const Job& truth, int edge_steps, int spp_step
 
 std::string convergence_log_line(const Plan& plan, const VariantConvergence& r) {
   const Variant& v = plan.variants[r.variant];
-  return fmt::format("ground truth {} ({}): {} at edge length {:g}, {} spp (change {:.2g}{})", v.id,
-                     v.label, r.converged ? "converged" : "NOT CONVERGED", r.edge_length, r.spp,
-                     r.reached, r.converged ? "" : "; " + r.why);
+  // A check that could not be rendered leaves the change unmeasured.
+  const std::string change = std::isnan(r.reached) ? std::string("change not measured")
+                                                   : fmt::format("change {:.2g}", r.reached);
+  return fmt::format("ground truth {} ({}): {} at edge length {:g}, {} spp ({}{})", v.id, v.label,
+                     r.converged ? "converged" : "NOT CONVERGED", r.edge_length, r.spp, change,
+                     r.converged ? "" : "; " + r.why);
 }
 
 ConvergenceDecision decide_refinement(double edge_change, double spp_change, int edge_steps,

@@ -147,6 +147,9 @@ struct AxisStatistics {
 struct StudyStatistics {
   RankingStatistics overall;
   std::vector<RankingStatistics> per_scene;
+  // Some scene is a mesh shape: the headline says whether the first
+  // scene's leader stays in the best rank group on every other scene.
+  bool mesh_scenes = false;
   std::vector<AxisStatistics> by_axis;
   std::vector<std::string> headline;  // the report's lead: 3 to 6 sentences
   // Where a differently defined quantity (the mean absolute terminator RMSE)

@@ -297,40 +297,67 @@ std::string leader_change_sentence(const StudyStatistics& s) {
   return "";
 }
 
+// Whether `base`'s leader stays in the best rank group of every other
+// ranking, and who leads where it does not. Rank groups, not first places:
+// a leader tied with others has not lost to them. `opening` names the base
+// ("Under the sun (light)"), `where` the word before another's id ("under",
+// "on"), `what` the things compared ("lighting", "scene").
+struct NamedRanking {
+  std::string id;
+  const RankingStatistics* ranking = nullptr;
+};
+std::string leader_holds_sentence(const std::string& opening, const RankingStatistics& base,
+                                  const std::vector<NamedRanking>& others, const char* where,
+                                  const char* what) {
+  const MethodStatistics& lead = base.methods.front();
+  std::vector<std::string> kept, lost;
+  for (const NamedRanking& o : others) {
+    const MethodStatistics* m = o.ranking->find(lead.method);
+    if (!m || o.ranking->methods.empty()) continue;
+    if (m->rank == 1) {
+      kept.push_back(o.id);
+      continue;
+    }
+    const MethodStatistics& other = o.ranking->methods.front();
+    lost.push_back(fmt::format("{} (rank group {} at {}; {} leads at {})", o.id, m->rank, share(*m),
+                               other.method, share(other)));
+  }
+  std::string out = fmt::format("{}, {} leads at {} of raw bump's combined error", opening,
+                                lead.method, share(lead));
+  if (lost.empty())
+    return out + fmt::format(
+                     " and stays in the best rank group {} all {} other {}s ({}): the ranking's "
+                     "winner does not change with the {}.",
+                     where, kept.size(), what, list_text(kept), what);
+  out += fmt::format("; it falls out of the best rank group {} {}", where, list_text(lost, "; "));
+  if (!kept.empty()) out += fmt::format(", and stays in it {} {}", where, list_text(kept));
+  return out + fmt::format(": the winner changes with the {}.", what);
+}
+
 // For an axis of kinds of light (AxisStatistics::lighting): whether the
-// first level's leader stays in the best rank group under every other
-// level, and who leads where it does not. Rank groups, not first places:
-// a leader tied with others has not lost to them.
+// first level's leader holds under the others.
 std::string lighting_sentence(const StudyStatistics& s) {
   for (const AxisStatistics& a : s.by_axis) {
     if (!a.lighting || a.levels.empty() || a.levels.front().ranking.methods.empty()) continue;
-    const LevelRanking& base = a.levels.front();
-    const MethodStatistics& lead = base.ranking.methods.front();
-    std::vector<std::string> kept, lost;
-    for (std::size_t l = 1; l < a.levels.size(); ++l) {
-      const RankingStatistics& r = a.levels[l].ranking;
-      const MethodStatistics* m = r.find(lead.method);
-      if (!m || r.methods.empty()) continue;
-      if (m->rank == 1) {
-        kept.push_back(a.levels[l].value_id);
-        continue;
-      }
-      const MethodStatistics& other = r.methods.front();
-      lost.push_back(fmt::format("{} (rank group {} at {}; {} leads at {})", a.levels[l].value_id,
-                                 m->rank, share(*m), other.method, share(other)));
-    }
-    std::string out = fmt::format("Under the {} ({}), {} leads at {} of raw bump's combined error",
-                                  base.value_id, short_label(a), lead.method, share(lead));
-    if (lost.empty())
-      return out + fmt::format(
-                       " and stays in the best rank group under all {} other lightings "
-                       "({}): the ranking's winner does not change with the lighting.",
-                       kept.size(), list_text(kept));
-    out += fmt::format("; it falls out of the best rank group under {}", list_text(lost, "; "));
-    if (!kept.empty()) out += fmt::format(", and stays in it under {}", list_text(kept));
-    return out + ": the winner changes with the lighting.";
+    std::vector<NamedRanking> others;
+    for (std::size_t l = 1; l < a.levels.size(); ++l)
+      others.push_back({a.levels[l].value_id, &a.levels[l].ranking});
+    return leader_holds_sentence(
+        fmt::format("Under the {} ({})", a.levels.front().value_id, short_label(a)),
+        a.levels.front().ranking, others, "under", "lighting");
   }
   return "";
+}
+
+// For a study of mesh assets (StudyStatistics::mesh_scenes): whether the
+// first scene's leader (the study's reference shape) holds on every asset.
+std::string scene_sentence(const StudyStatistics& s) {
+  if (!s.mesh_scenes || s.per_scene.size() < 2 || s.per_scene.front().methods.empty()) return "";
+  std::vector<NamedRanking> others;
+  for (std::size_t i = 1; i < s.per_scene.size(); ++i)
+    others.push_back({s.per_scene[i].scene, &s.per_scene[i]});
+  return leader_holds_sentence(fmt::format("On the first scene ({})", s.per_scene.front().scene),
+                               s.per_scene.front(), others, "on", "scene");
 }
 
 }  // namespace
@@ -343,6 +370,7 @@ std::vector<std::string> lead_sentences(const StudyStatistics& s) {
   out.push_back(worse_sentence(s.overall));
   if (std::string lighting = lighting_sentence(s); !lighting.empty())
     out.push_back(std::move(lighting));
+  if (std::string scenes = scene_sentence(s); !scenes.empty()) out.push_back(std::move(scenes));
   const std::vector<Dependence> deps = dependences(s);
   std::size_t said = 0;
   for (std::size_t k = 0; k < deps.size() && said < 2; ++k)

@@ -136,8 +136,11 @@ std::vector<RankingTask> ranking_tasks(const Plan& plan, const std::vector<Study
   std::vector<std::string> scenes;
   for (const Variant& v : plan.variants)
     if (v.section == SectionKind::kBump &&
-        std::find(scenes.begin(), scenes.end(), v.scene) == scenes.end())
+        std::find(scenes.begin(), scenes.end(), v.scene) == scenes.end()) {
       scenes.push_back(v.scene);
+      s.mesh_scenes |=
+          !v.jobs.empty() && plan.jobs[v.jobs.front()].scene().shape.type == ShapeType::kMesh;
+    }
   s.per_scene.resize(scenes.size());
   for (std::size_t i = 0; i < scenes.size(); ++i) {
     std::vector<char> sel(n, 0);

@@ -5,9 +5,11 @@
 #include "temp_dir_test.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <regex>
 #include <sstream>
@@ -19,6 +21,7 @@
 
 #include "cli/cli.h"
 #include "image/image_io.h"
+#include "scene/mesh_file.h"
 
 namespace penumbra {
 namespace {
@@ -192,6 +195,65 @@ TEST_F(Cli, RenderTakesAMeshFileFramedByADefaultScene) {
   EXPECT_EQ(bad.code, kExitBadInput);
   EXPECT_NE(bad.err.find("garbage.obj"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(path("bad.exr")));
+}
+
+// `penumbra mesh` writes the triangles a scene stands for. PLY keeps the
+// floats' bits: the mesh read back renders the tessellated sphere's smooth
+// image bit for bit. OBJ keeps 9 significant digits, which name every float
+// exactly: read back (Assimp's parser rounds), each coordinate is within one
+// float ulp of the tessellation's (6e-8 of the unit radius). The shipped
+// control sphere is this command's output, so the test fails when it is stale.
+TEST_F(Cli, MeshWritesTheTrianglesASceneStandsFor) {
+  const std::string sphere = kScenes + "/lowpoly/sphere.json";
+  ASSERT_EQ(run({"mesh", sphere, "--segments", "12", "-o", path("s.ply")}).code, kExitOk);
+  ASSERT_EQ(run({"mesh", sphere, "--segments", "12", "-o", path("s.obj")}).code, kExitOk);
+  const std::vector<std::string> small = {"--width", "40", "--height", "40", "--spp", "4"};
+  auto render_to = [&](std::vector<std::string> args, const std::string& out) {
+    args.insert(args.end(), {"-o", path(out)});
+    args.insert(args.end(), small.begin(), small.end());
+    EXPECT_EQ(run(args).code, kExitOk) << out;
+    return read_image(path(out));
+  };
+  const Image built_in = render_to({"render", sphere, "--segments", "12"}, "built-in.exr");
+  const Image from_ply = render_to(
+      {"render", sphere, "--set", R"(/shape={"type": "mesh", "file": ")" + path("s.ply") + "\"}"},
+      "ply.exr");
+  ASSERT_EQ(built_in.pixels.size(), from_ply.pixels.size());
+  std::size_t differ = 0;
+  for (std::size_t p = 0; p < built_in.pixels.size(); p += built_in.channels.size())
+    for (std::size_t c = 0; c < 4; ++c) differ += built_in.pixels[p + c] != from_ply.pixels[p + c];
+  EXPECT_EQ(differ, 0u);
+  const LoadedMesh ply = load_mesh_file(path("s.ply"), {}, MeshNormals::kFile);
+  const LoadedMesh obj = load_mesh_file(path("s.obj"), {}, MeshNormals::kFile);
+  ASSERT_EQ(obj.surface->mesh.positions.size(), ply.surface->mesh.positions.size());
+  ASSERT_EQ(obj.surface->mesh.triangles, ply.surface->mesh.triangles);
+  for (std::size_t i = 0; i < ply.surface->mesh.positions.size(); ++i) {
+    const float a = ply.surface->mesh.positions[i], b = obj.surface->mesh.positions[i];
+    EXPECT_LE(std::abs(a - b), std::nextafter(std::abs(a), 2.0f) - std::abs(a)) << i;
+  }
+  // The truth of a mesh shape: the evaluator's subdivision, as exported.
+  const Result truth = run({"mesh", kScenes + "/meshes/sphere-control.json", "--representation",
+                            "displacement", "-o", path("truth.ply")});
+  ASSERT_EQ(truth.code, kExitOk) << truth.err;
+  EXPECT_NE(truth.out.find("displaced ground truth"), std::string::npos) << truth.out;
+  EXPECT_GT(
+      load_mesh_file(path("truth.ply"), {}, MeshNormals::kFile).surface->mesh.triangle_count(),
+      ply.surface->mesh.triangle_count() * 100);
+  const Result bad = run({"mesh", sphere, "-o", path("s.stl")});
+  EXPECT_EQ(bad.code, kExitBadInput);
+  EXPECT_NE(bad.err.find(".obj or .ply"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(path("s.stl")));
+  // scenes/meshes/sphere-uv64.obj is this command's file, its first line
+  // (the command that made it) aside.
+  ASSERT_EQ(run({"mesh", sphere, "--segments", "64", "-o", path("uv64.obj")}).code, kExitOk);
+  auto body = [](const std::string& file) {
+    std::ifstream in(file);
+    const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    return text.substr(std::min(text.size(), text.find('\n')));
+  };
+  EXPECT_TRUE(body(path("uv64.obj")) == body(kScenes + "/meshes/sphere-uv64.obj"))
+      << "regenerate with: penumbra mesh scenes/lowpoly/sphere.json --segments 64 -o "
+         "scenes/meshes/sphere-uv64.obj (and keep its first line)";
 }
 
 TEST_F(Cli, GlobalOptionsWorkAfterTheSubcommand) {

@@ -233,6 +233,46 @@ TEST_F(Convergence, AMemoryLimitStopsTheMeshRefinementAndSaysSo) {
   EXPECT_NE(r[0].why.find("GiB"), std::string::npos) << r[0].why;
 }
 
+// A check finer than the triangles a truth may have (the scene reader's
+// limit) ends that variant's mesh budget, as memory does, instead of
+// failing the study. The calibration cylinder at edge 0.001 is 25 million
+// triangles, its edge / 2 check 101 million; the renders themselves are of
+// the scene at edge 0.04, each with a seed of its own, so that every change
+// is above the tolerance.
+TEST_F(Convergence, ATriangleLimitStopsTheMeshRefinementAndSaysSo) {
+  const json study = {
+      {"version", 1},
+      {"scenes", {std::string(PENUMBRA_SOURCE_DIR) + "/scenes/calibration/cylinder.json"}},
+      {"set",
+       {{"/camera/width", 16},
+        {"/camera/height", 16},
+        {"/camera/spp", 1},
+        {"/displacement/edge_length", 0.001}}},
+      {"methods", {"none"}},
+      {"renderers", {"evaluator"}}};
+  std::ofstream(path("s.json")) << study.dump();
+  Plan p = plan_study(load_study(path("s.json")), 8.0 * kGiB);
+  std::uint64_t seed = 1;
+  const RenderBatch cheap = [&](const std::vector<Job>& jobs, const std::vector<ChainState>&,
+                                std::vector<std::string>* errors) {
+    std::vector<std::optional<Image>> out;
+    for (const Job& j : jobs) {
+      Scene s = j.scene();
+      s.displacement.edge_length = 0.04;
+      s.camera.seed = seed++;
+      out.push_back(render(s));
+    }
+    errors->assign(jobs.size(), "");
+    return out;
+  };
+  const auto r = converge_truths(p, budget(1e-12, 2, 1), 8.0 * kGiB, cheap);
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_FALSE(r[0].converged);
+  EXPECT_NE(r[0].why.find("edge length 0.0005 cannot be rendered"), std::string::npos) << r[0].why;
+  EXPECT_NE(r[0].why.find("million"), std::string::npos) << r[0].why;
+  EXPECT_EQ(r[0].edge_length, 0.001);
+}
+
 TEST_F(Convergence, AZeroBudgetRendersNothingAndFlagsEveryTruth) {
   Plan p = plan();
   const auto r = converge_truths(p, budget(0.001, 0, 3), 8.0 * kGiB, batch());

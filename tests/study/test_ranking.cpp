@@ -246,6 +246,41 @@ TEST(StudyStatistics, TheHeadlineSaysWhetherTheSunsWinnerWinsUnderEveryLighting)
   EXPECT_TRUE(kept) << s.headline[0];
 }
 
+// A study of mesh assets says whether its first scene's leader (the
+// reference shape) stays in the best rank group on each asset: here a leads
+// on the sphere and on the duck, b on the wuson.
+TEST(StudyStatistics, TheHeadlineSaysWhetherTheFirstScenesWinnerHoldsOnEveryAsset) {
+  Synthetic t;
+  std::size_t v = 0;
+  for (const char* scene : {"sphere", "duck", "wuson"})
+    for (int a = 0; a < 6; ++a, ++v) {
+      const bool wuson = std::string(scene) == "wuson";
+      const double none = 0.02 * (1 + a), jitter = 1.0 + 0.01 * (a % 3 - 1);
+      t.add(v, "none", none, 0.0, 0.0);
+      t.add(v, "a", none * (wuson ? 0.9 : 0.5) * jitter, 0.0, 0.0);
+      t.add(v, "b", none * (wuson ? 0.4 : 0.7) / jitter, 0.0, 0.0);
+      t.plan.variants[v].scene = scene;
+      t.plan.variants[v].section = SectionKind::kBump;
+    }
+  StudyStatistics s = study_statistics(t.plan, t.rows, {});
+  // The synthetic plan has no scenes to read shapes from: no mesh, no sentence.
+  EXPECT_FALSE(s.mesh_scenes);
+  for (const std::string& line : s.headline)
+    EXPECT_EQ(line.find("On the first scene"), std::string::npos) << line;
+  s.mesh_scenes = true;
+  s.headline = lead_sentences(s);
+  ASSERT_LE(s.headline.size(), 6u);
+  std::string said;
+  for (const std::string& line : s.headline)
+    if (line.rfind("On the first scene (sphere), a leads at 50", 0) == 0) said = line;
+  ASSERT_FALSE(said.empty()) << s.headline[0];
+  EXPECT_NE(said.find("falls out of the best rank group on wuson (rank group 2"), std::string::npos)
+      << said;
+  EXPECT_NE(said.find("b leads at 40"), std::string::npos) << said;
+  EXPECT_NE(said.find("stays in it on duck: the winner changes with the scene."), std::string::npos)
+      << said;
+}
+
 TEST(Agreement, SummariesPerRendererAndWhatWithThresholdCounts) {
   std::vector<AgreementRow> rows;
   for (std::size_t v = 0; v < 10; ++v) {

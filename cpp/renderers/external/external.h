@@ -62,4 +62,11 @@ RendererRun with_geometry(const RendererInfo& info, const Image& colour, double 
 // core/mesh_surface.h).
 TriangleMesh mesh_shape_triangles(const Scene& scene, bool truth);
 
+// The triangles Blender is given for a scene, in scene coordinates (and
+// what `penumbra mesh` writes): a mesh shape's (mesh_shape_triangles), a
+// tessellation's own, or the analytic shape as a grid, displaced by the
+// height (`displaced`) at the scene's edge length or, undisplaced, fine
+// enough that its chords stay within 2e-5 of the radius.
+TriangleMesh scene_triangles(const Scene& scene, bool displaced);
+
 }  // namespace penumbra::external

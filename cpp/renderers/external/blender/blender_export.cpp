@@ -157,39 +157,9 @@ const char* mode_name(BlenderShading shading) {
   return "smooth";
 }
 
-// The mesh Blender loads, in scene coordinates.
-TriangleMesh scene_mesh(const Scene& scene, bool displaced) {
-  // A mesh shape's truth is its subdivision whatever the height, as the
-  // evaluator's is: with no height it shows the mesh's facets.
-  if (scene.shape.type == ShapeType::kMesh)
-    return external::mesh_shape_triangles(scene,
-                                          scene.representation == Representation::kDisplacement);
-  const HeightFunction& hf = scene.height.function;
-  const double amplitude = scene.height.amplitude;
-  const SurfaceMap* height_map = scene.height.height_map();
-  const double reach =
-      displaced ? amplitude * height_bounds(hf, height_map, scene.shape).max_abs : 0.0;
-  // The ground truth needs the fine grid; the base surface of smooth and bump
-  // renders does not: 512 segments around keep the chord within
-  // (2 pi / 512)^2 / 8 = 1.9e-5 R of the circle (0.001 px at 128 px), and a
-  // cylinder's side is straight along its axis. A sphere then loads 262k
-  // triangles instead of 1M: a 128 px, 32 spp sphere bump job falls from
-  // 13.3 s to 4.6 s (mean over the default study's 36).
-  GridResolution res = grid_resolution(scene.shape, scene.displacement.edge_length, reach);
-  if (!displaced)
-    res = scene.shape.type == ShapeType::kPlane
-              ? GridResolution{1, 1}
-              : GridResolution{512, scene.shape.type == ShapeType::kCylinder ? 1u : 256u};
-  // A tessellated shape is sent as the evaluator's own triangles (its normals
-  // are the exact ones at the vertices), through the same coordinate change.
-  return scene.tessellation
-             ? tessellate(scene.shape, *scene.tessellation)
-             : make_grid_mesh(scene.shape, hf, displaced ? amplitude : 0.0, res, height_map);
-}
-
 // The mesh Blender loads, in Blender coordinates with outward winding.
 TriangleMesh blender_mesh(const Scene& scene, bool displaced) {
-  TriangleMesh mesh = scene_mesh(scene, displaced);
+  TriangleMesh mesh = external::scene_triangles(scene, displaced);
   // Swap y and z (a mirror), then restore outward winding: Cycles flips the
   // shading normal on back faces, so a reversed triangle would shade dark.
   for (std::size_t i = 0; i < mesh.positions.size(); i += 3) {
