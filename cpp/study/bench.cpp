@@ -1,13 +1,16 @@
 #include "study/bench.h"
 
+#include <chrono>
 #include <filesystem>
 
 #include <fmt/format.h>
 
+#include "core/tessellation.h"
 #include "core/vec.h"
 #include "evaluator/evaluator.h"
 #include "image/image_io.h"
 #include "renderers/renderers.h"
+#include "scene/mesh_file.h"
 #include "scene/scene_json.h"
 #include "util/resource_usage.h"
 
@@ -78,6 +81,32 @@ DisplacementTiming bench_displacement(int size, int spp) {
   render(scene, {}, &stats);
   t.edge_length = scene.displacement.edge_length;
   t.triangles = stats.triangles;
+  t.build_seconds = stats.build_seconds;
+  t.seconds = stats.seconds;
+  t.msamples_per_second = double(stats.camera_samples) / stats.seconds / 1e6;
+  t.peak_rss_mib = peak_rss_mib();
+  return t;
+}
+
+MeshFileTiming bench_mesh_file(int size, int spp, const std::string& folder) {
+  MeshFileTiming t;
+  Shape sphere;
+  sphere.type = ShapeType::kSphere;
+  Tessellation uv;
+  uv.segments = 1024;
+  const std::string file = (fs::path(folder) / "sphere-1024.ply").string();
+  write_mesh_file(tessellate(with_frame(sphere), uv), file, "penumbra bench: a 1M-triangle mesh");
+  t.file_mib = double(fs::file_size(file)) / (1024.0 * 1024.0);
+  t.rss_mib_before = current_rss_mib();
+  const auto start = std::chrono::steady_clock::now();
+  const LoadedMesh mesh = load_mesh_file(file, {}, MeshNormals::kFile);
+  t.read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  t.rss_mib_read = current_rss_mib();
+  t.triangles = mesh.surface->mesh.triangle_count();
+  nlohmann::json document = bench_scene(size, spp);
+  document["shape"] = {{"type", "mesh"}, {"file", file}};
+  RenderStats stats;
+  render(scene_from_json(document, "<bench>"), {}, &stats);  // the mesh read above, from memory
   t.build_seconds = stats.build_seconds;
   t.seconds = stats.seconds;
   t.msamples_per_second = double(stats.camera_samples) / stats.seconds / 1e6;

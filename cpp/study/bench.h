@@ -43,6 +43,20 @@ struct DisplacementTiming {
 };
 DisplacementTiming bench_displacement(int size, int spp);
 
+// A mesh file of about a million triangles, the unit sphere's 1024-segment
+// UV tessellation written as binary PLY into `folder`: reading it
+// (load_mesh_file: Assimp, welding, bounds) and a bump render of it under
+// the bench scene's light and height (Embree's build, then the render).
+struct MeshFileTiming {
+  std::size_t triangles = 0;
+  double file_mib = 0.0;
+  double read_seconds = 0.0;
+  double rss_mib_before = 0.0, rss_mib_read = 0.0;  // resident set before and after reading
+  double build_seconds = 0.0, seconds = 0.0, msamples_per_second = 0.0;
+  double peak_rss_mib = 0.0;  // the process's high-water mark after the render
+};
+MeshFileTiming bench_mesh_file(int size, int spp, const std::string& folder);
+
 // One render of `document` as `penumbra render` makes it (render_with, then
 // the EXR with the scene in its header) into `folder`: the CPU seconds it
 // took, an external renderer's own processes included; an external renderer

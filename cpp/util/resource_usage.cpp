@@ -1,6 +1,9 @@
 #include "util/resource_usage.h"
 
 #include <sys/resource.h>
+#include <unistd.h>
+
+#include <fstream>
 
 namespace penumbra {
 
@@ -19,6 +22,13 @@ double peak_rss_mib() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   return double(usage.ru_maxrss) / 1024.0;  // Linux reports KiB
+}
+
+double current_rss_mib() {
+  std::ifstream statm("/proc/self/statm");
+  double pages_total = 0.0, pages_resident = 0.0;
+  if (!(statm >> pages_total >> pages_resident)) return 0.0;
+  return pages_resident * double(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
 }
 
 double cpu_seconds() {

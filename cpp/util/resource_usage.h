@@ -7,6 +7,9 @@ namespace penumbra {
 // The largest resident set so far, MiB.
 double peak_rss_mib();
 
+// The resident set now (MiB, /proc/self/statm); 0 where it cannot be read.
+double current_rss_mib();
+
 // User and system CPU seconds so far of this process (all its threads).
 double cpu_seconds();
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "study/bench.h"
+#include "temp_dir_test.h"
 
 namespace penumbra {
 namespace {
@@ -23,6 +24,21 @@ TEST(Bench, TimingsCountTheSamplesOncePerMethod) {
   const DisplacementTiming d = bench_displacement(16, 2);
   EXPECT_GT(d.triangles, 0u);
   EXPECT_GE(d.peak_rss_mib, d.peak_rss_mib_before);
+}
+
+// The large-mesh figure reads a file of the 1024-segment UV sphere: 1024
+// triangles around each pole and two per quad between, 1024 x 510 x 2 +
+// 2 x 1024 (no triangle of zero area to drop), 24 bytes of position and
+// normal per vertex.
+class BenchMesh : public TempDirTest {};
+TEST_F(BenchMesh, AMillionTriangleFileIsReadAndRendered) {
+  const MeshFileTiming m = bench_mesh_file(16, 1, path(""));
+  EXPECT_EQ(m.triangles, 1024u * 510u * 2u + 2u * 1024u);
+  EXPECT_GT(m.file_mib, (1024.0 * 511 + 2) * 24 / (1024.0 * 1024.0));
+  EXPECT_GT(m.read_seconds, 0.0);
+  EXPECT_GT(m.rss_mib_read, 0.0);
+  EXPECT_GT(m.seconds, 0.0);
+  EXPECT_GE(m.peak_rss_mib, m.rss_mib_read);
 }
 
 }  // namespace
