@@ -682,6 +682,37 @@ TEST(ShippedStudies, EachPlansAndTheQuickStudyIsASampleOfTheDefault) {
   EXPECT_LT(quick.jobs.size(), plans.at("default").jobs.size() / 4);
 }
 
+// The meshes study end to end, shrunk (24 px, 4 spp, coarse truths, two
+// methods, the evaluator): every scene, assets included, gets its own
+// ranking, and the headline says whether the analytic sphere's leader
+// holds on each of the others.
+TEST_F(Study, TheMeshesStudyRanksEachAssetAndSaysWhetherTheLeaderHolds) {
+  json study = json::parse(std::ifstream(kSource + "/scenes/studies/meshes.json"));
+  for (json& scene : study["scenes"])
+    scene = kSource + "/scenes/studies/" + scene.get<std::string>();
+  study["set"]["/camera/width"] = 24;
+  study["set"]["/camera/height"] = 24;
+  study["set"]["/camera/spp"] = 4;
+  study["set"]["/displacement/edge_length"] = 0.02;
+  study["methods"] = {"none", "estevez2019"};
+  study["renderers"] = {"evaluator"};
+  study["ground_truth"] = {
+      {"tolerance", 1}, {"max_edge_refinements", 1}, {"max_spp_refinements", 1}};
+  study.erase("figures");
+  StudyOptions options = test_study_options(path("out"));
+  options.fit = false;  // the fit's tests are its own (tests/analysis/test_achievable.cpp)
+  run_study(load_study(write("meshes.json", study)), options);
+  const json report = json::parse(std::ifstream(path("out/report.json")));
+  std::vector<std::string> scenes;
+  for (const json& r : report.at("statistics").at("per_scene"))
+    scenes.push_back(r.at("scene").get<std::string>());
+  EXPECT_EQ(scenes, (std::vector<std::string>{"sphere-weave", "sphere-control", "duck", "wuson"}));
+  bool said = false;
+  for (const json& line : report.at("statistics").at("headline"))
+    said |= line.get<std::string>().rfind("On the first scene (sphere-weave), ", 0) == 0;
+  EXPECT_TRUE(said) << report.at("statistics").at("headline").dump(1);
+}
+
 TEST_F(Study, TheStudyFilesSpellingDoesNotChangeTheReport) {
   write("named.json", tiny_evaluator("none"));
   const fs::path cwd = fs::current_path();
