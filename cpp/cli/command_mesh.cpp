@@ -2,6 +2,7 @@
 // a tessellation, a mesh shape, or the displaced ground truth, exactly as
 // Blender is given them (external::scene_triangles), for another renderer
 // or as a mesh scene of its own (scenes/meshes/sphere-uv64.obj is one).
+#include <cctype>
 #include <filesystem>
 
 #include <fmt/format.h>
@@ -31,13 +32,15 @@ std::string what_the_triangles_are(const Scene& scene, bool truth) {
   if (scene.tessellation)
     return fmt::format("the tessellation's triangles ({} segments around)",
                        scene.tessellation->segments);
+  if (scene.shape.type == ShapeType::kPlane) return "the plane as two triangles";
   return "the analytic shape as a fine grid (chords within 2e-5 of the radius)";
 }
 
 int write_scene_mesh(const MeshArgs& a, std::ostream& out) {
   const LoadedScene loaded = read_scene(a.scene, a.scene_args);
   const Scene& scene = loaded.scene;
-  const std::string extension = fs::path(a.output).extension().string();
+  std::string extension = fs::path(a.output).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (extension != ".obj" && extension != ".ply")
     throw UsageError(fmt::format("-o {}: expected a file name ending in .obj or .ply (got \"{}\")",
                                  a.output, extension));

@@ -326,8 +326,13 @@ void write_mesh_file(const TriangleMesh& mesh, const std::string& path,
   std::string extension = fs::path(path).extension().string();
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   const bool ply = extension == ".ply";
+  // One line in either header, whatever the caller's text (a path may hold
+  // a newline).
+  std::string line = comment;
+  std::replace_if(
+      line.begin(), line.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
   write_atomically(path, [&](CheckedFile& out) {
-    ply ? write_ply_body(mesh, comment, out) : write_obj_body(mesh, comment, out);
+    ply ? write_ply_body(mesh, line, out) : write_obj_body(mesh, line, out);
   });
 }
 

@@ -62,7 +62,7 @@ LoadedMesh load_mesh_file(const std::string& path, const MeshTransform& transfor
 // Writes `mesh` (vertices, their normals, triangles) to `path` whole or not
 // at all: binary little-endian PLY holds the floats' bits; OBJ writes each
 // with 9 significant digits, which a correctly rounding reader turns back
-// into the same float. `comment` heads the file (one line, no newline).
+// into the same float. `comment` heads the file (newlines become spaces).
 // The format is the extension's (".obj" or ".ply"); std::runtime_error
 // when the file cannot be written.
 void write_mesh_file(const TriangleMesh& mesh, const std::string& path, const std::string& comment);
