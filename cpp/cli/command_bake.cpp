@@ -51,6 +51,12 @@ int bake(const BakeArgs& a, std::ostream& out) {
   check_extension(a.output, ".exr", "-o", ": a baked map is float OpenEXR");
   if (a.kind == "normal" && a.on != "shape")
     throw InputError("--kind", "", "a normal map is baked over a shape: add --on shape");
+  // A mesh's UVs may overlap or leave gaps, so "the shape's (u, v)" has no
+  // single point per texel to bake from.
+  if (a.on == "shape" && scene.shape.type == ShapeType::kMesh)
+    throw InputError(loaded.origin, "/shape/type",
+                     "expected an analytic shape to bake over (a mesh's UVs need not cover the "
+                     "map once); bake --on plane and lay the map over the mesh's UVs");
   check_writable(a.output);
   if (a.on == "shape") return bake_on_shape(a, scene, out);
   const Image map =

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <unordered_map>
 
@@ -23,18 +24,32 @@ const unsigned* corners(const TriangleMesh& m, std::uint32_t triangle) {
   return &m.triangles[3 * std::size_t(triangle)];
 }
 
-// P + A h(P) Ni with P and Ni from weights w over vertices a (and b, c).
-Vec3 displaced(const TriangleMesh& m, const unsigned* index, const double* w, int count,
-               const HeightFunction& height, double amplitude) {
+// h at a lattice point: of its position, or of its UV where a map is laid
+// over the mesh.
+double lattice_height(const MeshHeight& height, const Vec3& p, double u, double v) {
+  if (!height.map) return evaluate_height(height.function, p).h;
+  return sample_map(*height.map, u * height.map->tiles_u, v * height.map->tiles_v).value;
+}
+
+// P + A h Ni with P, Ni and the UV from weights w over vertices index[k]
+// (uv[k] their coordinates in the triangle that places the point; uv null
+// without a map).
+Vec3 displaced(const TriangleMesh& m, const unsigned* index, const double* w,
+               const float* const* uv, int count, const MeshHeight& height, double amplitude) {
   Vec3 p, n;
+  double u = 0.0, v = 0.0;
   for (int k = 0; k < count; ++k) {
     p += vertex(m, index[k]) * w[k];
     n += normal(m, index[k]) * w[k];
+    if (uv) {
+      u += w[k] * uv[k][0];
+      v += w[k] * uv[k][1];
+    }
   }
   if (amplitude == 0.0) return p;
   const double length_n = length(n);
   if (!(length_n > 0.0)) return p;
-  return p + n * (amplitude * evaluate_height(height, p).h / length_n);
+  return p + n * (amplitude * lattice_height(height, p, u, v) / length_n);
 }
 
 void append(std::vector<float>* out, const Vec3& p) {
@@ -90,6 +105,9 @@ SurfaceGeometry mesh_surface_at(const TriangleMesh& mesh, std::uint32_t triangle
   const Frame f = Frame::from_z(g.n);
   g.t1 = f.s;
   g.t2 = f.t;
+  g.u = b[1];
+  g.v = b[2];
+  g.triangle = triangle;
   return g;
 }
 
@@ -222,29 +240,42 @@ void locate_in_base(const MeshSubdivision& plan, std::uint64_t prim, double b1, 
   b[2] = y;
 }
 
-TriangleMesh subdivide_displaced(const TriangleMesh& base, const MeshSubdivision& plan,
-                                 const HeightFunction& height, double amplitude) {
+TriangleMesh subdivide_displaced(const MeshSurface& surface, const MeshSubdivision& plan,
+                                 const MeshHeight& height, double amplitude) {
+  const TriangleMesh& base = surface.mesh;
+  const bool by_uv = height.map != nullptr;
+  // A corner's UV where the vertex is first used.
+  std::vector<const float*> vertex_uv(by_uv ? base.vertex_count() : 0, nullptr);
+  for (std::size_t t = 0; by_uv && t < base.triangle_count(); ++t)
+    for (std::size_t k = 0; k < 3; ++k)
+      if (!vertex_uv[base.triangles[3 * t + k]])
+        vertex_uv[base.triangles[3 * t + k]] = &surface.uvs[6 * t + 2 * k];
   TriangleMesh out;
   // Corners first: vertex k of the base is vertex k here.
   for (unsigned k = 0; k < base.vertex_count(); ++k) {
     const double w = 1.0;
-    append(&out.positions, displaced(base, &k, &w, 1, height, amplitude));
+    const float* uv = by_uv ? vertex_uv[k] : nullptr;
+    append(&out.positions, displaced(base, &k, &w, by_uv ? &uv : nullptr, 1, height, amplitude));
   }
-  // Each edge's inner points once, walked from its lower vertex.
+  // Each edge's inner points once, walked from its lower vertex, with the
+  // UVs of the triangle that meets it first.
   std::unordered_map<std::uint64_t, unsigned> edge_first;
-  const auto edge_point = [&](unsigned a, unsigned b, std::uint32_t n, std::uint32_t k) {
+  const auto edge_point = [&](unsigned a, unsigned b, const float* uv_a, const float* uv_b,
+                              std::uint32_t n, std::uint32_t k) {
     // Point k of n from a to b.
     if (k == 0) return a;
     if (k == n) return b;
     const bool forward = a < b;
     const unsigned index[2] = {std::min(a, b), std::max(a, b)};
+    const float* uv[2] = {forward ? uv_a : uv_b, forward ? uv_b : uv_a};
     const std::uint64_t key = (std::uint64_t(index[0]) << 32) | index[1];
     auto it = edge_first.find(key);
     if (it == edge_first.end()) {
       const auto first = unsigned(out.vertex_count());
       for (std::uint32_t s = 1; s < n; ++s) {
         const double w[2] = {double(n - s) / n, double(s) / n};
-        append(&out.positions, displaced(base, index, w, 2, height, amplitude));
+        append(&out.positions,
+               displaced(base, index, w, by_uv ? uv : nullptr, 2, height, amplitude));
       }
       it = edge_first.emplace(key, first).first;
     }
@@ -256,13 +287,16 @@ TriangleMesh subdivide_displaced(const TriangleMesh& base, const MeshSubdivision
     const unsigned* c = corners(base, t);
     const std::uint32_t n = plan.levels[t];
     const std::uint32_t* levels = &plan.edge_levels[3 * std::size_t(t)];
+    const float* uv[3] = {nullptr, nullptr, nullptr};
+    for (std::size_t k = 0; by_uv && k < 3; ++k) uv[k] = &surface.uvs[6 * std::size_t(t) + 2 * k];
     ids.assign(std::size_t(n + 1) * (n + 1), 0);
     for (std::uint32_t j = 0; j <= n; ++j)
       for (std::uint32_t i = 0; i + j <= n; ++i) {
         unsigned& id = ids[std::size_t(j) * (n + 1) + i];
         const LatticePoint p = lattice_point(i, j, n, levels);
         if (p.edge >= 0) {
-          id = edge_point(c[p.edge], c[(p.edge + 1) % 3], levels[p.edge], p.k);
+          const int e0 = p.edge, e1 = (p.edge + 1) % 3;
+          id = edge_point(c[e0], c[e1], uv[e0], uv[e1], levels[p.edge], p.k);
         } else if (i == 0 && j == 0) {
           id = c[0];
         } else if (i == n) {
@@ -272,7 +306,7 @@ TriangleMesh subdivide_displaced(const TriangleMesh& base, const MeshSubdivision
         } else {
           id = unsigned(out.vertex_count());
           const double w[3] = {1.0 - p.x - p.y, p.x, p.y};
-          append(&out.positions, displaced(base, c, w, 3, height, amplitude));
+          append(&out.positions, displaced(base, c, w, by_uv ? uv : nullptr, 3, height, amplitude));
         }
       }
     const std::uint64_t per_triangle = std::uint64_t(n) * n;
@@ -290,22 +324,23 @@ namespace {
 
 // The exact normal of the truth at base barycentrics b of `triangle`; Ni
 // where it is not finite (a degenerate triangle's cross product).
-Vec3 export_normal(const TriangleMesh& base, std::uint32_t triangle, const double b[3],
-                   const HeightFunction& height, double amplitude) {
-  const SurfaceGeometry g = mesh_surface_at(base, triangle, b);
-  const Vec3 n = mesh_displaced_normal(base, triangle, b, amplitude, evaluate_height(height, g.p));
+Vec3 export_normal(const MeshSurface& base, std::uint32_t triangle, const double b[3],
+                   const MeshHeight& height, double amplitude) {
+  const SurfaceGeometry g = mesh_surface_at(base.mesh, triangle, b);
+  const Vec3 n = mesh_displaced_normal(base.mesh, triangle, b, amplitude,
+                                       mesh_height_at(height.function, height.map, base, g));
   return std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z) ? n : g.n;
 }
 
 }  // namespace
 
-TriangleMesh displaced_mesh_for_export(const TriangleMesh& base, const MeshSubdivision& plan,
-                                       const HeightFunction& height, double amplitude) {
+TriangleMesh displaced_mesh_for_export(const MeshSurface& base, const MeshSubdivision& plan,
+                                       const MeshHeight& height, double amplitude) {
   const TriangleMesh shared = subdivide_displaced(base, plan, height, amplitude);
   TriangleMesh out;
   std::unordered_map<unsigned, unsigned> own;  // shared vertex -> this triangle's copy
   constexpr double kCorner[3][2] = {{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}};
-  for (std::uint32_t t = 0; t < base.triangle_count(); ++t) {
+  for (std::uint32_t t = 0; t < base.mesh.triangle_count(); ++t) {
     own.clear();
     for (std::uint64_t prim = plan.first[t]; prim < plan.first[t + 1]; ++prim) {
       const unsigned* v = &shared.triangles[3 * prim];
@@ -325,6 +360,208 @@ TriangleMesh displaced_mesh_for_export(const TriangleMesh& base, const MeshSubdi
     }
   }
   out.side_triangles = out.triangle_count();
+  return out;
+}
+
+}  // namespace penumbra
+
+namespace penumbra {
+
+namespace {
+
+// A MikkTSpace vertex: the welded vertex (position and normal) with one
+// UV's bits.
+struct TangentKey {
+  unsigned vertex = 0;
+  std::uint32_t u = 0, v = 0;
+  bool operator==(const TangentKey&) const = default;
+};
+
+struct TangentKeyHash {
+  std::size_t operator()(const TangentKey& k) const {
+    std::uint64_t h = k.vertex;
+    h = h * 0x9E3779B97F4A7C15ull ^ k.u;
+    h = h * 0x9E3779B97F4A7C15ull ^ k.v;
+    return std::size_t(h ^ (h >> 29));
+  }
+};
+
+// v - n <n, v>, normalised (zero stays zero); n unit in all but odd files.
+Vec3 project_unit(const Vec3& n, const Vec3& v) {
+  const Vec3 p = v - n * dot(n, v);
+  const double l = length(p);
+  return l > 0.0 ? p / l : p;
+}
+
+// One triangle's signed direction of increasing u (MikkTSpace's eq. 18),
+// its orientation, and whether it contributes (a nonzero UV area and both
+// directions nonzero; otherwise it joins the first group that reaches it).
+struct FaceTangent {
+  Vec3 tangent;
+  bool preserving = false, contributes = false;
+};
+
+FaceTangent face_tangent(const TriangleMesh& m, const std::vector<float>& uvs, std::size_t t) {
+  // In float, as MikkTSpace computes them: whether a UV area is zero, and its
+  // sign, decide a triangle's group, and a nearly collinear UV triangle's
+  // area can round to zero or change sign between float and double.
+  const unsigned* c = &m.triangles[3 * t];
+  const float* uv = &uvs[6 * t];
+  const float t21x = uv[2] - uv[0], t21y = uv[3] - uv[1];
+  const float t31x = uv[4] - uv[0], t31y = uv[5] - uv[1];
+  const float area2 = t21x * t31y - t21y * t31x;
+  float d1[3], d2[3], os[3], ot[3];
+  for (int a = 0; a < 3; ++a) {
+    d1[a] = m.positions[3 * c[1] + a] - m.positions[3 * c[0] + a];
+    d2[a] = m.positions[3 * c[2] + a] - m.positions[3 * c[0] + a];
+    os[a] = t31y * d1[a] - t21y * d2[a];
+    ot[a] = -t31x * d1[a] + t21x * d2[a];
+  }
+  const float os2 = os[0] * os[0] + os[1] * os[1] + os[2] * os[2];
+  const float ot2 = ot[0] * ot[0] + ot[1] * ot[1] + ot[2] * ot[2];
+  const auto not_zero = [](float x) { return std::abs(x) > std::numeric_limits<float>::min(); };
+  FaceTangent f;
+  f.preserving = area2 > 0.0f;
+  if (!not_zero(area2)) return f;
+  if (not_zero(os2))
+    f.tangent = Vec3{os[0], os[1], os[2]} * ((f.preserving ? 1.0 : -1.0) / std::sqrt(double(os2)));
+  f.contributes = not_zero(os2) && not_zero(ot2);
+  return f;
+}
+
+constexpr std::uint32_t kUnset = ~0u;
+
+// MikkTSpace's vertex of every corner.
+std::vector<std::uint32_t> tangent_vertices(const TriangleMesh& m, const std::vector<float>& uvs) {
+  std::unordered_map<TangentKey, std::uint32_t, TangentKeyHash> ids;
+  std::vector<std::uint32_t> out(m.triangles.size());
+  for (std::size_t c = 0; c < out.size(); ++c) {
+    TangentKey key;
+    key.vertex = m.triangles[c];
+    std::memcpy(&key.u, &uvs[2 * c], sizeof key.u);
+    std::memcpy(&key.v, &uvs[2 * c + 1], sizeof key.v);
+    out[c] = ids.emplace(key, std::uint32_t(ids.size())).first->second;
+  }
+  return out;
+}
+
+// The triangle across each corner's edge (corner i to i + 1), kUnset where
+// none: the first later edge, in triangle order, that runs the other way
+// between the same two vertices.
+std::vector<std::uint32_t> edge_neighbours(const std::vector<std::uint32_t>& ids) {
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> by_edge;
+  const auto from = [&](std::uint32_t c) { return ids[c]; };
+  const auto to = [&](std::uint32_t c) { return ids[c - c % 3 + (c % 3 + 1) % 3]; };
+  for (std::uint32_t c = 0; c < ids.size(); ++c) {
+    const std::uint32_t lo = std::min(from(c), to(c)), hi = std::max(from(c), to(c));
+    by_edge[(std::uint64_t(lo) << 32) | hi].push_back(c);
+  }
+  std::vector<std::uint32_t> out(ids.size(), kUnset);
+  for (const auto& [key, list] : by_edge)
+    for (std::size_t a = 0; a < list.size(); ++a) {
+      if (out[list[a]] != kUnset) continue;
+      for (std::size_t b = a + 1; b < list.size(); ++b)
+        if (out[list[b]] == kUnset && from(list[a]) == to(list[b]) &&
+            to(list[a]) == from(list[b])) {
+          out[list[a]] = list[b] / 3;
+          out[list[b]] = list[a] / 3;
+          break;
+        }
+    }
+  return out;
+}
+
+struct TangentGroup {
+  Vec3 tangent;
+  std::uint32_t vertex = 0;
+  bool preserving = false;
+};
+
+// MikkTSpace's groups: the triangles around a vertex reached through shared
+// edges with the group's orientation, started in triangle and corner order;
+// a triangle that does not contribute takes the orientation of the first
+// group that reaches it.
+class TangentGrouping {
+ public:
+  TangentGrouping(const std::vector<std::uint32_t>& ids,
+                  const std::vector<std::uint32_t>& neighbours, std::vector<FaceTangent>& faces)
+      : ids_(ids), neighbours_(neighbours), faces_(faces), group_(ids.size(), kUnset) {
+    for (std::uint32_t t = 0; t < faces.size(); ++t)
+      for (std::uint32_t i = 0; i < 3; ++i) {
+        if (!faces[t].contributes || group_[3 * t + i] != kUnset) continue;
+        const auto g = std::uint32_t(groups.size());
+        groups.push_back({{}, ids[3 * t + i], faces[t].preserving});
+        group_[3 * t + i] = g;
+        assign(neighbours[3 * t + i], g);
+        assign(neighbours[3 * t + (i + 2) % 3], g);
+      }
+  }
+  std::uint32_t group_of(std::size_t corner) const { return group_[corner]; }
+  std::vector<TangentGroup> groups;
+
+ private:
+  void assign(std::uint32_t t, std::uint32_t g) {
+    if (t == kUnset) return;
+    std::uint32_t i = 0;
+    while (i < 3 && ids_[3 * t + i] != groups[g].vertex) ++i;
+    if (i == 3 || group_[3 * t + i] != kUnset) return;
+    FaceTangent& face = faces_[t];
+    if (!face.contributes && group_[3 * t] == kUnset && group_[3 * t + 1] == kUnset &&
+        group_[3 * t + 2] == kUnset)
+      face.preserving = groups[g].preserving;
+    if (face.preserving != groups[g].preserving) return;
+    group_[3 * t + i] = g;
+    assign(neighbours_[3 * t + i], g);
+    assign(neighbours_[3 * t + (i + 2) % 3], g);
+  }
+
+  const std::vector<std::uint32_t>& ids_;
+  const std::vector<std::uint32_t>& neighbours_;
+  std::vector<FaceTangent>& faces_;
+  std::vector<std::uint32_t> group_;
+};
+
+}  // namespace
+
+std::vector<float> mikktspace_tangents(const TriangleMesh& m, const std::vector<float>& uvs) {
+  const std::size_t count = m.triangle_count();
+  std::vector<FaceTangent> faces(count);
+  for (std::size_t t = 0; t < count; ++t) faces[t] = face_tangent(m, uvs, t);
+  const std::vector<std::uint32_t> ids = tangent_vertices(m, uvs);
+  TangentGrouping grouping(ids, edge_neighbours(ids), faces);
+  std::vector<TangentGroup>& groups = grouping.groups;
+  for (std::size_t t = 0; t < count; ++t) {
+    if (!faces[t].contributes) continue;
+    const unsigned* c = &m.triangles[3 * t];
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::uint32_t g = grouping.group_of(3 * t + k);
+      if (g == kUnset) continue;
+      // The normal as stored, not normalised, as MikkTSpace takes it: a
+      // file's normal that is not unit tilts the projection the same way
+      // in Blender.
+      const Vec3 n = normal(m, c[k]);
+      const Vec3 p = vertex(m, c[k]);
+      const double cos_angle = dot(project_unit(n, vertex(m, c[(k + 1) % 3]) - p),
+                                   project_unit(n, vertex(m, c[(k + 2) % 3]) - p));
+      groups[g].tangent +=
+          project_unit(n, faces[t].tangent) * std::acos(std::clamp(cos_angle, -1.0, 1.0));
+    }
+  }
+  std::vector<float> out(12 * count);
+  for (std::size_t c = 0; c < 3 * count; ++c) {
+    // A corner no group reached keeps MikkTSpace's default: (1, 0, 0), -1.
+    Vec3 tangent{1.0, 0.0, 0.0};
+    bool preserving = false;
+    if (const std::uint32_t g = grouping.group_of(c); g != kUnset) {
+      if (length_squared(groups[g].tangent) > 0.0) tangent = normalize(groups[g].tangent);
+      preserving = groups[g].preserving;
+    }
+    float* o = &out[4 * c];
+    o[0] = float(tangent.x);
+    o[1] = float(tangent.y);
+    o[2] = float(tangent.z);
+    o[3] = preserving ? 1.0f : -1.0f;
+  }
   return out;
 }
 

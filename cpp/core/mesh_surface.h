@@ -19,6 +19,7 @@
 #include "core/grid_mesh.h"
 #include "core/height.h"
 #include "core/shape.h"
+#include "core/surface_map.h"
 
 namespace penumbra {
 
@@ -31,7 +32,40 @@ struct MeshSurface {
   std::string digest;
   std::string file;  // where it was read from, for messages
   Vec3 bounds_min, bounds_max;
+  // The file's first texture coordinates per corner (u, v; 6 per triangle;
+  // v up, as OBJ, Blender and Assimp's glTF reader give them), empty when it
+  // has none. Per corner, not per vertex: a UV seam gives one welded vertex
+  // two coordinates without splitting the surface.
+  std::vector<float> uvs;
+  // The MikkTSpace tangent of each corner (x, y, z, bitangent sign; 12 per
+  // triangle), mikktspace_tangents of the arrays above; empty without uvs.
+  std::vector<float> tangents;
+  bool has_uvs() const { return !uvs.empty(); }
 };
+
+// Tangents by Mikkelsen's MikkTSpace (Mikkelsen 2008, "Simulation of
+// wrinkled surfaces revisited"), the algorithm of Blender's calc_tangents
+// and Cycles' Normal Map node (blender/blender
+// intern/mikktspace/mikktspace.hh at 9918488), for triangles:
+//  - a MikkTSpace vertex is a welded vertex (position and normal) with one
+//    UV's bits;
+//  - per triangle, the direction of increasing u (eq. 18),
+//    T_f = s_f normalize((t31.v) d1 - (t21.v) d2), s_f = sign of the UV
+//    area, computed in float as MikkTSpace does (a nearly collinear UV
+//    triangle's area can round to zero or change sign);
+//  - groups: the triangles around a vertex reached through shared edges
+//    (the first later edge that runs the other way) with one orientation,
+//    started in triangle and corner order; a triangle with a zero UV area
+//    or direction takes the orientation of the first group that reaches it
+//    and adds nothing;
+//  - a group's tangent: the sum of its triangles' T_f projected off the
+//    corner's normal (as stored, not normalised) and normalised, weighted
+//    by the triangle's angle at the vertex in that tangent plane, then
+//    normalised; the sign is the group's s_f. A corner no group reaches
+//    keeps MikkTSpace's default, (1, 0, 0) and -1.
+// Checked against Blender 3.4's own tangents on a real asset
+// (Renderers.MikkTSpaceTangentsMatchBlendersOnARealAsset).
+std::vector<float> mikktspace_tangents(const TriangleMesh& mesh, const std::vector<float>& uvs);
 
 // The centre and radius of the bounding box's circumscribed sphere: the
 // size scale a mesh shape's epsilons and default edge length use.
@@ -45,7 +79,8 @@ void measure_mesh(MeshSurface* m);
 // n = Ni(b), t1 x t2 = n, curvatures 0 (the bump sees the interpolated
 // normal as a smooth surface without the curvature terms, which are of
 // relative size A h kappa against 1; the truth's normal has them exactly,
-// mesh_displaced_normal). u, v stay 0.
+// mesh_displaced_normal). u, v = b1, b2 and triangle = `triangle`: a mesh's
+// parameters, from which surface_map.h reads the texture coordinates.
 SurfaceGeometry mesh_surface_at(const TriangleMesh& mesh, std::uint32_t triangle,
                                 const double b[3]);
 
@@ -84,12 +119,23 @@ double normal_curvature(const TriangleMesh& mesh, std::uint32_t triangle);
 void locate_in_base(const MeshSubdivision& plan, std::uint64_t prim, double b1, double b2,
                     std::uint32_t* base, double b[3]);
 
-// The truth's mesh: every lattice point displaced to P + A h(P) Ni (a point
+// What displaces a mesh: the analytic function of P, or a height map laid
+// over the mesh's UVs (the surface needs them).
+struct MeshHeight {
+  const HeightFunction& function;
+  const SurfaceMap* map = nullptr;  // a kHeight map, or null
+};
+
+// The truth's mesh: every lattice point displaced to P + A h Ni (a point
 // on an edge computed from that edge's two vertices in one order, so both
 // triangles get its bits), triangle t's sub-triangles at plan.first[t]
-// onwards, row by row of its lattice. No normals.
-TriangleMesh subdivide_displaced(const TriangleMesh& base, const MeshSubdivision& plan,
-                                 const HeightFunction& height, double amplitude);
+// onwards, row by row of its lattice. No normals. With a map, h is read at
+// the point's UV: a corner's from the first triangle that uses the vertex,
+// an edge point's from the first triangle that has the edge, so a UV seam
+// stays watertight (where the map differs across the seam, the strip of
+// sub-triangles along it blends the two sides).
+TriangleMesh subdivide_displaced(const MeshSurface& base, const MeshSubdivision& plan,
+                                 const MeshHeight& height, double amplitude);
 
 // The truth's mesh as another renderer is given it (POV-Ray's mesh2,
 // Cycles): subdivide_displaced's triangles, but each base triangle with
@@ -98,7 +144,7 @@ TriangleMesh subdivide_displaced(const TriangleMesh& base, const MeshSubdivision
 // the evaluator shades them. A vertex on a base edge keeps the position
 // bits its neighbour's copy has, so the surface stays watertight; lattice
 // triangles squeezed onto an edge (zero area) are left out.
-TriangleMesh displaced_mesh_for_export(const TriangleMesh& base, const MeshSubdivision& plan,
-                                       const HeightFunction& height, double amplitude);
+TriangleMesh displaced_mesh_for_export(const MeshSurface& base, const MeshSubdivision& plan,
+                                       const MeshHeight& height, double amplitude);
 
 }  // namespace penumbra

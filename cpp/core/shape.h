@@ -2,6 +2,7 @@
 // bump and displacement representations need. Scene units throughout.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 
 #include "core/enum_names.h"
@@ -58,11 +59,13 @@ struct SurfaceGeometry {
   // Parameters of the displaceable part: cylinder side u = azimuth in
   // [0, 2 pi), v = axial coordinate in [-height/2, height/2]; sphere
   // u = azimuth in [0, 2 pi), v = polar angle from +axis in [0, pi];
-  // plane u, v = coordinates along frame.s and frame.t from the centre.
-  // Set by surface_at(); intersect() leaves them 0 (no renderer needs them
-  // there, and the azimuth costs an atan2 per camera ray).
+  // plane u, v = coordinates along frame.s and frame.t from the centre;
+  // mesh u, v = barycentrics b1, b2 in triangle `triangle`.
+  // Set by surface_at() and mesh_surface_at(); intersect() leaves them 0 (no
+  // renderer needs them there, and the azimuth costs an atan2 per camera ray).
   double u = 0.0, v = 0.0;
-  bool displaceable = true;  // false on cylinder caps: h applies to the side only
+  std::uint32_t triangle = 0;  // meshes only
+  bool displaceable = true;    // false on cylinder caps: h applies to the side only
 };
 
 struct Hit {

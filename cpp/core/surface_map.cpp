@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/mesh_surface.h"
 #include "util/hash.h"
 
 namespace penumbra {
@@ -152,9 +153,84 @@ MapSample sample_map(const SurfaceMap& m, double s, double t, int channel) {
   return out;
 }
 
+namespace {
+
+// A mesh triangle's texture coordinates at barycentrics (1 - b1 - b2, b1,
+// b2) and the gradients of its affine u and v in its plane: grad u =
+// alpha e1 + beta e2 with <grad u, e_j> = u_j - u_0 (the Gram system).
+struct MeshUv {
+  double u = 0.0, v = 0.0;
+  Vec3 grad_u, grad_v;
+};
+
+MeshUv mesh_uv(const MeshSurface& m, std::uint32_t triangle, double b1, double b2) {
+  const float* uv = &m.uvs[6 * std::size_t(triangle)];
+  const unsigned* c = &m.mesh.triangles[3 * std::size_t(triangle)];
+  const auto vertex = [&](int k) {
+    const float* p = &m.mesh.positions[3 * std::size_t(c[k])];
+    return Vec3{p[0], p[1], p[2]};
+  };
+  const double b0 = 1.0 - b1 - b2;
+  MeshUv out;
+  out.u = b0 * uv[0] + b1 * uv[2] + b2 * uv[4];
+  out.v = b0 * uv[1] + b1 * uv[3] + b2 * uv[5];
+  const Vec3 e1 = vertex(1) - vertex(0), e2 = vertex(2) - vertex(0);
+  const double g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2);
+  const double det = g11 * g22 - g12 * g12;
+  if (!(det > 0.0)) return out;
+  const auto gradient = [&](double d1, double d2) {
+    return (e1 * (g22 * d1 - g12 * d2) + e2 * (g11 * d2 - g12 * d1)) / det;
+  };
+  out.grad_u = gradient(double(uv[2]) - uv[0], double(uv[4]) - uv[0]);
+  out.grad_v = gradient(double(uv[3]) - uv[1], double(uv[5]) - uv[1]);
+  return out;
+}
+
+}  // namespace
+
+HeightSample mesh_height_at(const HeightFunction& function, const SurfaceMap* map,
+                            const MeshSurface& mesh, const SurfaceGeometry& g) {
+  if (!map || map->kind != MapKind::kHeight) return evaluate_height(function, g.p);
+  const SurfaceMap& image = *map;
+  const MeshUv q = mesh_uv(mesh, g.triangle, g.u, g.v);
+  const MapSample m = sample_map(image, q.u * image.tiles_u, q.v * image.tiles_v);
+  HeightSample out;
+  out.h = m.value;
+  out.gradient = q.grad_u * (m.d_ds * image.tiles_u) + q.grad_v * (m.d_dt * image.tiles_v);
+  return out;
+}
+
+namespace {
+
+Vec3 mesh_normal_map_normal(const SurfaceMap& map, const MeshSurface& mesh,
+                            const SurfaceGeometry& g) {
+  const MeshUv q = mesh_uv(mesh, g.triangle, g.u, g.v);
+  const double s = q.u * map.tiles_u, t = q.v * map.tiles_v;
+  const Vec3 c{sample_map(map, s, t, 0).value, sample_map(map, s, t, 1).value,
+               sample_map(map, s, t, 2).value};
+  const Vec3 n_tangent = c * 2.0 - Vec3{1.0, 1.0, 1.0};
+  const unsigned* corner = &mesh.mesh.triangles[3 * std::size_t(g.triangle)];
+  const float* tangents = &mesh.tangents[12 * std::size_t(g.triangle)];
+  const double b[3] = {1.0 - g.u - g.v, g.u, g.v};
+  Vec3 tangent, normal;
+  for (int k = 0; k < 3; ++k) {
+    const float* t_k = &tangents[4 * k];
+    const float* n_k = &mesh.mesh.normals[3 * std::size_t(corner[k])];
+    tangent += Vec3{t_k[0], t_k[1], t_k[2]} * b[k];
+    normal += Vec3{n_k[0], n_k[1], n_k[2]} * b[k];
+  }
+  const Vec3 bitangent = cross(normal, tangent) * double(tangents[3]);
+  const Vec3 n = tangent * n_tangent.x + bitangent * n_tangent.y + normal * n_tangent.z;
+  const double len = length(n);
+  return len > 0.0 ? n / len : g.n;
+}
+
+}  // namespace
+
 HeightSample height_at(const HeightFunction& function, const SurfaceMap* map, const Shape& shape,
                        const SurfaceGeometry& g) {
   if (!map || map->kind != MapKind::kHeight) return evaluate_height(function, g.p);
+  if (shape.type == ShapeType::kMesh) return mesh_height_at(function, map, *shape.mesh, g);
   const SurfaceParameters q = surface_parameters(shape, g.p);
   const MapSample m = sample_map(*map, q.u * map->tiles_u, q.v * map->tiles_v);
   HeightSample out;
@@ -168,6 +244,7 @@ HeightSample height_at(const HeightFunction& function, const SurfaceMap* map, co
 }
 
 Vec3 normal_map_normal(const SurfaceMap& map, const Shape& shape, const SurfaceGeometry& g) {
+  if (shape.type == ShapeType::kMesh) return mesh_normal_map_normal(map, *shape.mesh, g);
   const SurfaceParameters q = surface_parameters(shape, g.p);
   const double s = q.u * map.tiles_u, t = q.v * map.tiles_v;
   const Vec3 c{sample_map(map, s, t, 0).value, sample_map(map, s, t, 1).value,
@@ -205,6 +282,21 @@ HeightBounds height_bounds(const HeightFunction& function, const SurfaceMap* map
                             2.0 * std::pow(pu * pv * d.dxy, 2)) +
                   (shape.type == ShapeType::kPlane ? 0.0 : b.max_gradient / shape.radius);
   return b;
+}
+
+std::vector<HeightBounds> mesh_height_bounds(const SurfaceMap& map, const MeshSurface& mesh) {
+  const TexelDifferences d = texel_differences(map);
+  std::vector<HeightBounds> out(mesh.mesh.triangle_count());
+  for (std::uint32_t t = 0; t < out.size(); ++t) {
+    const MeshUv q = mesh_uv(mesh, t, 0.0, 0.0);
+    // Texels per scene unit along u and v on this triangle.
+    const double pu = map.width * map.tiles_u * length(q.grad_u);
+    const double pv = map.height * map.tiles_v * length(q.grad_v);
+    out[t].max_abs = d.max_abs;
+    out[t].max_gradient = pu * d.dx + pv * d.dy;
+    out[t].max_hessian = pu * pu * d.dxx + pv * pv * d.dyy + 2.0 * pu * pv * d.dxy;
+  }
+  return out;
 }
 
 std::string map_digest(const SurfaceMap& m) {

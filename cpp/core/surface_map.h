@@ -16,6 +16,8 @@
 
 namespace penumbra {
 
+struct MeshSurface;  // core/mesh_surface.h
+
 enum class MapKind {
   kHeight,  // one channel: h (dimensionless; the scene's amplitude scales it)
   kNormal,  // three channels: a tangent-space normal encoded as 0.5 n + 0.5
@@ -69,13 +71,24 @@ MapSample sample_map(const SurfaceMap& map, double s, double t, int channel = 0)
 
 // A height map's h at the point of `g` (g.p, g.n), with the 3D gradient in
 // the tangent plane (per scene unit), as evaluate_height gives it for the
-// analytic families. `map` null: the analytic function at g.p.
+// analytic families. `map` null: the analytic function at g.p. On a mesh
+// the map is read at the UV interpolated over triangle g.triangle and the
+// gradient lies in that triangle's plane: h_s grad(u) + h_t grad(v), with
+// grad(u), grad(v) the gradients of the triangle's affine UVs (no
+// orthogonality assumed; zero where its UV area is zero).
 HeightSample height_at(const HeightFunction& function, const SurfaceMap* map, const Shape& shape,
                        const SurfaceGeometry& g);
+// height_at on a mesh surface, g from mesh_surface_at.
+HeightSample mesh_height_at(const HeightFunction& function, const SurfaceMap* map,
+                            const MeshSurface& mesh, const SurfaceGeometry& g);
 
 // A normal map's shading normal at the point of `g`: the decoded tangent-space
 // normal 2c - 1 in the frame (dP/du, dP/dv, N), unit length; the green
-// channel follows +v, as Blender's Normal Map node reads it.
+// channel follows +v, as Blender's Normal Map node reads it. On a mesh the
+// frame is MikkTSpace's, as Cycles' Normal Map node builds it
+// (blender/blender intern/cycles/kernel/svm/tex_coord.h,
+// svm_node_normal_map): T and N interpolated and not normalised,
+// B = sign (N x T), n = normalize(x T + y B + z N).
 Vec3 normal_map_normal(const SurfaceMap& map, const Shape& shape, const SurfaceGeometry& g);
 
 // Bounds of h and its derivatives over the whole surface, for the mesh
@@ -92,6 +105,10 @@ struct HeightBounds {
 };
 HeightBounds height_bounds(const HeightFunction& function, const SurfaceMap* map,
                            const Shape& shape);
+// The same bounds per triangle of a mesh with UVs: texels per scene unit
+// from each triangle's |grad u| and |grad v| (its UVs are affine, so no
+// curvature term).
+std::vector<HeightBounds> mesh_height_bounds(const SurfaceMap& map, const MeshSurface& mesh);
 
 // Hex digest of a map's size, kind and texels (FNV-1a, two seeds).
 std::string map_digest(const SurfaceMap& map);

@@ -76,11 +76,11 @@ DisplacedMesh::DisplacedMesh(const Scene& scene) : impl_(std::make_unique<Impl>(
   m.shape = scene.shape;
   m.amplitude = scene.height.amplitude;
   m.height = scene.height.function;
+  if (scene.height.height_map()) m.map = scene.height.map;
   if (m.shape.type == ShapeType::kMesh) {
     build_mesh_shape(scene);
     return;
   }
-  if (scene.height.height_map()) m.map = scene.height.map;
   const double e = scene.displacement.edge_length;
   const HeightBounds bounds = height_bounds(m.height, m.map.get(), m.shape);
   const double reach = m.amplitude * bounds.max_abs;
@@ -103,7 +103,7 @@ void DisplacedMesh::build_mesh_shape(const Scene& scene) {
   const MeshSurface& base = *m.shape.mesh;
   const double e = scene.displacement.edge_length;
   m.plan = plan_subdivision(base.mesh, e);
-  TriangleMesh mesh = subdivide_displaced(base.mesh, m.plan, m.height, m.amplitude);
+  TriangleMesh mesh = subdivide_displaced(base, m.plan, {m.height, m.map.get()}, m.amplitude);
   m.side_primitives = static_cast<unsigned>(mesh.triangle_count());
   vertices_ = mesh.vertex_count();
   triangles_ = mesh.triangle_count();
@@ -111,10 +111,16 @@ void DisplacedMesh::build_mesh_shape(const Scene& scene) {
   // base triangle: e'^2 kappa / 8 with kappa bounding |d2P'/ds2| along it,
   // from the turn of Ni there (k), h's gradient and Hessian:
   //   (1 + A|h|) k + 2 A |grad h| k + A |Hess h|.
-  const double a = m.amplitude, h_max = max_abs_height(m.height);
-  const double gradient = max_gradient_norm(m.height), hessian = max_hessian_norm(m.height);
+  const double a = m.amplitude;
+  const HeightBounds function_bounds{max_abs_height(m.height), max_gradient_norm(m.height),
+                                     max_hessian_norm(m.height)};
+  const std::vector<HeightBounds> map_bounds =
+      m.map ? mesh_height_bounds(*m.map, base) : std::vector<HeightBounds>{};
   offsets_.resize(base.mesh.triangle_count());
   for (std::uint32_t t = 0; t < offsets_.size(); ++t) {
+    const HeightBounds& bounds = m.map ? map_bounds[t] : function_bounds;
+    const double h_max = bounds.max_abs, gradient = bounds.max_gradient,
+                 hessian = bounds.max_hessian;
     const double k = normal_curvature(base.mesh, t);
     const double kappa = (1.0 + a * h_max) * k + 2.0 * a * gradient * k + a * hessian;
     const double e2 = double(m.plan.sub_edges[t]) * m.plan.sub_edges[t];

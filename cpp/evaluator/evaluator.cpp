@@ -210,7 +210,7 @@ class MeshTracer {
     out->geometry = hit.geometry;
     out->ng = out->ni = hit.geometry.n;
     if (hit.on_mesh) {
-      const HeightSample h = evaluate_height(height_, hit.geometry.p);
+      const HeightSample h = height_at(height_, map_, shape_, hit.geometry);
       out->shading_point = displaced_point(hit.geometry, amplitude_, h);
       out->exact_ns =
           mesh_displaced_normal(shape_.mesh->mesh, hit.base_triangle, hit.base_b, amplitude_, h);

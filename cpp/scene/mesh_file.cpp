@@ -43,9 +43,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Positions and normals in double before they are welded and stored.
+// Positions, normals and UVs in double before they are welded and stored.
 struct RawMesh {
   std::vector<Vec3> positions, normals;  // normals empty: the file had none
+  std::vector<std::array<double, 2>> uvs;  // empty: some mesh of the file has none
   std::vector<unsigned> triangles;
 };
 
@@ -53,10 +54,12 @@ struct RawMesh {
 // already in the vertices (aiProcess_PreTransformVertices).
 RawMesh read_triangles(const aiScene& scene) {
   RawMesh raw;
-  bool all_normals = true;
+  bool all_normals = true, all_uvs = true;
   for (unsigned m = 0; m < scene.mNumMeshes; ++m)
-    if (scene.mMeshes[m]->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)
+    if (scene.mMeshes[m]->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) {
       all_normals = all_normals && scene.mMeshes[m]->HasNormals();
+      all_uvs = all_uvs && scene.mMeshes[m]->HasTextureCoords(0);
+    }
   for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
     const aiMesh& mesh = *scene.mMeshes[m];
     if (!(mesh.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
@@ -67,6 +70,10 @@ RawMesh read_triangles(const aiScene& scene) {
       if (all_normals) {
         const aiVector3D& n = mesh.mNormals[v];
         raw.normals.push_back({n.x, n.y, n.z});
+      }
+      if (all_uvs) {
+        const aiVector3D& uv = mesh.mTextureCoords[0][v];
+        raw.uvs.push_back({uv.x, uv.y});
       }
     }
     for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
@@ -156,16 +163,22 @@ MeshSurface surface_from(const RawMesh& raw, std::size_t* dropped) {
       }
       m.triangles.push_back(number[v]);
     }
+    // The corners' own UVs: the weld above ignores them.
+    for (std::size_t k = 0; k < 3 && !raw.uvs.empty(); ++k)
+      for (double x : raw.uvs[raw.triangles[t + k]]) s.uvs.push_back(float(x));
   }
   m.side_triangles = m.triangle_count();
   return s;
 }
 
-std::string digest_of(const TriangleMesh& m) {
+std::string digest_of(const MeshSurface& s) {
+  const TriangleMesh& m = s.mesh;
   ContentDigest d;
   d.add(m.positions.data(), m.positions.size() * sizeof(float));
   d.add(m.normals.data(), m.normals.size() * sizeof(float));
   d.add(m.triangles.data(), m.triangles.size() * sizeof(unsigned));
+  // A mesh without UVs keeps the digest it had before they were read.
+  if (s.has_uvs()) d.add(s.uvs.data(), s.uvs.size() * sizeof(float));
   return d.hex();
 }
 
@@ -238,7 +251,11 @@ LoadedMesh read_mesh_file(const std::string& path, const MeshTransform& transfor
     throw MeshFileError(loaded.dropped_triangles > 0
                             ? "every triangle has zero area"
                             : "no triangles (points and lines are not surfaces)");
-  surface.digest = digest_of(surface.mesh);
+  for (std::size_t v = 0; v < raw.uvs.size(); ++v)
+    if (!std::isfinite(raw.uvs[v][0]) || !std::isfinite(raw.uvs[v][1]))
+      throw MeshFileError(fmt::format("the texture coordinates of vertex {} are not finite", v));
+  if (surface.has_uvs()) surface.tangents = mikktspace_tangents(surface.mesh, surface.uvs);
+  surface.digest = digest_of(surface);
   surface.file = path;
   measure_mesh(&surface);
   loaded.surface = std::make_shared<const MeshSurface>(std::move(surface));

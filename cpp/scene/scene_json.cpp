@@ -418,12 +418,20 @@ FilterChoice read_filter(Reader r) {
   return c;
 }
 
-// An image map on a mesh shape: refused until its UVs are read.
-void refuse_on_mesh(const Reader& r, const Shape& shape) {
-  if (shape.type == ShapeType::kMesh)
-    r.fail("type",
-           "expected an analytic family (grating, weave, noise) on a mesh: its UVs are not read "
-           "yet, so an image map has nothing to be laid over");
+// An image map on a mesh shape is laid over the file's UVs: a mesh without
+// them is refused, and so is a filter (its footprints assume an analytic
+// shape's parameterisation).
+void check_map_on_mesh(Reader& r, const Shape& shape) {
+  if (shape.type != ShapeType::kMesh) return;
+  if (!shape.mesh->has_uvs())
+    r.fail("type", fmt::format("expected an analytic family (grating, weave, noise) on the mesh "
+                               "{}: it has no texture coordinates, so an image map has nothing "
+                               "to be laid over",
+                               shape.mesh->file));
+  if (r.has("filter"))
+    r.fail("filter",
+           "expected no filter on a mesh shape (filtered maps and pyramids follow an analytic "
+           "shape's parameterisation, not a mesh's UVs)");
 }
 
 HeightSpec read_height(Reader r, const Shape& shape) {
@@ -434,7 +442,7 @@ HeightSpec read_height(Reader r, const Shape& shape) {
     return h;
   }
   const bool image = h.family == HeightFamily::kHeightMap || h.family == HeightFamily::kNormalMap;
-  if (image) refuse_on_mesh(r, shape);
+  if (image) check_map_on_mesh(r, shape);
   if (image) read_map(r, &h);
   std::optional<FilterChoice> filter;
   if (image && r.has("filter")) filter = read_filter(r.object("filter"));

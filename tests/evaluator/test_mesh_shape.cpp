@@ -28,8 +28,11 @@
 #include "core/mesh_surface.h"
 #include "core/random.h"
 #include "core/shadow_origin.h"
+#include "core/surface_map.h"
 #include "core/tessellation.h"
 #include "evaluator/evaluator.h"
+#include "image/bump_maps.h"
+#include "image/image_io.h"
 #include "mesh_files.h"
 #include "scene/scene_json.h"
 #include "temp_dir_test.h"
@@ -51,6 +54,12 @@ TriangleMesh octahedron() {
   m.triangles = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
   m.side_triangles = m.triangle_count();
   return m;
+}
+
+MeshSurface surface_of(TriangleMesh m) {
+  MeshSurface s;
+  s.mesh = std::move(m);
+  return s;
 }
 
 HeightFunction test_height() {
@@ -109,7 +118,7 @@ TEST(MeshSurface, AdaptiveSubdivisionOfAClosedMeshIsClosed) {
   for (double edge : {10.0, 1.0, 0.37, 0.2}) {
     const TriangleMesh base = stretched_octahedron();
     const MeshSubdivision plan = plan_subdivision(base, edge);
-    const TriangleMesh out = subdivide_displaced(base, plan, test_height(), 0.05);
+    const TriangleMesh out = subdivide_displaced(surface_of(base), plan, {test_height()}, 0.05);
     ASSERT_EQ(out.triangle_count(), plan.triangle_count());
     std::map<std::pair<unsigned, unsigned>, int> directed;
     std::size_t squeezed = 0;
@@ -155,8 +164,9 @@ TEST(MeshSurface, ExportedTruthIsTheSameSurfaceWithItsCreases) {
   const TriangleMesh base = octahedron();
   const double amplitude = 0.005;
   const MeshSubdivision plan = plan_subdivision(base, 0.37);
-  const TriangleMesh shared = subdivide_displaced(base, plan, test_height(), amplitude);
-  const TriangleMesh out = displaced_mesh_for_export(base, plan, test_height(), amplitude);
+  const HeightFunction height = test_height();
+  const TriangleMesh shared = subdivide_displaced(surface_of(base), plan, {height}, amplitude);
+  const TriangleMesh out = displaced_mesh_for_export(surface_of(base), plan, {height}, amplitude);
   ASSERT_EQ(out.normals.size(), out.positions.size());
   using Point = std::array<float, 3>;
   const auto point = [](const TriangleMesh& m, unsigned v) {
@@ -469,20 +479,88 @@ std::string obj_text(const TriangleMesh& mesh) {
   return text;
 }
 
-// Image maps need UVs, which a mesh does not bring yet: refused at the map.
-TEST_F(MeshShapeTest, ImageMapsOnAMeshAreRefusedUntilItsUvsAreRead) {
+// An image map on a mesh is laid over its UVs: a mesh without them is
+// refused at the map, and so is a filter (its footprints follow an analytic
+// shape's parameterisation).
+TEST_F(MeshShapeTest, ImageMapsOnAMeshNeedItsUvsAndNoFilter) {
   std::ofstream(path("tri.obj")) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-  for (const char* family : {"height-map", "normal-map"}) {
+  std::ofstream(path("tri-uv.obj")) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                                       "f 1/1 2/2 3/3\n";
+  const auto refusal = [&](const char* mesh, const json& height) {
     json scene = small_scene();
-    scene["shape"] = {{"type", "mesh"}, {"file", path("tri.obj")}};
-    scene["height"] = {{"type", family}, {"file", path("map.exr")}, {"amplitude", 0.01}};
+    scene["shape"] = {{"type", "mesh"}, {"file", path(mesh)}};
+    scene["height"] = height;
     try {
       scene_from_json(scene, "scene.json");
-      ADD_FAILURE() << family << " on a mesh was accepted";
     } catch (const InputError& e) {
-      EXPECT_EQ(e.pointer(), "/height/type") << e.what();
-      EXPECT_NE(e.reason().find("UVs"), std::string::npos) << e.what();
+      return e.pointer() + ": " + e.reason();
     }
+    return std::string("accepted");
+  };
+  for (const char* family : {"height-map", "normal-map"}) {
+    const std::string why =
+        refusal("tri.obj", {{"type", family}, {"file", path("map.exr")}, {"amplitude", 0.01}});
+    EXPECT_EQ(why.rfind("/height/type: ", 0), 0u) << why;
+    EXPECT_NE(why.find("no texture coordinates"), std::string::npos) << why;
+  }
+  write_exr(bake_surface_map(scene_from_json(small_scene(), "s").shape,
+                             make_grating({1, 0, 0}, 2.0, 0.0), 1.0, 8, 8, MapKind::kHeight),
+            path("map.exr"));
+  const std::string filtered = refusal("tri-uv.obj", {{"type", "height-map"},
+                                                      {"file", path("map.exr")},
+                                                      {"amplitude", 0.01},
+                                                      {"filter", json::object()}});
+  EXPECT_EQ(filtered.rfind("/height/filter: ", 0), 0u) << filtered;
+}
+
+// A flat square with the analytic plane's own (u, v) as its UVs carries an
+// image map exactly as the plane does (its UVs are affine, as the plane's
+// parameters are): the bump and normal-map renders are the plane's up to
+// Embree's float hit (as FlatSquareMatchesTheAnalyticPlane), so the mesh's
+// gradient through grad(u), grad(v) and its MikkTSpace frame (T along
+// dP/du, sign (N x T) along dP/dv) are the plane's; the truth differs
+// in the facets the two subdivisions make.
+TEST_F(MeshShapeTest, FlatSquareWithImageMapsMatchesTheAnalyticPlane) {
+  json plane = small_scene();
+  plane["shape"] = {
+      {"type", "plane"}, {"center", {0, 0, 0}}, {"axis", {0, 0, -1}}, {"width", 2}, {"height", 2}};
+  plane["light"]["direction"] = {-1, 0.3, -1.2};
+  plane["displacement"] = {{"edge_length", 0.01}};
+  const Shape shape = scene_from_json(plane, "plane").shape;
+  const HeightFunction grating = make_grating({1, 0.4, 0}, 4.0, 0.3);
+  write_exr(bake_surface_map(shape, grating, 1.0, 96, 96, MapKind::kHeight), path("h.exr"));
+  write_exr(bake_surface_map(shape, grating, 0.01, 96, 96, MapKind::kNormal), path("n.exr"));
+  std::ofstream obj(path("square.obj"));
+  obj.precision(17);
+  const double corner[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+  for (const auto& c : corner) obj << "v " << c[0] << " " << c[1] << " 0\n";
+  for (const auto& c : corner) {
+    const SurfaceParameters q = surface_parameters(shape, {c[0], c[1], 0.0});
+    obj << "vt " << q.u << " " << q.v << "\n";
+  }
+  // Wound about -z, the normal's side, as a modelling tool writes it.
+  obj << "vn 0 0 -1\nf 1/1/1 3/3/1 2/2/1\nf 1/1/1 4/4/1 3/3/1\n";
+  obj.close();
+  json mesh = plane;
+  mesh["shape"] = {{"type", "mesh"}, {"file", path("square.obj")}};
+  const json height_map{{"type", "height-map"}, {"file", path("h.exr")}, {"amplitude", 0.01}};
+  const json normal_map{{"type", "normal-map"}, {"file", path("n.exr")}};
+  for (const auto& [height, representation] :
+       {std::pair{height_map, "bump"}, std::pair{height_map, "displacement"},
+        std::pair{normal_map, "bump"}}) {
+    plane["height"] = mesh["height"] = height;
+    plane["representation"] = mesh["representation"] = representation;
+    const Image a = render(scene_from_json(plane, "plane"));
+    const Image b = render(scene_from_json(mesh, "mesh"));
+    double sum = 0.0, differ = 0.0;
+    const std::size_t channels = a.channels.size();
+    for (std::size_t p = 0; p < a.pixels.size(); p += channels) {
+      sum += a.pixels[p];
+      differ += std::abs(a.pixels[p] - b.pixels[p]);
+    }
+    const std::string what = height["type"].get<std::string>() + " " + representation;
+    std::printf("%s: mean |difference| %.3g of the mean radiance\n", what.c_str(), differ / sum);
+    EXPECT_LT(differ / sum, std::string(representation) == "bump" ? 1e-5 : 1e-3) << what;
   }
 }
 

@@ -152,10 +152,11 @@ RendererRun with_geometry(const RendererInfo& info, const Image& colour, double 
 }
 
 TriangleMesh mesh_shape_triangles(const Scene& scene, bool truth) {
-  const TriangleMesh& base = scene.shape.mesh->mesh;
-  if (!truth) return base;
-  return displaced_mesh_for_export(base, plan_subdivision(base, scene.displacement.edge_length),
-                                   scene.height.function, scene.height.amplitude);
+  const MeshSurface& base = *scene.shape.mesh;
+  if (!truth) return base.mesh;
+  return displaced_mesh_for_export(
+      base, plan_subdivision(base.mesh, scene.displacement.edge_length),
+      {scene.height.function, scene.height.height_map()}, scene.height.amplitude);
 }
 
 TriangleMesh scene_triangles(const Scene& scene, bool displaced) {
