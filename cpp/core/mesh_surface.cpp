@@ -523,7 +523,46 @@ class TangentGrouping {
 
 }  // namespace
 
+namespace {
+
+// Whether triangle t is wound against its vertex normals (its Ng away from
+// their sum).
+bool wound_against_normals(const TriangleMesh& m, std::size_t t) {
+  const unsigned* c = &m.triangles[3 * t];
+  const Vec3 ng = cross(vertex(m, c[1]) - vertex(m, c[0]), vertex(m, c[2]) - vertex(m, c[0]));
+  return dot(ng, normal(m, c[0]) + normal(m, c[1]) + normal(m, c[2])) < 0.0;
+}
+
+std::vector<float> tangents_as_wound(const TriangleMesh& m, const std::vector<float>& uvs);
+
+}  // namespace
+
 std::vector<float> mikktspace_tangents(const TriangleMesh& m, const std::vector<float>& uvs) {
+  // MikkTSpace's sign assumes a triangle is wound about its normal; a file
+  // that winds some against their normals (the 24-segment UV tessellation
+  // winds all but its pole fans inward) gets those rewound first, as the
+  // Blender export rewinds them for Cycles, and its corners' tangents back
+  // in the file's order.
+  std::vector<std::size_t> rewound;
+  for (std::size_t t = 0; t < m.triangle_count(); ++t)
+    if (wound_against_normals(m, t)) rewound.push_back(t);
+  if (rewound.empty()) return tangents_as_wound(m, uvs);
+  TriangleMesh wound = m;
+  std::vector<float> wound_uvs = uvs;
+  for (std::size_t t : rewound) {
+    std::swap(wound.triangles[3 * t + 1], wound.triangles[3 * t + 2]);
+    std::swap(wound_uvs[6 * t + 2], wound_uvs[6 * t + 4]);
+    std::swap(wound_uvs[6 * t + 3], wound_uvs[6 * t + 5]);
+  }
+  std::vector<float> out = tangents_as_wound(wound, wound_uvs);
+  for (std::size_t t : rewound)
+    for (std::size_t a = 0; a < 4; ++a) std::swap(out[12 * t + 4 + a], out[12 * t + 8 + a]);
+  return out;
+}
+
+namespace {
+
+std::vector<float> tangents_as_wound(const TriangleMesh& m, const std::vector<float>& uvs) {
   const std::size_t count = m.triangle_count();
   std::vector<FaceTangent> faces(count);
   for (std::size_t t = 0; t < count; ++t) faces[t] = face_tangent(m, uvs, t);
@@ -564,5 +603,7 @@ std::vector<float> mikktspace_tangents(const TriangleMesh& m, const std::vector<
   }
   return out;
 }
+
+}  // namespace
 
 }  // namespace penumbra

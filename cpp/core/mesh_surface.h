@@ -46,7 +46,10 @@ struct MeshSurface {
 // Tangents by Mikkelsen's MikkTSpace (Mikkelsen 2008, "Simulation of
 // wrinkled surfaces revisited"), the algorithm of Blender's calc_tangents
 // and Cycles' Normal Map node (blender/blender
-// intern/mikktspace/mikktspace.hh at 9918488), for triangles:
+// intern/mikktspace/mikktspace.hh at 9918488), for triangles wound about
+// their normals (a triangle wound against the sum of its vertex normals is
+// rewound first, as the Blender export rewinds it for Cycles: MikkTSpace's
+// sign, and so the bitangent, assumes a front face):
 //  - a MikkTSpace vertex is a welded vertex (position and normal) with one
 //    UV's bits;
 //  - per triangle, the direction of increasing u (eq. 18),

@@ -101,6 +101,24 @@ SurfaceParameters surface_parameters(const Shape& s, const Vec3& p) {
   return out;
 }
 
+void triangle_parameters(const Shape& shape, const Vec3 corners[3], double u[3], double v[3]) {
+  bool pole[3];
+  for (int k = 0; k < 3; ++k) {
+    const SurfaceParameters p = surface_parameters(shape, corners[k]);
+    u[k] = p.u, v[k] = p.v;
+    pole[k] = !(length(p.dp_du) > 1e-9 * shape.radius);
+  }
+  if (std::max({u[0], u[1], u[2]}) - std::min({u[0], u[1], u[2]}) > 0.5)
+    for (int k = 0; k < 3; ++k)
+      if (u[k] < 0.5) u[k] += 1.0;
+  double sum = 0.0;
+  int count = 0;
+  for (int k = 0; k < 3; ++k)
+    if (!pole[k]) sum += u[k], ++count;
+  for (int k = 0; k < 3; ++k)
+    if (pole[k] && count > 0) u[k] = sum / count;
+}
+
 SurfaceGeometry surface_at_parameters(const Shape& s, double u, double v) {
   switch (s.type) {
     case ShapeType::kPlane:

@@ -53,6 +53,11 @@ struct SurfaceParameters {
   Vec3 dp_du, dp_dv;
 };
 SurfaceParameters surface_parameters(const Shape& shape, const Vec3& p);
+// The map parameters of a triangle's corners (points on or near the shape)
+// as one triangle of a mesh carries them: u unwrapped past 1 where the
+// triangle straddles the u seam, and at a sphere's pole (where u is
+// undefined) the other corners' mean u.
+void triangle_parameters(const Shape& shape, const Vec3 corners[3], double u[3], double v[3]);
 // The inverse: the base surface at map parameters (u, v) in [0, 1]^2.
 SurfaceGeometry surface_at_parameters(const Shape& shape, double u, double v);
 // Lengths of the u and v lines at their longest (scene units): the

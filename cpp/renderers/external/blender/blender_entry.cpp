@@ -59,7 +59,8 @@ const RendererEntry& blender_entry() {
            .note =
                "Blender 3.4 Cycles: bump via ray-differential finite differences, ground "
                "truth via a displaced mesh (a mesh shape's: the evaluator's subdivision; "
-               "bump on a mesh shape is evaluator-only); its chiang2019 is the Bump node, which is "
+               "bump on a mesh shape is evaluator-only, its normal maps are the Normal Map node "
+               "in Blender's MikkTSpace frame); its chiang2019 is the Bump node, which is "
                "cycles34 (Chiang's term against Ni after ensure_valid_reflection turns "
                "the bumped normal towards Ng at grazing views); both ids render the same "
                "Blender scene",

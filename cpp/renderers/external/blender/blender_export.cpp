@@ -7,6 +7,7 @@
 
 #include <filesystem>
 
+#include "core/mesh_surface.h"
 #include "core/tessellation.h"
 #include "image/image_io.h"
 #include "renderers/external/blender/blender.h"
@@ -122,12 +123,14 @@ BlenderShading blender_shading(const Scene& scene, bool has_height) {
         "representation, or no /shape/tessellation)");
   // The same on a mesh shape: Cycles differentiates h over the flat
   // triangle, the evaluator across the plane normal to Ni.
+  // A normal map is not differentiated: Cycles' Normal Map node reads it in
+  // the MikkTSpace frame the evaluator builds (core/surface_map.h).
   if (scene.shape.type == ShapeType::kMesh && scene.representation == Representation::kBump &&
-      has_height)
+      has_height && !scene.height.normal_map())
     throw ExportError(
         "Blender export: bump on a mesh shape is evaluator-only (Cycles differentiates h over "
         "the flat triangle, the evaluator across the interpolated normal); its smooth and "
-        "displacement representations are exported");
+        "displacement representations and its normal maps are exported");
   switch (scene.representation) {
     case Representation::kSmooth:
       return BlenderShading::kSmooth;
@@ -187,29 +190,35 @@ std::vector<float> corner_uvs(const Scene& scene, const TriangleMesh& mesh) {
   const SurfaceMap& map = *scene.height.map;
   std::vector<float> uvs(mesh.triangles.size() * 2);
   for (std::size_t t = 0; t < mesh.triangles.size(); t += 3) {
-    double u[3], v[3];
-    bool pole[3];
+    Vec3 corners[3];
     for (int k = 0; k < 3; ++k) {
       const float* q = &mesh.positions[3 * std::size_t(mesh.triangles[t + k])];
-      const SurfaceParameters p =
-          surface_parameters(scene.shape, to_blender(Vec3(q[0], q[1], q[2])));
-      u[k] = p.u, v[k] = p.v;
-      pole[k] = !(length(p.dp_du) > 1e-9 * scene.shape.radius);
+      corners[k] = to_blender(Vec3(q[0], q[1], q[2]));
     }
-    const double lo = std::min({u[0], u[1], u[2]}), hi = std::max({u[0], u[1], u[2]});
-    if (hi - lo > 0.5)
-      for (double& x : u)
-        if (x < 0.5) x += 1.0;
-    double sum = 0.0;
-    int count = 0;
-    for (int k = 0; k < 3; ++k)
-      if (!pole[k]) sum += u[k], ++count;
+    double u[3], v[3];
+    triangle_parameters(scene.shape, corners, u, v);
     for (int k = 0; k < 3; ++k) {
-      if (pole[k] && count > 0) u[k] = sum / count;
       uvs[2 * (t + k)] = float(u[k] * map.tiles_u);
       uvs[2 * (t + k) + 1] = float(v[k] * map.tiles_v);
     }
   }
+  return uvs;
+}
+
+// A mesh shape's own UVs times the map's tiling at every corner of the
+// Blender mesh's triangles: the same triangles in the same order, some
+// rewound (blender_mesh), so each corner is found by its vertex.
+std::vector<float> mesh_corner_uvs(const Scene& scene, const TriangleMesh& mesh) {
+  const MeshSurface& surface = *scene.shape.mesh;
+  const SurfaceMap& map = *scene.height.map;
+  std::vector<float> uvs(mesh.triangles.size() * 2);
+  for (std::size_t t = 0; t < mesh.triangles.size(); t += 3)
+    for (std::size_t k = 0; k < 3; ++k) {
+      std::size_t j = 0;
+      while (j < 2 && surface.mesh.triangles[t + j] != mesh.triangles[t + k]) ++j;
+      uvs[2 * (t + k)] = float(surface.uvs[2 * (t + j)] * map.tiles_u);
+      uvs[2 * (t + k) + 1] = float(surface.uvs[2 * (t + j) + 1] * map.tiles_v);
+    }
   return uvs;
 }
 
@@ -320,7 +329,8 @@ BlenderExport export_blender(const Scene& scene) {
   json job = job_json(scene, out, has_height);
   if (scene.height.map && out.shading != BlenderShading::kMesh &&
       out.shading != BlenderShading::kSmooth) {
-    out.uvs = corner_uvs(scene, out.mesh);
+    out.uvs = scene.shape.type == ShapeType::kMesh ? mesh_corner_uvs(scene, out.mesh)
+                                                   : corner_uvs(scene, out.mesh);
     out.map = map_image(*scene.height.map);
     job["mesh"]["uvs"] = kBlenderUvsFile;
     job["height"]["image"] = {
