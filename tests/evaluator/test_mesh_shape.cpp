@@ -479,6 +479,27 @@ std::string obj_text(const TriangleMesh& mesh) {
   return text;
 }
 
+// The same with a planar UV per vertex (x and y mapped to [0, 1]).
+std::string obj_text_with_uvs(const TriangleMesh& mesh) {
+  std::string text;
+  char line[160];
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    const double x = mesh.positions[3 * v], y = mesh.positions[3 * v + 1];
+    std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\nvn %.9g %.9g %.9g\nvt %.9g %.9g\n", x, y,
+                  double(mesh.positions[3 * v + 2]), double(mesh.normals[3 * v]),
+                  double(mesh.normals[3 * v + 1]), double(mesh.normals[3 * v + 2]), 0.5 + 0.5 * x,
+                  0.5 + 0.5 * y);
+    text += line;
+  }
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const unsigned* c = &mesh.triangles[3 * t];
+    std::snprintf(line, sizeof line, "f %u/%u/%u %u/%u/%u %u/%u/%u\n", c[0] + 1, c[0] + 1, c[0] + 1,
+                  c[1] + 1, c[1] + 1, c[1] + 1, c[2] + 1, c[2] + 1, c[2] + 1);
+    text += line;
+  }
+  return text;
+}
+
 // An image map on a mesh is laid over its UVs: a mesh without them is
 // refused at the map, and so is a filter (its footprints follow an analytic
 // shape's parameterisation).
@@ -566,22 +587,31 @@ TEST_F(MeshShapeTest, FlatSquareWithImageMapsMatchesTheAnalyticPlane) {
 
 // Mutated OBJ and PLY files (bytes flipped, inserted, cut, numbers made
 // huge or NaN, counts changed) either load into a finite mesh that renders
-// finite pixels, or are refused with /shape/file; nothing crashes or hangs
-// (the whole run takes well under a second of loading per mutant).
+// finite pixels, or are refused with /shape/file (or /height/type, where a
+// mutant with UVs lost them); nothing crashes or hangs (the whole run takes
+// well under a second of loading per mutant).
 TEST_F(MeshShapeTest, MutatedMeshFilesLoadOrAreRefused) {
   const Scene tessellated = scene_from_json(small_scene(), "built-in");
   const TriangleMesh sphere = tessellate(tessellated.shape, *tessellated.tessellation);
   write_ply(sphere, path("parent.ply"));
   std::ifstream ply_in(path("parent.ply"), std::ios::binary);
   const std::string ply((std::istreambuf_iterator<char>(ply_in)), std::istreambuf_iterator<char>());
-  const std::string parents[2] = {obj_text(sphere), ply};
-  const char* extensions[2] = {".obj", ".ply"};
+  // The third parent carries UVs and is rendered with a normal map or a
+  // height map over them (MikkTSpace on mutated UVs and positions).
+  const std::string parents[3] = {obj_text(sphere), ply, obj_text_with_uvs(sphere)};
+  const char* extensions[3] = {".obj", ".ply", ".obj"};
+  write_exr(bake_surface_map(tessellated.shape, make_grating({1, 0.4, 0}, 3.0, 0.0), 0.05, 16, 8,
+                             MapKind::kNormal),
+            path("normal.exr"));
+  write_exr(bake_surface_map(tessellated.shape, make_grating({1, 0.4, 0}, 3.0, 0.0), 1.0, 16, 8,
+                             MapKind::kHeight),
+            path("height.exr"));
   const char* tokens[] = {"nan", "inf", "-1",    "1e300",           "99999999",
                           "\n",  " ",   "f 1 2", "element face 7\n"};
   Pcg32 rng(20261128);
   int loaded = 0, refused = 0, assimp_checks = 0;
-  for (int m = 0; m < 400; ++m) {
-    const int which = m % 2;
+  for (int m = 0; m < 600; ++m) {
+    const int which = m % 3;
     std::string text = parents[which];
     const int edits = 1 + int(rng.next_double() * 4);
     for (int e = 0; e < edits && !text.empty(); ++e) {
@@ -602,6 +632,13 @@ TEST_F(MeshShapeTest, MutatedMeshFilesLoadOrAreRefused) {
     json scene = small_scene();
     scene["shape"] = {{"type", "mesh"}, {"file", file}};
     scene["camera"]["width"] = scene["camera"]["height"] = 8;
+    if (which == 2) {
+      scene["representation"] = "bump";
+      scene["height"] =
+          m % 2 == 0
+              ? json{{"type", "normal-map"}, {"file", path("normal.exr")}}
+              : json{{"type", "height-map"}, {"file", path("height.exr")}, {"amplitude", 0.01}};
+    }
     try {
       const Scene s = scene_from_json(scene, "scene.json");
       const Image image = render(s);
@@ -610,7 +647,9 @@ TEST_F(MeshShapeTest, MutatedMeshFilesLoadOrAreRefused) {
           << "mutant " << m;
       ++loaded;
     } catch (const InputError& e) {
-      EXPECT_EQ(e.pointer(), "/shape/file") << "mutant " << m << ": " << e.what();
+      // A mutant that lost its UVs is refused at the map that needs them.
+      EXPECT_TRUE(e.pointer() == "/shape/file" || (which == 2 && e.pointer() == "/height/type"))
+          << "mutant " << m << ": " << e.what();
       ++refused;
       // Assimp's failed assertions are refusals here, not aborts (mesh_file.cpp).
       if (std::string(e.what()).find("failed its own check") != std::string::npos) {
@@ -621,8 +660,8 @@ TEST_F(MeshShapeTest, MutatedMeshFilesLoadOrAreRefused) {
   }
   std::printf("mesh file mutants: %d loaded, %d refused (%d by a failed Assimp assertion)\n",
               loaded, refused, assimp_checks);
-  EXPECT_GT(loaded, 20);
-  EXPECT_GT(refused, 20);
+  EXPECT_GT(loaded, 30);
+  EXPECT_GT(refused, 30);
   // The installed binary refuses such a file too (exit 2), rather than abort.
   for (const char* extension : extensions) {
     const std::string file = path(std::string("assert") + extension);
