@@ -1,8 +1,10 @@
 // `penumbra bake`: a scene's analytic height function as a height map of the
-// plane, or as a height or normal map over its shape (core/surface_map.h).
+// plane, or as a height or normal map over its shape (core/surface_map.h);
+// or its normal map integrated into a height map (core/normal_integration.h).
 #include <fmt/format.h>
 
 #include "cli/command.h"
+#include "core/normal_integration.h"
 #include "core/surface_map.h"
 #include "image/bump_maps.h"
 #include "image/image_io.h"
@@ -19,6 +21,7 @@ struct BakeArgs {
   double extent = 1.0;
   std::string on = "plane";     // "plane": z = 0 over [0, extent)^2; "shape": the shape's (u, v)
   std::string kind = "height";  // "height" or "normal" (shape only)
+  bool integrate = false;       // the scene's normal map integrated into a height map
 };
 
 // --on shape: the map over the shape's (u, v), texels as square as the
@@ -39,11 +42,53 @@ int bake_on_shape(const BakeArgs& a, const Scene& scene, std::ostream& out) {
   return kExitOk;
 }
 
+// --integrate: the scene's normal map as the height map whose bump normal it
+// is, over the same (u, v) (core/normal_integration.h).
+int bake_integrated(const BakeArgs& a, const LoadedScene& loaded, std::ostream& out) {
+  const Scene& scene = loaded.scene;
+  if (!scene.height.normal_map())
+    throw InputError(loaded.origin, "/height/type",
+                     fmt::format("expected \"normal-map\" to integrate, got \"{}\"",
+                                 to_string(scene.height.family)));
+  check_extension(a.output, ".exr", "-o", ": an integrated height map is float OpenEXR");
+  check_writable(a.output);
+  const SurfaceMap& map = *scene.height.map;
+  const MapLengths lengths = scene.shape.type == ShapeType::kMesh
+                                 ? mesh_map_lengths(*scene.shape.mesh)
+                                 : map_lengths(scene.shape);
+  if (!(lengths.u > 0.0) || !(lengths.v > 0.0))
+    throw InputError(loaded.origin, "/shape",
+                     "expected a shape whose (u, v) have a length (every triangle's UV area is "
+                     "zero)");
+  // A map tiled n times spans 1/n of the shape's u (v) lines.
+  const IntegratedHeight h =
+      integrate_normal_map(map, lengths.u / map.tiles_u, lengths.v / map.tiles_v);
+  Image image;
+  image.width = h.width;
+  image.height = h.height;
+  image.channels = {"Y"};
+  image.pixels = h.heights;
+  write_exr(image, a.output, {{"penumbra:integrated_from", a.scene}});
+  out << fmt::format(
+      "wrote {} ({}x{}, heights in scene units over the map's (u, v), spanning {:.6g} x {:.6g} "
+      "scene units; {} conjugate-gradient iterations): use /height = {{\"type\": \"height-map\", "
+      "\"file\": \"{}\", \"amplitude\": 1}}\n"
+      "the map's normals against the integrated height's (the part of the map no height gives): "
+      "RMS {:.3g} deg, largest {:.3g} deg over {} texels{}\n",
+      a.output, h.width, h.height, lengths.u / map.tiles_u, lengths.v / map.tiles_v, h.iterations,
+      a.output, h.rms_angle_deg, h.largest_angle_deg, h.heights.size(),
+      h.clamped > 0 ? fmt::format("; {} texels steeper than {:.0f} deg were clamped", h.clamped,
+                                  std::acos(kMinNormalZ) * 180.0 / kPi)
+                    : "");
+  return kExitOk;
+}
+
 int bake(const BakeArgs& a, std::ostream& out) {
   SceneArgs scene_args;
   scene_args.sets = a.sets;
   const LoadedScene loaded = read_scene(a.scene, scene_args);
   const Scene& scene = loaded.scene;
+  if (a.integrate) return bake_integrated(a, loaded, out);
   if (scene.height.family == HeightFamily::kNone || scene.height.map)
     throw InputError(loaded.origin, "/height",
                      fmt::format("expected an analytic height function to bake, got \"{}\"",
@@ -105,6 +150,11 @@ Command add_bake_command(CLI::App& app, SharedOptions&) {
                   "normal as a tangent-space normal map (R, G, B = 0.5 n + 0.5; --on shape only)")
       ->check(CLI::IsMember({"height", "normal"}))
       ->capture_default_str();
+  cmd->add_flag("--integrate", a->integrate,
+                "instead: integrate the scene's normal map (/height, a normal-map) into the "
+                "height map whose bump normal it is, over the same (u, v) of the scene's shape "
+                "(a mesh: its mean UV scale), and say how far the map is from any height's "
+                "normals");
   return {cmd, [a](const CommandContext& c) { return bake(*a, c.out); }};
 }
 

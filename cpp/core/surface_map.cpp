@@ -302,6 +302,25 @@ HeightBounds height_bounds(const HeightFunction& function, const SurfaceMap* map
   return b;
 }
 
+MapLengths mesh_map_lengths(const MeshSurface& mesh) {
+  double area = 0.0, sum_u = 0.0, sum_v = 0.0;
+  for (std::uint32_t t = 0; t < mesh.mesh.triangle_count(); ++t) {
+    const MeshUv q = mesh_uv(mesh, t, 0.0, 0.0);
+    const double gu = length(q.grad_u), gv = length(q.grad_v);
+    if (!(gu > 0.0) || !(gv > 0.0)) continue;
+    const unsigned* c = &mesh.mesh.triangles[3 * std::size_t(t)];
+    const auto vertex = [&](int k) {
+      const float* p = &mesh.mesh.positions[3 * std::size_t(c[k])];
+      return Vec3{p[0], p[1], p[2]};
+    };
+    const double a = 0.5 * length(cross(vertex(1) - vertex(0), vertex(2) - vertex(0)));
+    area += a;
+    sum_u += a / gu;
+    sum_v += a / gv;
+  }
+  return area > 0.0 ? MapLengths{sum_u / area, sum_v / area} : MapLengths{};
+}
+
 std::vector<HeightBounds> mesh_height_bounds(const SurfaceMap& map, const MeshSurface& mesh) {
   const TexelDifferences d = texel_differences(map);
   std::vector<HeightBounds> out(mesh.mesh.triangle_count());

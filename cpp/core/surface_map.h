@@ -66,6 +66,11 @@ struct MapLengths {
   double u = 0.0, v = 0.0;
 };
 MapLengths map_lengths(const Shape& shape);
+// A mesh's: the area-weighted means over its triangles of 1 / |grad u| and
+// 1 / |grad v| (scene units per unit of u, v), triangles with a zero UV
+// area left out; a mesh whose UV scale varies has no single length, and
+// what uses this one is exact only where the scale is the mean.
+MapLengths mesh_map_lengths(const MeshSurface& mesh);
 
 // The spline at map coordinates (s, t): channel c's value and its derivatives
 // per unit of s and of t.
