@@ -1,6 +1,8 @@
 // `penumbra bake`: a scene's analytic height function as a height map of the
 // plane, or as a height or normal map over its shape (core/surface_map.h);
 // or its normal map integrated into a height map (core/normal_integration.h).
+#include <stdexcept>
+
 #include <fmt/format.h>
 
 #include "cli/command.h"
@@ -53,6 +55,11 @@ int bake_integrated(const BakeArgs& a, const LoadedScene& loaded, std::ostream& 
   check_extension(a.output, ".exr", "-o", ": an integrated height map is float OpenEXR");
   check_writable(a.output);
   const SurfaceMap& map = *scene.height.map;
+  if (static_cast<long long>(map.width) * map.height > kMaxIntegratedTexels)
+    throw InputError(loaded.origin, "/height/file",
+                     fmt::format("expected a normal map of at most {} texels to integrate, got "
+                                 "{}x{} (the solve holds about 56 bytes a texel)",
+                                 kMaxIntegratedTexels, map.width, map.height));
   const MapLengths lengths = scene.shape.type == ShapeType::kMesh
                                  ? mesh_map_lengths(*scene.shape.mesh)
                                  : map_lengths(scene.shape);
@@ -68,6 +75,11 @@ int bake_integrated(const BakeArgs& a, const LoadedScene& loaded, std::ostream& 
   image.height = h.height;
   image.channels = {"Y"};
   image.pixels = h.heights;
+  if (!h.converged)
+    throw std::runtime_error(
+        fmt::format("{}: the integration of {}x{} texels did not converge in {} conjugate-gradient "
+                    "iterations; nothing written",
+                    a.scene, h.width, h.height, h.iterations));
   write_exr(image, a.output, {{"penumbra:integrated_from", a.scene}});
   out << fmt::format(
       "wrote {} ({}x{}, heights in scene units over the map's (u, v), spanning {:.6g} x {:.6g} "

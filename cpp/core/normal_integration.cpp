@@ -103,7 +103,8 @@ double dot_product(const std::vector<double>& a, const std::vector<double>& b) {
 
 // Conjugate gradients on L x = b (L singular on constants, b orthogonal to
 // them, so the iterates stay in the range), to a residual of 1e-10 |b|.
-std::vector<double> solve(const Grid& g, const std::vector<double>& b, int* iterations) {
+std::vector<double> solve(const Grid& g, const std::vector<double>& b, int* iterations,
+                          bool* converged) {
   std::vector<double> x(g.size(), 0.0), r = b, p = b, lp(g.size());
   double rr = dot_product(r, r);
   const double stop = 1e-20 * std::max(rr, 1e-300);
@@ -122,6 +123,7 @@ std::vector<double> solve(const Grid& g, const std::vector<double>& b, int* iter
     for (std::size_t i = 0; i < p.size(); ++i) p[i] = r[i] + beta * p[i];
   }
   *iterations = k;
+  *converged = rr <= stop;
   return x;
 }
 
@@ -171,7 +173,7 @@ IntegratedHeight integrate_normal_map(const SurfaceMap& map, double length_u, do
   out.width = map.width;
   out.height = map.height;
   out.clamped = s.clamped;
-  std::vector<double> h = solve(g, divergence(g, s), &out.iterations);
+  std::vector<double> h = solve(g, divergence(g, s), &out.iterations, &out.converged);
   double mean = 0.0;
   for (double x : h) mean += x;
   mean /= double(h.size());

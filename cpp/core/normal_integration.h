@@ -31,7 +31,12 @@ struct IntegratedHeight {
   double largest_angle_deg = 0.0;  // the same, at its largest
   int clamped = 0;                 // texels whose n_z was raised to kMinNormalZ
   int iterations = 0;              // of conjugate gradients
+  bool converged = false;          // the residual fell to 1e-10 of the right side's
 };
+
+// More texels than this are refused by the CLI: the solve holds about 56
+// bytes a texel (4096 x 4096: about 0.9 GiB).
+inline constexpr long long kMaxIntegratedTexels = 4096LL * 4096LL;
 
 // `map` a kNormal map spanning length_u by length_v scene units (the scene
 // length of its u and v lines: a plane's sides, a sphere's equator and half
