@@ -101,6 +101,13 @@ def load_fit(path):
     floor = c.get(doc, '', 'floor', dict, 'an object')
     fit = {'src': path, 'unit': c.get(doc, '', 'unit', str, 'a string'),
            'variants': c.get(doc, '', 'variants', int, 'an integer'),
+           # absent before fit.json's contents 4: none left out
+           'unconverged_truths': [
+               e if isinstance(e, str)
+               else c.fail(f'/unconverged_truths/{i}', 'a variant id (a string)')
+               for i, e in enumerate(
+                   c.get(doc, '', 'unconverged_truths', list, 'an array')
+                   if 'unconverged_truths' in doc else [])],
            'floor': floor_of(c, floor, '/floor'),
            'families': [floor_of(c, e, p)
                         for e, p in c.array(doc, '', 'family_floors')],

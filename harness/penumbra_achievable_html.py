@@ -226,6 +226,7 @@ def achievable_context(fit, figs, fit_file):
     return {'absent': None, 'file': fit_file, 'unit': fit['unit'],
             'floor': pct(f['floor']), 'none': pct(f['none']),
             'variants': f['variants'], 'pct': PCT,
+            'unconverged': fit['unconverged_truths'],
             'families': families, 'shares': shares,
             'share_figure': figure_file(
                 figs['share'], 'share of the achievable improvement',

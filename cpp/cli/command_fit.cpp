@@ -17,6 +17,7 @@ namespace {
 struct FitArgs {
   std::string folder, output;
   int resamples = 2000;
+  std::vector<double> smoothness = FitOptions().smoothness;
   std::vector<std::string> emit;  // languages (factor_emit.h)
   std::string table;              // emit this table.json without fitting
 };
@@ -48,9 +49,10 @@ void print_summary(const FitResult& r, std::ostream& out) {
                        100 * e.interval.high);
   };
   out << fmt::format(
-      "study {}: {} variants fitted ({} skipped, {} re-traced differ from the cache); terminator "
-      "RMSE pooled over variants, % of albedo*E/pi, 95 % bootstrap intervals over variants\n",
-      r.study, r.variants.size(), r.skipped, r.retraced_different);
+      "study {}: {} variants fitted ({} skipped, {} with a truth that did not converge left out, "
+      "{} re-traced differ from the cache); terminator RMSE pooled over variants, % of "
+      "albedo*E/pi, 95 % bootstrap intervals over variants\n",
+      r.study, r.variants.size(), r.skipped, r.unconverged.size(), r.retraced_different);
   out << fmt::format("  raw bump {}; floor of any light,deviation factor {}\n",
                      pct(r.study_floor.none), pct(r.study_floor.floor));
   out << fmt::format("  fitted table, each scene family held out: {}\n", pct(r.held_out_pooled));
@@ -76,6 +78,7 @@ int fit_into(const FitArgs& a, const CommandContext& c) {
   FitOptions options;
   options.folder = a.folder;
   options.resamples = a.resamples;
+  options.smoothness = a.smoothness;
   options.jobs = c.parallelism.threads();
   const auto start = std::chrono::steady_clock::now();
   options.progress = [&c, start](const std::string& line) {
@@ -129,6 +132,13 @@ Command add_fit_command(CLI::App& app, SharedOptions&) {
   cmd->add_option("--table", a->table,
                   "print the function of this table.json (with one --emit) instead of fitting")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--smoothness", a->smoothness,
+                  "candidate weights of the fitted table's smoothness prior, chosen among by "
+                  "leave-one-family-out (comma-separated, each in [1e-6, 1e6]); fit.json says "
+                  "which won: widen the list when it is an end")
+      ->delimiter(',')
+      ->check(CLI::Range(1e-6, 1e6))
+      ->capture_default_str();
   cmd->add_option("--resamples", a->resamples, "bootstrap resamples over variants")
       ->check(CLI::Range(100, 100000))
       ->capture_default_str();

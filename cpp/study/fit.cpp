@@ -435,8 +435,19 @@ void say(const FitOptions& o, const std::string& line) {
 void load_variants(const FitOptions& o, const json& report, FitResult* r) {
   const std::filesystem::path folder(o.folder);
   const json& variants = report.at("variants");
+  // A truth that did not converge is not yet the truth: the floor and the
+  // fitted constants would be fitted to its error.
+  std::set<std::string> unconverged;
+  if (report.contains("ground_truth") && report["ground_truth"].contains("variants"))
+    for (const json& g : report["ground_truth"]["variants"])
+      if (!g.value("converged", true)) unconverged.insert(g.at("variant").get<std::string>());
   std::size_t done = 0;
   for (const json& variant : variants) {
+    if (unconverged.count(variant.at("id").get<std::string>())) {
+      r->unconverged.push_back(variant.at("id").get<std::string>());
+      ++done;
+      continue;
+    }
     if (auto v = load_variant(folder, variant, o.grid, r))
       r->variants.push_back(std::move(*v));
     else
@@ -447,8 +458,9 @@ void load_variants(const FitOptions& o, const json& report, FitResult* r) {
   if (r->variants.empty())
     throw InputError((folder / "report.json").string(), "/variants",
                      fmt::format("no variant with an evaluator raw-bump render and displacement "
-                                 "truth to fit ({} re-traced differ from the cache)",
-                                 r->retraced_different));
+                                 "truth to fit ({} left out: their truth did not converge; {} "
+                                 "re-traced differ from the cache)",
+                                 r->unconverged.size(), r->retraced_different));
   double outside = 0.0, total = 0.0;
   for (const FitVariant& v : r->variants)
     for (std::size_t b = 0; b < v.data.tally.count.size(); ++b) {
@@ -832,6 +844,8 @@ FitResult fit_study(const FitOptions& o) {
   FitResult r;
   r.folder = o.folder;
   r.grid = o.grid;
+  if (o.smoothness.empty()) throw std::invalid_argument("fit_study: no candidate smoothness");
+  r.smoothness_candidates = o.smoothness;
   MethodErrors errors;
   try {
     r.study = report.at("study").value("name", "");
@@ -946,6 +960,7 @@ json result_json(const FitResult& r) {
       {"grid", factor_grid_json(r.grid)},
       {"variants", r.variants.size()},
       {"skipped", r.skipped},
+      {"unconverged_truths", r.unconverged},
       {"retraced", r.retraced},
       {"retraced_different", r.retraced_different},
       {"outside_grid_share", r.outside_share},
@@ -956,6 +971,7 @@ json result_json(const FitResult& r) {
       {"held_out_minus_best",
        r.held_out.empty() || r.best_method.empty() ? json() : paired_json(r.held_out_minus_best)},
       {"table_smoothness", r.table_smoothness},
+      {"smoothness_candidates", r.smoothness_candidates},
       {"seconds", r.seconds},
       // Arrays even when empty (one scene family: nothing to hold out).
       {"family_floors", json::array()},
@@ -1061,8 +1077,9 @@ void write_fit(const FitResult& r, const std::filesystem::path& out) {
 
 // What fit.json holds, raised when it gains a quantity, so that a study's
 // fit step redoes a fit written without it (2: deshmukh2020's constants;
-// 3: intervals on the constants' errors, paired differences, share groups).
-constexpr const char* kFitContents = "3";
+// 3: intervals on the constants' errors, paired differences, share groups;
+// 4: variants whose truth did not converge left out and named).
+constexpr const char* kFitContents = "4";
 
 std::string fit_inputs_digest(const std::filesystem::path& study) {
   std::uint64_t h = fnv1a(without_run_keys(read_file((study / "report.json").string())));

@@ -127,6 +127,9 @@ struct FitResult {
   FactorGrid grid;
   std::vector<FitVariant> variants;
   std::size_t retraced = 0, retraced_different = 0, skipped = 0;
+  // Variants left out because their ground truth did not converge
+  // (report.json's /ground_truth/variants), by id; not counted in skipped.
+  std::vector<std::string> unconverged;
   double outside_share = 0.0;  // of the terminator bins' tallied light, outside the grid
   FloorFit study_floor;
   std::vector<FloorFit> family_floors;
@@ -140,6 +143,7 @@ struct FitResult {
   std::vector<FittedConstant> constants;
   FactorTable table;  // fitted on every variant, smoothness chosen by leave-one-family-out
   double table_smoothness = 0.0;
+  std::vector<double> smoothness_candidates;  // FitOptions::smoothness
   double seconds = 0.0;
 };
 

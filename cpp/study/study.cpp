@@ -400,6 +400,9 @@ void fit_study_folder(const fs::path& out, const StudyOptions& options, StudyRun
   try {
     result = fit_study(fit);
   } catch (const InputError& e) {
+    // A fit of an earlier report.json would be read as this one's.
+    for (const char* file : {"fit.json", "fit.csv", "table.json", ".inputs"})
+      fs::remove(out / "fit" / file);
     log(fmt::format("nothing to fit ({})", e.what()));
     return;
   }
@@ -411,11 +414,12 @@ void fit_study_folder(const fs::path& out, const StudyOptions& options, StudyRun
   write_fit_stamp(out / "fit", digest);
   stats.fit_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   log(
-      fmt::format("floor {:.2f} % [{:.2f}, {:.2f}] of albedo*E/pi against raw bump's {:.2f} %, "
-                  "fit/fit.json in {:.1f} s",
+      fmt::format("floor {:.2f} % [{:.2f}, {:.2f}] of albedo*E/pi against raw bump's {:.2f} % "
+                  "over {} variants ({} left out: their truth did not converge), fit/fit.json in "
+                  "{:.1f} s",
                   100 * result.study_floor.floor.value, 100 * result.study_floor.floor.interval.low,
                   100 * result.study_floor.floor.interval.high, 100 * result.study_floor.none.value,
-                  stats.fit_s));
+                  result.variants.size(), result.unconverged.size(), stats.fit_s));
 }
 
 // The steps after the render phase: the comparisons, the sections' steps,

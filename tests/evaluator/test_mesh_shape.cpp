@@ -11,9 +11,11 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <string>
 #include <tuple>
@@ -34,6 +36,7 @@
 #include "image/bump_maps.h"
 #include "image/image_io.h"
 #include "mesh_files.h"
+#include "scene/mesh_file.h"
 #include "scene/scene_json.h"
 #include "temp_dir_test.h"
 
@@ -590,16 +593,161 @@ TEST_F(MeshShapeTest, FlatSquareWithImageMapsMatchesTheAnalyticPlane) {
 // finite pixels, or are refused with /shape/file (or /height/type, where a
 // mutant with UVs lost them); nothing crashes or hangs (the whole run takes
 // well under a second of loading per mutant).
+// A glTF 2.0 asset's UVs as the file holds them, decoded here from its JSON
+// and binary buffer without Assimp: the reader gives each corner the file's
+// TEXCOORD_0 with v turned up (1 - v: glTF puts v = 0 at the image's top,
+// OBJ and Blender at its bottom, and Blender's glTF importer flips it the
+// same way), at the position the node's matrix puts it. The same asset as
+// .gltf with an external buffer, as .gltf with the buffer embedded and as
+// .glb reads to the same bits. Floats: the file's UVs are float and 1 - v
+// is exact for v in [0.5, 1] and within half an ulp of 1 elsewhere, so
+// 1e-7 is rounding; a wrong flip or a swapped corner is off by up to 1.
+TEST_F(MeshShapeTest, GltfUvsAreTheFilesWithVTurnedUp) {
+  const std::string folder = "/usr/share/assimp/models/glTF2/";
+  const std::string gltf = folder + "BoxTextured-glTF/BoxTextured.gltf";
+  ASSERT_TRUE(std::filesystem::exists(gltf)) << "assimp-testmodels is not installed";
+  const json doc = json::parse(std::ifstream(gltf));
+  std::ifstream bin_in(folder + "BoxTextured-glTF/" + doc["buffers"][0]["uri"].get<std::string>(),
+                       std::ios::binary);
+  const std::string bin((std::istreambuf_iterator<char>(bin_in)), std::istreambuf_iterator<char>());
+  // An accessor's element i, component c, as float (5126) or uint16 (5123).
+  const auto element = [&](int accessor, std::size_t i, std::size_t c) {
+    const json& a = doc["accessors"][accessor];
+    const json& view = doc["bufferViews"][a["bufferView"].get<int>()];
+    const std::size_t size = a["componentType"] == 5126 ? 4 : 2;
+    const std::size_t width = a["type"] == "SCALAR" ? 1 : a["type"] == "VEC2" ? 2 : 3;
+    const std::size_t stride = view.value("byteStride", std::size_t(size * width));
+    const std::size_t at = view.value("byteOffset", std::size_t(0)) +
+                           a.value("byteOffset", std::size_t(0)) + i * stride + c * size;
+    if (size == 2) {
+      std::uint16_t v = 0;
+      std::memcpy(&v, bin.data() + at, 2);
+      return double(v);
+    }
+    float v = 0;
+    std::memcpy(&v, bin.data() + at, 4);
+    return double(v);
+  };
+  const json& primitive = doc["meshes"][0]["primitives"][0];
+  const int indices = primitive["indices"], positions = primitive["attributes"]["POSITION"],
+            texcoords = primitive["attributes"]["TEXCOORD_0"];
+  // The root node's column-major matrix (its child holds the mesh).
+  const json& m = doc["nodes"][0]["matrix"];
+  const auto placed = [&](std::size_t v) {
+    const double x = element(positions, v, 0), y = element(positions, v, 1),
+                 z = element(positions, v, 2);
+    return Vec3{m[0].get<double>() * x + m[4].get<double>() * y + m[8].get<double>() * z,
+                m[1].get<double>() * x + m[5].get<double>() * y + m[9].get<double>() * z,
+                m[2].get<double>() * x + m[6].get<double>() * y + m[10].get<double>() * z};
+  };
+  const std::size_t corners = doc["accessors"][indices]["count"];
+  const LoadedMesh loaded = load_mesh_file(gltf, MeshTransform{}, MeshNormals::kFile);
+  const MeshSurface& surface = *loaded.surface;
+  ASSERT_TRUE(surface.has_uvs());
+  ASSERT_EQ(surface.mesh.triangles.size(), corners);
+  // Corners in the file's order: the reader keeps triangles and their
+  // corners as they come.
+  double largest = 0.0;
+  for (std::size_t c = 0; c < corners; ++c) {
+    const std::size_t v = std::size_t(element(indices, c, 0));
+    const std::size_t ours = surface.mesh.triangles[c];
+    const Vec3 p{surface.mesh.positions[3 * ours], surface.mesh.positions[3 * ours + 1],
+                 surface.mesh.positions[3 * ours + 2]};
+    EXPECT_LT(length(p - placed(v)), 1e-7) << "corner " << c;
+    largest =
+        std::max({largest, std::abs(double(surface.uvs[2 * c]) - element(texcoords, v, 0)),
+                  std::abs(double(surface.uvs[2 * c + 1]) - (1.0 - element(texcoords, v, 1)))});
+  }
+  EXPECT_LT(largest, 1e-7);
+  for (const std::string other :
+       {"BoxTextured-glTF-Embedded/BoxTextured.gltf", "BoxTextured-glTF-Binary/BoxTextured.glb"}) {
+    const LoadedMesh same = load_mesh_file(folder + other, MeshTransform{}, MeshNormals::kFile);
+    EXPECT_EQ(same.surface->uvs, surface.uvs) << other;
+    EXPECT_EQ(same.surface->mesh.positions, surface.mesh.positions) << other;
+  }
+}
+
+// A one-triangle glTF 2.0 file, its buffer embedded as base64: positions,
+// then UVs, as floats; `uvs` may hold what OBJ's text cannot carry through
+// Assimp (its `vt nan` reads as 0), a NaN.
+std::string gltf_triangle(const std::array<float, 9>& positions, const std::array<float, 6>& uvs) {
+  std::string bytes(sizeof positions + sizeof uvs, '\0');
+  std::memcpy(bytes.data(), positions.data(), sizeof positions);
+  std::memcpy(bytes.data() + sizeof positions, uvs.data(), sizeof uvs);
+  static const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string base64;
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    std::uint32_t n = std::uint32_t(std::uint8_t(bytes[i])) << 16;
+    if (i + 1 < bytes.size()) n |= std::uint32_t(std::uint8_t(bytes[i + 1])) << 8;
+    if (i + 2 < bytes.size()) n |= std::uint8_t(bytes[i + 2]);
+    for (std::size_t k = 0; k < 4; ++k)
+      base64 += i + k <= bytes.size() ? digits[(n >> (18 - 6 * k)) & 63] : '=';
+  }
+  const json doc = {
+      {"asset", {{"version", "2.0"}}},
+      {"scene", 0},
+      {"scenes", {{{"nodes", {0}}}}},
+      {"nodes", {{{"mesh", 0}}}},
+      {"meshes",
+       {{{"primitives", {{{"attributes", {{"POSITION", 0}, {"TEXCOORD_0", 1}}}, {"mode", 4}}}}}}},
+      {"buffers",
+       {{{"byteLength", bytes.size()}, {"uri", "data:application/octet-stream;base64," + base64}}}},
+      {"bufferViews",
+       {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", sizeof positions}},
+        {{"buffer", 0}, {"byteOffset", sizeof positions}, {"byteLength", sizeof uvs}}}},
+      {"accessors",
+       {{{"bufferView", 0},
+         {"componentType", 5126},
+         {"count", 3},
+         {"type", "VEC3"},
+         {"min", {0, 0, 0}},
+         {"max", {1, 1, 0}}},
+        {{"bufferView", 1}, {"componentType", 5126}, {"count", 3}, {"type", "VEC2"}}}}};
+  return doc.dump();
+}
+
+// Texture coordinates that are not numbers are refused where the file is
+// named, with the vertex; the same triangle with finite ones loads with
+// them. (Assimp keeps a glTF buffer's floats as they are.)
+TEST_F(MeshShapeTest, ATriangleWithANanUvIsRefusedWithTheVertex) {
+  const std::array<float, 9> positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  std::ofstream(path("good.gltf")) << gltf_triangle(positions, {0, 0, 1, 0, 0, 1});
+  const LoadedMesh good = load_mesh_file(path("good.gltf"), MeshTransform{}, MeshNormals::kSmooth);
+  ASSERT_EQ(good.surface->uvs.size(), 6u);
+  EXPECT_EQ(good.surface->uvs[2], 1.0f);
+  EXPECT_EQ(good.surface->uvs[5], 0.0f);  // v = 1 in the file, turned up
+  std::ofstream(path("nan.gltf")) << gltf_triangle(
+      positions, {0, 0, 1, std::numeric_limits<float>::quiet_NaN(), 0, 1});
+  json scene = small_scene();
+  scene["shape"] = {{"type", "mesh"}, {"file", path("nan.gltf")}};
+  try {
+    scene_from_json(scene, "scene.json");
+    ADD_FAILURE() << "a NaN texture coordinate was read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.pointer(), "/shape/file");
+    EXPECT_NE(std::string(e.what()).find("texture coordinates of vertex"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("nan.gltf"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(MeshShapeTest, MutatedMeshFilesLoadOrAreRefused) {
   const Scene tessellated = scene_from_json(small_scene(), "built-in");
   const TriangleMesh sphere = tessellate(tessellated.shape, *tessellated.tessellation);
   write_ply(sphere, path("parent.ply"));
   std::ifstream ply_in(path("parent.ply"), std::ios::binary);
   const std::string ply((std::istreambuf_iterator<char>(ply_in)), std::istreambuf_iterator<char>());
-  // The third parent carries UVs and is rendered with a normal map or a
-  // height map over them (MikkTSpace on mutated UVs and positions).
-  const std::string parents[3] = {obj_text(sphere), ply, obj_text_with_uvs(sphere)};
-  const char* extensions[3] = {".obj", ".ply", ".obj"};
+  // The third and fourth parents carry UVs and are rendered with a normal
+  // map or a height map over them (MikkTSpace on mutated UVs and
+  // positions); the fourth is a real glTF 2.0 asset, its buffer embedded in
+  // the JSON as base64, so that a mutation reaches the JSON and the data.
+  std::ifstream gltf_in(
+      "/usr/share/assimp/models/glTF2/BoxTextured-glTF-Embedded/BoxTextured.gltf");
+  const std::string gltf((std::istreambuf_iterator<char>(gltf_in)),
+                         std::istreambuf_iterator<char>());
+  ASSERT_FALSE(gltf.empty()) << "assimp-testmodels is not installed";
+  const std::string parents[4] = {obj_text(sphere), ply, obj_text_with_uvs(sphere), gltf};
+  const char* extensions[4] = {".obj", ".ply", ".obj", ".gltf"};
   write_exr(bake_surface_map(tessellated.shape, make_grating({1, 0.4, 0}, 3.0, 0.0), 0.05, 16, 8,
                              MapKind::kNormal),
             path("normal.exr"));
@@ -610,8 +758,9 @@ TEST_F(MeshShapeTest, MutatedMeshFilesLoadOrAreRefused) {
                           "\n",  " ",   "f 1 2", "element face 7\n"};
   Pcg32 rng(20261128);
   int loaded = 0, refused = 0, assimp_checks = 0;
-  for (int m = 0; m < 600; ++m) {
-    const int which = m % 3;
+  std::array<int, 4> loaded_of{};
+  for (int m = 0; m < 800; ++m) {
+    const int which = m % 4;
     std::string text = parents[which];
     const int edits = 1 + int(rng.next_double() * 4);
     for (int e = 0; e < edits && !text.empty(); ++e) {
@@ -632,7 +781,7 @@ TEST_F(MeshShapeTest, MutatedMeshFilesLoadOrAreRefused) {
     json scene = small_scene();
     scene["shape"] = {{"type", "mesh"}, {"file", file}};
     scene["camera"]["width"] = scene["camera"]["height"] = 8;
-    if (which == 2) {
+    if (which >= 2) {
       scene["representation"] = "bump";
       scene["height"] =
           m % 2 == 0
@@ -646,9 +795,10 @@ TEST_F(MeshShapeTest, MutatedMeshFilesLoadOrAreRefused) {
                               [](float v) { return std::isfinite(v); }))
           << "mutant " << m;
       ++loaded;
+      ++loaded_of[std::size_t(which)];
     } catch (const InputError& e) {
       // A mutant that lost its UVs is refused at the map that needs them.
-      EXPECT_TRUE(e.pointer() == "/shape/file" || (which == 2 && e.pointer() == "/height/type"))
+      EXPECT_TRUE(e.pointer() == "/shape/file" || (which >= 2 && e.pointer() == "/height/type"))
           << "mutant " << m << ": " << e.what();
       ++refused;
       // Assimp's failed assertions are refusals here, not aborts (mesh_file.cpp).
@@ -658,9 +808,12 @@ TEST_F(MeshShapeTest, MutatedMeshFilesLoadOrAreRefused) {
       }
     }
   }
-  std::printf("mesh file mutants: %d loaded, %d refused (%d by a failed Assimp assertion)\n",
-              loaded, refused, assimp_checks);
+  std::printf(
+      "mesh file mutants: %d loaded (OBJ %d, PLY %d, OBJ with UVs %d, glTF %d), %d refused (%d by "
+      "a failed Assimp assertion)\n",
+      loaded, loaded_of[0], loaded_of[1], loaded_of[2], loaded_of[3], refused, assimp_checks);
   EXPECT_GT(loaded, 30);
+  EXPECT_GT(loaded_of[3], 0);  // some glTF mutants load, or the glTF side tests only refusals
   EXPECT_GT(refused, 30);
   // The installed binary refuses such a file too (exit 2), rather than abort.
   for (const char* extension : extensions) {

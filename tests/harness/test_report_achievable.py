@@ -122,6 +122,11 @@ class Section(unittest.TestCase):
         self.assertIn('against the published 0.125; the published constant '
                       'lies outside the interval.', page)
 
+    def test_truths_left_out_are_named(self):
+        self.assertIn('Left out of every fit: 2 variants whose ground truth '
+                      'did not converge (v007, v011).', self.pages['tie'])
+        self.assertNotIn('Left out of every fit', self.pages['apart'])
+
     def test_deshmukh2020_line_is_fit_json(self):
         page, d = self.pages['tie'], self.doc
         d0, d1 = [c for c in d['constants'] if c['method'] == 'deshmukh2020']
