@@ -217,15 +217,21 @@ StudyOptions study_options(const RunArgs& a, const Study& study, const CommandCo
 }
 
 // The run's wall time against the least its renders allow on the cores
-// they had (issue 45's efficiency figure); what is left is the fit, the
-// comparisons, the figures and the waiting.
+// they had (issue 45's efficiency figure): the render phase's ratio (what
+// idle cores and the scheduling cost) and the whole run's, with the steps
+// after the renders: the comparisons and report files, the fit and the figures.
 void print_efficiency(const StudyRunStats& stats, int cores, std::ostream& out) {
   if (stats.render_core_seconds <= 0.0 || cores < 1) return;
   const double bound = stats.render_core_seconds / cores;
+  const double after = stats.seconds - stats.render_phase_s;
   out << fmt::format(
-      "time: renders {:.1f} core-s on {} cores (at least {:.1f} s of wall time), the run {:.1f} s: "
-      "{:.2f}x that bound (the fit {:.1f} s; comparisons, figures and waiting make the rest)\n",
-      stats.render_core_seconds, cores, bound, stats.seconds, stats.seconds / bound, stats.fit_s);
+      "time: renders {:.1f} core-s on {} cores (at least {:.1f} s of wall time); the render phase "
+      "{:.1f} s: {:.2f}x that bound; then the comparisons and report files {:.1f} s, the fit "
+      "{:.1f} s, the figures {:.1f} s; the run {:.1f} s: {:.2f}x the bound, {:.2f}x without the "
+      "figures\n",
+      stats.render_core_seconds, cores, bound, stats.render_phase_s, stats.render_phase_s / bound,
+      std::max(0.0, after - stats.fit_s - stats.figures_s), stats.fit_s, stats.figures_s,
+      stats.seconds, stats.seconds / bound, (stats.seconds - stats.figures_s) / bound);
 }
 
 // --add-method: each id joins the bump section's methods (after those the

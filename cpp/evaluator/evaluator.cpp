@@ -890,6 +890,51 @@ PacketSetup packet_setup(const Scene& scene, const Tracer& tracer) {
   return setup;
 }
 
+// A block of at most kRays of one pixel's samples on their way through a
+// tracer's packets: their camera rays and hits, and the shadow rays that
+// wait for a verdict with the radiance each would add (lit).
+template <std::size_t kRays>
+struct SampleBlock {
+  Ray rays[kRays], shadow_rays[kRays];
+  SurfaceHit hits[kRays];
+  PendingShadow pending[kRays];
+  double distances[kRays];
+  bool found[kRays], blocked[kRays];
+  std::size_t waiting = 0;
+
+  // Camera rays of samples [first, first + n) of pixel (i, j).
+  void camera_rays(const Camera& camera, const Vec3& orthographic_direction, int i, int j,
+                   std::uint64_t key, int first, std::size_t n, int nx, int ny) {
+    for (std::size_t k = 0; k < n; ++k) {
+      const int s = first + int(k);
+      rays[k] = camera_ray(camera, orthographic_direction, i, j, s % nx, s / nx, nx, ny,
+                           sample_jitter(camera, key, s));
+    }
+  }
+  void wait(const PendingShadow& p) {
+    shadow_rays[waiting] = {p.ray.origin, p.wi};
+    distances[waiting] = p.distance;
+    pending[waiting++] = p;
+  }
+  // Traces the waiting shadow rays (in one packet, or the one ray alone
+  // without `packets`) and adds the radiance of those the light reaches,
+  // in the samples' order.
+  template <typename Tracer>
+  void settle(const Tracer& tracer, const Props& props, const std::vector<LitPass>& lit,
+              bool packets, PixelSums* sums, std::uint64_t* shadow_ray_count) {
+    if (waiting > 0 && packets) tracer.occluded_packet(shadow_rays, distances, waiting, blocked);
+    if (waiting > 0 && !packets)
+      blocked[0] = tracer.occluded(pending[0].ray, pending[0].wi, pending[0].distance);
+    for (std::size_t k = 0; k < waiting; ++k) {
+      const PendingShadow& p = pending[k];
+      ++*shadow_ray_count;
+      if (blocked[k] || props.occluded(p.ray.origin, p.wi, p.distance)) continue;
+      for (std::size_t c = p.first; c < p.last; ++c) sums[lit[c].pass].radiance += lit[c].radiance;
+    }
+    waiting = 0;
+  }
+};
+
 // One pixel's samples kPacketRays at a time, camera rays and then shadow
 // rays in packets of the tracer's: the samples are shaded in the order of
 // the strata, and the radiance the shadow rays let through is added in that
@@ -902,44 +947,25 @@ void shade_pixel_packets(const Scene& scene, const Tracer& tracer, const Props& 
   const Camera& camera = scene.camera;
   const Vec3 orthographic_direction = normalize(camera.direction);
   Material material = scene.material;
-  Ray rays[kRays], shadow_rays[kRays];
-  SurfaceHit hits[kRays];
-  PendingShadow pending[kRays];
-  double distances[kRays];
-  bool found[kRays], blocked[kRays];
+  SampleBlock<kRays> b;
   // Kept per thread: one allocation per pixel was 2 % of a 16-spp truth.
   thread_local std::vector<LitPass> lit;
   const int count = nx * ny;
   for (int first = 0; first < count; first += int(kRays)) {
     const std::size_t n = std::min<std::size_t>(kRays, count - first);
-    for (std::size_t k = 0; k < n; ++k) {
-      const int s = first + int(k);
-      rays[k] = camera_ray(camera, orthographic_direction, pixel.i, pixel.j, s % nx, s / nx, nx, ny,
-                           sample_jitter(camera, pixel.key, s));
-    }
-    tracer.primary_packet(rays, n, hits, found);
+    b.camera_rays(camera, orthographic_direction, pixel.i, pixel.j, pixel.key, first, n, nx, ny);
+    tracer.primary_packet(b.rays, n, b.hits, b.found);
     lit.clear();
-    std::size_t waiting = 0;
     for (std::size_t k = 0; k < n; ++k) {
-      hits[k].on_prop = false;
+      b.hits[k].on_prop = false;
       material.filtered.active = false;
-      if (!(props.nearer(rays[k], found[k], &hits[k]) || found[k])) continue;
+      if (!(props.nearer(b.rays[k], b.found[k], &b.hits[k]) || b.found[k])) continue;
       const LightUniforms u = light_uniforms(scene, pixel.key, first + int(k), nx, ny);
-      if (const auto p =
-              shader.shade_deferred(rays[k], hits[k], u, &material, pixel.rng, pixel.sums, &lit)) {
-        shadow_rays[waiting] = {p->ray.origin, p->wi};
-        distances[waiting] = p->distance;
-        pending[waiting++] = *p;
-      }
+      if (const auto p = shader.shade_deferred(b.rays[k], b.hits[k], u, &material, pixel.rng,
+                                               pixel.sums, &lit))
+        b.wait(*p);
     }
-    if (waiting > 0) tracer.occluded_packet(shadow_rays, distances, waiting, blocked);
-    for (std::size_t k = 0; k < waiting; ++k) {
-      const PendingShadow& p = pending[k];
-      ++*pixel.shadow_rays;
-      if (blocked[k] || props.occluded(p.ray.origin, p.wi, p.distance)) continue;
-      for (std::size_t c = p.first; c < p.last; ++c)
-        pixel.sums[lit[c].pass].radiance += lit[c].radiance;
-    }
+    b.settle(tracer, props, lit, true, pixel.sums, pixel.shadow_rays);
   }
 }
 
@@ -1358,6 +1384,155 @@ std::vector<Image> render_methods(const Scene& scene,
 
 Image render(const Scene& scene, const RenderOptions& options, RenderStats* stats) {
   return std::move(render_methods(scene, {scene.terminator}, options, stats).front());
+}
+
+namespace {
+
+// One lighting of a shared truth pass (render_lightings): its scene, the
+// one pass it renders (its terminator) and the shader that shades it.
+struct Lighting {
+  const Scene* scene = nullptr;
+  std::vector<TerminatorSettings> passes;
+  std::unique_ptr<const SampleShader<MeshTracer>> shader;
+};
+
+// One pixel of every lighting: each block of camera rays and their hits
+// once, then each lighting's shading and shadow rays as shade_pixel_packets
+// (or, without packets, shade_pixel) does them for that lighting alone: its
+// sums receive the same values in the same order, so they are the same bits.
+struct LightingPixel {
+  int i = 0, j = 0;
+  std::uint64_t key = 0;
+  std::vector<Pcg32>* rngs = nullptr;      // one per lighting
+  std::vector<PixelSums>* sums = nullptr;  // one per lighting
+  std::uint64_t* shadow_rays = nullptr;
+};
+
+void shade_pixel_lightings(const Scene& first, const MeshTracer& tracer, const Props& props,
+                           const std::vector<Lighting>& lightings, const LightingPixel& pixel,
+                           bool packets) {
+  constexpr std::size_t kRays = MeshTracer::kPacketRays;
+  const Camera& camera = first.camera;
+  int nx, ny;
+  strata(camera.spp, &nx, &ny);
+  const Vec3 orthographic_direction = normalize(camera.direction);
+  const std::size_t block = packets ? kRays : 1;
+  SampleBlock<kRays> b;
+  thread_local std::vector<LitPass> lit;
+  std::vector<Material> materials;
+  for (const Lighting& l : lightings) materials.push_back(l.scene->material);
+  const int count = nx * ny;
+  for (int start = 0; start < count; start += int(block)) {
+    const std::size_t n = std::min<std::size_t>(block, std::size_t(count - start));
+    b.camera_rays(camera, orthographic_direction, pixel.i, pixel.j, pixel.key, start, n, nx, ny);
+    if (packets) {
+      tracer.primary_packet(b.rays, n, b.hits, b.found);
+    } else {
+      b.found[0] = tracer.primary(b.rays[0], &b.hits[0]);
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      b.hits[k].on_prop = false;
+      b.found[k] = props.nearer(b.rays[k], b.found[k], &b.hits[k]) || b.found[k];
+    }
+    for (std::size_t l = 0; l < lightings.size(); ++l) {
+      const Lighting& lighting = lightings[l];
+      Material& material = materials[l];
+      PixelSums* sums = &(*pixel.sums)[l];
+      lit.clear();
+      for (std::size_t k = 0; k < n; ++k) {
+        if (!b.found[k]) continue;
+        material.filtered.active = false;
+        const LightUniforms u = light_uniforms(*lighting.scene, pixel.key, start + int(k), nx, ny);
+        if (const auto p = lighting.shader->shade_deferred(b.rays[k], b.hits[k], u, &material,
+                                                           &(*pixel.rngs)[l], sums, &lit))
+          b.wait(*p);
+      }
+      b.settle(tracer, props, lit, packets, sums, pixel.shadow_rays);
+    }
+  }
+}
+
+// The rows of every lighting's image (render_lightings).
+void render_lighting_images(const Scene& first, const MeshTracer& tracer, const Props& props,
+                            const std::vector<Lighting>& lightings, const RenderOptions& options,
+                            std::vector<Image>* images, RenderStats* stats) {
+  const Camera& camera = first.camera;
+  const std::size_t channel_count = evaluator_channels().size();
+  const double inv_spp = 1.0 / camera.spp;
+  std::atomic<int> rows_done{0};
+  std::atomic<std::uint64_t> shadow_rays{0};
+  std::mutex progress_mutex;
+  auto last_report = Clock::now();
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, camera.height), [&](const tbb::blocked_range<int>& rows) {
+        std::uint64_t local_shadow_rays = 0;
+        std::vector<PixelSums> sums(lightings.size());
+        std::vector<Pcg32> rngs;
+        for (int j = rows.begin(); j != rows.end(); ++j) {
+          for (int i = 0; i < camera.width; ++i) {
+            const std::uint64_t key = pixel_key(camera, i, j);
+            rngs.assign(lightings.size(), Pcg32(key));
+            std::fill(sums.begin(), sums.end(), PixelSums{});
+            shade_pixel_lightings(first, tracer, props, lightings,
+                                  {i, j, key, &rngs, &sums, &local_shadow_rays}, options.packets);
+            const std::size_t pixel = std::size_t(j) * std::size_t(camera.width) + std::size_t(i);
+            for (std::size_t l = 0; l < lightings.size(); ++l)
+              write_pixel(sums[l], inv_spp, &(*images)[l].pixels[pixel * channel_count]);
+          }
+          const int done = ++rows_done;
+          if (options.progress) {
+            std::lock_guard<std::mutex> lock(progress_mutex);
+            const auto now = Clock::now();
+            if (done == camera.height || now - last_report > std::chrono::milliseconds(250)) {
+              last_report = now;
+              options.progress(static_cast<double>(done) / camera.height);
+            }
+          }
+        }
+        shadow_rays += local_shadow_rays;
+      });
+  stats->camera_samples =
+      std::uint64_t(camera.width) * std::uint64_t(camera.height) * std::uint64_t(camera.spp);
+  stats->shadow_rays = shadow_rays;
+  stats->packets = options.packets;
+}
+
+}  // namespace
+
+std::vector<Image> render_lightings(const std::vector<Scene>& scenes, const RenderOptions& options,
+                                    RenderStats* stats) {
+  if (scenes.empty()) throw std::invalid_argument("render_lightings: no scene");
+  for (const Scene& s : scenes)
+    if (s.representation != Representation::kDisplacement || !shares_samples(s.terminator))
+      throw std::invalid_argument(
+          "render_lightings: renders displacement truths whose method draws no random numbers");
+  const auto start = Clock::now();
+  RenderStats local;
+  const Scene& first = scenes.front();
+  const std::shared_ptr<const DisplacedMesh> mesh =
+      options.share_meshes ? shared_displaced_mesh(first, &local.mesh_reused)
+                           : std::make_shared<const DisplacedMesh>(first);
+  local.triangles = mesh->triangle_count();
+  local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  const MeshTracer tracer(first, *mesh);
+  const Props props(first);
+  std::vector<Lighting> lightings(scenes.size());
+  for (std::size_t l = 0; l < scenes.size(); ++l) {
+    lightings[l].scene = &scenes[l];
+    lightings[l].passes = {scenes[l].terminator};
+    lightings[l].shader = std::make_unique<const SampleShader<MeshTracer>>(scenes[l], tracer, props,
+                                                                           lightings[l].passes);
+  }
+  std::vector<Image> images(scenes.size(), blank_image(first));
+  render_lighting_images(first, tracer, props, lightings, options, &images, &local);
+  for (std::size_t l = 0; l < scenes.size(); ++l) {
+    std::vector<Image> one{std::move(images[l])};
+    centre_angles(scenes[l], &one);
+    images[l] = std::move(one.front());
+  }
+  local.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  if (stats) *stats = local;
+  return images;
 }
 
 namespace {

@@ -81,6 +81,19 @@ std::vector<Image> render_methods(const Scene& scene,
                                   const std::vector<TerminatorSettings>& methods,
                                   const RenderOptions& options = {}, RenderStats* stats = nullptr);
 
+// Displacement truths of `scenes`, which must differ only in their light and
+// material (the caller checks: renderers.h, render_evaluator_lightings), in
+// one pass: image k has the bits render() gives for scenes[k]. The displaced
+// mesh is built (or taken from the process's cache) once, and each camera
+// ray and its hit are traced once for all of them; each scene's light
+// sample, shading and shadow ray are its own (issue 45: the truths of a
+// study's light directions and materials on one geometry).
+// std::invalid_argument when `scenes` is empty, a scene is not a
+// displacement render, or its method draws random numbers while shading.
+std::vector<Image> render_lightings(const std::vector<Scene>& scenes,
+                                    const RenderOptions& options = {},
+                                    RenderStats* stats = nullptr);
+
 // Raw bump rendered as render() renders it, to the bit, with its light
 // tallied per pixel by the cell of `grid` each sample's angles fall in
 // (core/factor_table.h, PixelTally): what any factor table on that grid

@@ -27,6 +27,24 @@ void check_output(const RendererInfo& info, const Image& image, const Scene& sce
                     info.id, bad, image.pixels.size()));
 }
 
+// A pass's images, each checked as render_with checks one: errors[k] says
+// why image k cannot be used (its scene: scene_of(k)).
+template <typename SceneOf>
+MethodsRun checked_pass(std::vector<Image> images, double seconds, SceneOf scene_of) {
+  MethodsRun run;
+  run.images = std::move(images);
+  run.seconds = seconds;
+  run.errors.resize(run.images.size());
+  for (std::size_t k = 0; k < run.images.size(); ++k) {
+    try {
+      check_output(evaluator_entry().info, run.images[k], scene_of(k));
+    } catch (const RendererError& e) {
+      run.errors[k] = e.what();
+    }
+  }
+  return run;
+}
+
 }  // namespace
 
 RendererRun render_with(RendererKind r, const Scene& scene, const RenderSettings& settings) {
@@ -48,19 +66,19 @@ MethodsRun render_evaluator_methods(const Scene& scene,
                                     const std::vector<TerminatorSettings>& methods,
                                     const RenderSettings& settings) {
   if (processes_cancelled()) throw RenderCancelled("not started (interrupted)");
-  MethodsRun run;
   RenderStats stats;
-  run.images = render_methods(scene, methods, settings.progress, &stats);
-  run.seconds = stats.seconds;
-  run.errors.resize(run.images.size());
-  for (std::size_t k = 0; k < run.images.size(); ++k) {
-    try {
-      check_output(evaluator_entry().info, run.images[k], scene);
-    } catch (const RendererError& e) {
-      run.errors[k] = e.what();
-    }
-  }
-  return run;
+  std::vector<Image> images = render_methods(scene, methods, settings.progress, &stats);
+  return checked_pass(std::move(images), stats.seconds,
+                      [&](std::size_t) -> const Scene& { return scene; });
+}
+
+MethodsRun render_evaluator_lightings(const std::vector<Scene>& scenes,
+                                      const RenderSettings& settings) {
+  if (processes_cancelled()) throw RenderCancelled("not started (interrupted)");
+  RenderStats stats;
+  std::vector<Image> images = render_lightings(scenes, settings.progress, &stats);
+  return checked_pass(std::move(images), stats.seconds,
+                      [&](std::size_t k) -> const Scene& { return scenes[k]; });
 }
 
 std::string pixel_code_digest(RendererKind r, const RenderSettings& settings) {

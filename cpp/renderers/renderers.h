@@ -33,6 +33,14 @@ MethodsRun render_evaluator_methods(const Scene& scene,
                                     const std::vector<TerminatorSettings>& methods,
                                     const RenderSettings& settings);
 
+// The evaluator's displacement truths of `scenes` in one pass
+// (render_lightings, evaluator/evaluator.h): the scenes must differ only in
+// their light and material, which the caller checks (study/rendering.h
+// groups them by their JSON without /light and /material); images[k] has
+// the bits render_with gives for scenes[k], errors[k] as above.
+MethodsRun render_evaluator_lightings(const std::vector<Scene>& scenes,
+                                      const RenderSettings& settings);
+
 // A digest of the code and scripts that produce `renderer`'s pixels (see
 // renderers/code_digest.h); part of cache keys. For Blender it covers the
 // script that settings (or PENUMBRA_BLENDER_SCRIPT) select.

@@ -88,6 +88,36 @@ DisplacementTiming bench_displacement(int size, int spp) {
   return t;
 }
 
+SharedTruthTiming bench_shared_truths(int size, int spp) {
+  SharedTruthTiming t;
+  std::vector<Scene> scenes;
+  for (const nlohmann::json& direction :
+       {nlohmann::json{-1, 0, -1.2}, nlohmann::json{-1, 0, -0.2}, nlohmann::json{-1, 0, 0.4}})
+    for (const double specular : {0.0, 0.4}) {
+      nlohmann::json document = bench_scene(size, spp);
+      document["representation"] = "displacement";
+      document["light"]["direction"] = direction;
+      document["material"]["specular"] = {{"weight", specular}, {"roughness", 0.3}};
+      scenes.push_back(scene_from_json(document, "<bench>"));
+    }
+  t.lightings = scenes.size();
+  // Both from the process's mesh cache (bench_displacement built the mesh),
+  // so that the ratio is the rays', as in a study whose truths share a mesh.
+  double cpu_before = cpu_seconds();
+  for (const Scene& scene : scenes) {
+    RenderStats stats;
+    render(scene, {}, &stats);
+    t.alone_seconds += stats.seconds;
+  }
+  t.alone_cpu_seconds = cpu_seconds() - cpu_before;
+  cpu_before = cpu_seconds();
+  RenderStats stats;
+  render_lightings(scenes, {}, &stats);
+  t.pass_seconds = stats.seconds;
+  t.pass_cpu_seconds = cpu_seconds() - cpu_before;
+  return t;
+}
+
 MeshFileTiming bench_mesh_file(int size, int spp, const std::string& folder) {
   MeshFileTiming t;
   Shape sphere;

@@ -43,6 +43,17 @@ struct DisplacementTiming {
 };
 DisplacementTiming bench_displacement(int size, int spp);
 
+// The bench scene's displacement truth under three light directions and
+// two materials (Lambert, and GGX of weight 0.4): six renders, then the
+// same six in one pass (render_lightings), the mesh from the process's
+// cache in both.
+struct SharedTruthTiming {
+  std::size_t lightings = 0;
+  double alone_seconds = 0.0, alone_cpu_seconds = 0.0;
+  double pass_seconds = 0.0, pass_cpu_seconds = 0.0;
+};
+SharedTruthTiming bench_shared_truths(int size, int spp);
+
 // A mesh file of about a million triangles, the unit sphere's 1024-segment
 // UV tessellation written as binary PLY into `folder`: reading it
 // (load_mesh_file: Assimp, welding, bounds) and a bump render of it under

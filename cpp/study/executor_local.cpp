@@ -22,9 +22,16 @@ class LocalExecutor : public Executor {
     MethodBatches batches(jobs, todo);
     stats.method_batches += batches.batches();
     stats.batched_renders += batches.members();
+    stats.truth_batches += batches.truth_batches();
+    stats.batched_truths += batches.truth_members();
     if (options_.log && batches.batches() > 0)
       options_.log(fmt::format("{} of them in {} passes that render several methods of one variant",
                                batches.members(), batches.batches()));
+    if (options_.log && batches.truth_batches() > 0)
+      options_.log(
+          fmt::format("{} of them in {} passes that render the ground truths of several lights and "
+                      "materials on one displaced mesh",
+                      batches.truth_members(), batches.truth_batches()));
     std::vector<double> core_seconds(todo.size(), 0.0);  // one slot per task: no lock
     const ExecuteResult result = execute_tasks(
         todo.size(), execute_options(round),

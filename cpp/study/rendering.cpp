@@ -81,6 +81,7 @@ Renderers probe_renderers(const std::vector<RendererKind>& kinds, double timeout
 
 struct MethodBatches::Batch {
   std::vector<std::size_t> jobs;  // indices into jobs_
+  bool lightings = false;         // displacement truths of one geometry (else methods)
   std::mutex mutex;
   bool started = false;
   std::shared_future<MethodsRun> run;  // reset once every slot took its image
@@ -89,21 +90,30 @@ struct MethodBatches::Batch {
 
 MethodBatches::MethodBatches(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo)
     : jobs_(jobs) {
-  std::map<std::string, std::vector<std::size_t>> groups;  // scene without its terminator
+  // Bump renders by their scene without its terminator; displacement
+  // truths by theirs without the light and the material.
+  std::map<std::string, std::vector<std::size_t>> groups;
   std::set<std::string> keys;
   for (std::size_t i : todo) {
     const Job& job = jobs[i];
-    if (job.renderer != RendererKind::kEvaluator || job.representation != Representation::kBump ||
+    const bool bump = job.representation == Representation::kBump;
+    if (job.renderer != RendererKind::kEvaluator ||
+        (!bump && job.representation != Representation::kDisplacement) ||
         !shares_samples(job.scene().terminator) || !keys.insert(job.key).second)
       continue;
     nlohmann::json scene = job.scene_json();
-    scene.erase("terminator");
-    groups[scene.dump()].push_back(i);
+    for (const char* part : bump ? std::vector<const char*>{"terminator"}
+                                 : std::vector<const char*>{"light", "material"})
+      scene.erase(part);
+    groups[(bump ? "methods:" : "lightings:") + scene.dump()].push_back(i);
   }
   for (auto& [scene, members] : groups) {
     if (members.size() < 2) continue;
     auto batch = std::make_unique<Batch>();
     batch->jobs = members;
+    batch->lightings = scene.starts_with("lightings:");
+    (batch->lightings ? truth_members_ : method_members_) += members.size();
+    ++(batch->lightings ? truth_batches_ : method_batches_);
     batch->taken.assign(members.size(), 0);
     for (std::size_t slot = 0; slot < members.size(); ++slot)
       member_[jobs[members[slot]].key] = {batches_.size(), slot};
@@ -112,6 +122,17 @@ MethodBatches::MethodBatches(const std::vector<Job>& jobs, const std::vector<std
 }
 
 MethodBatches::~MethodBatches() = default;
+
+MethodsRun MethodBatches::render_batch(const Batch& batch, const RenderSettings& settings) const {
+  if (batch.lightings) {
+    std::vector<Scene> scenes;
+    for (std::size_t i : batch.jobs) scenes.push_back(jobs_[i].scene());
+    return render_evaluator_lightings(scenes, settings);
+  }
+  std::vector<TerminatorSettings> methods;
+  for (std::size_t i : batch.jobs) methods.push_back(jobs_[i].scene().terminator);
+  return render_evaluator_methods(jobs_[batch.jobs.front()].scene(), methods, settings);
+}
 
 std::optional<RendererRun> MethodBatches::take(const Job& job, const RenderSettings& settings) {
   const auto found = member_.find(job.key);
@@ -133,10 +154,7 @@ std::optional<RendererRun> MethodBatches::take(const Job& job, const RenderSetti
   }
   if (owner) {
     try {
-      std::vector<TerminatorSettings> methods;
-      for (std::size_t i : batch.jobs) methods.push_back(jobs_[i].scene().terminator);
-      promise.set_value(
-          render_evaluator_methods(jobs_[batch.jobs.front()].scene(), methods, settings));
+      promise.set_value(render_batch(batch, settings));
     } catch (...) {
       promise.set_exception(std::current_exception());
     }

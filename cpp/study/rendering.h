@@ -34,11 +34,15 @@ Renderers probe_renderers(const std::vector<RendererKind>& kinds, double timeout
                           const std::string& probe_cache = "");
 
 // Evaluator bump renders of one variant that differ only in their method
-// share their samples: the first of them to start renders them all in one
-// pass (render_evaluator_methods), with every core; the others wait for it
-// and take their image. Each is still its own job: cached under its own key,
-// counted, failed or cancelled alone. The images have the bits of separate
-// renders (tested), so cache keys do not change. Thread-safe.
+// share their samples, and so do the displacement truths (and their
+// convergence checks) of variants that differ only in their light and
+// material: the first of them to start renders them all in one pass
+// (render_evaluator_methods, render_evaluator_lightings), with every core;
+// the others wait for it and take their image. Each is still its own job:
+// cached under its own key, counted, failed or cancelled alone. The images
+// have the bits of separate renders (tested), so cache keys do not change.
+// A truths' pass holds one displaced mesh, as each of its members alone
+// would, so it needs no more memory than its largest member. Thread-safe.
 class MethodBatches {
  public:
   // Batches of two or more among `jobs[todo]`.
@@ -50,11 +54,17 @@ class MethodBatches {
   // threw, and RendererError when its image has NaN or Inf values.
   std::optional<RendererRun> take(const Job& job, const RenderSettings& settings);
 
-  std::size_t batches() const { return batches_.size(); }
-  std::size_t members() const { return member_.size(); }
+  // Passes over the methods of one variant, and the renders they hold.
+  std::size_t batches() const { return method_batches_; }
+  std::size_t members() const { return method_members_; }
+  // Passes over the truths of one geometry, and the renders they hold.
+  std::size_t truth_batches() const { return truth_batches_; }
+  std::size_t truth_members() const { return truth_members_; }
 
  private:
   struct Batch;
+  MethodsRun render_batch(const Batch& batch, const RenderSettings& settings) const;
+  std::size_t method_batches_ = 0, method_members_ = 0, truth_batches_ = 0, truth_members_ = 0;
   const std::vector<Job>& jobs_;
   std::map<std::string, std::pair<std::size_t, std::size_t>> member_;  // key -> batch, slot
   std::vector<std::unique_ptr<Batch>> batches_;

@@ -441,8 +441,10 @@ void report_study(const Study& study, const Rendered& in, const StepContext& con
       out.string());
   if (options.fit) fit_study_folder(out, options, stats);
   if (!options.figures) return;
+  const auto figures_start = std::chrono::steady_clock::now();
   try {
     draw_figures(out, options, stats);
+    stats.figures_s = seconds_since(figures_start);
   } catch (const RenderCancelled&) {
     remove_report_files(out.string());
     throw;
@@ -476,7 +478,7 @@ StudyRunStats run_prepared(const Study& study, Plan& plan, Renderers& renderers,
   stats.blender_processes = blender_sessions->started();
   blender_sessions.reset();  // the processes end here, not after the figures
   renderers.blender_sessions = nullptr;
-  stats.seconds = seconds_since(start);
+  stats.seconds = stats.render_phase_s = seconds_since(start);
   if (stats.not_started > 0) return stats;  // interrupted: no report from a partial study
 
   report_study(study, {plan, convergence, r, interplay}, context, options, stats);

@@ -202,6 +202,62 @@ TEST(Render, MethodsRenderedTogetherHaveTheBitsOfTheirOwnRenders) {
   EXPECT_EQ(render_methods(walk, {w}).size(), 1u);  // alone it is a plain render
 }
 
+// render_lightings gives each displacement truth the bits of its own
+// render: distant, point, sphere and quad lights and a glossy material on
+// one displaced mesh (and on a scene with a prop), through Embree
+// packets and one ray at a time, with the camera rays traced once.
+TEST(Render, TruthsOfSeveralLightsRenderedTogetherHaveTheBitsOfTheirOwnRenders) {
+  const std::vector<std::vector<std::string>> lightings{
+      {},
+      {"/light/direction=[-1,0.7,-0.2]"},
+      {"/material/specular={\"weight\":0.4,\"roughness\":0.3}"},
+      {"/light={\"type\":\"point\",\"position\":[-6,1,-2],\"intensity\":40}"},
+      {"/light={\"type\":\"sphere\",\"position\":[-3,0,-1],\"radius\":0.5,\"power\":100}"},
+      {"/light={\"type\":\"quad\",\"corner\":[-3,-1,-2],\"edge_u\":[0,2,0],"
+       "\"edge_v\":[0,0,1],\"radiance\":5}"}};
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases{
+      {"sphere-weave.json", {"/camera/jitter=true"}},
+      {"cylinder-grating.json",
+       {"/props=[{\"type\":\"sphere\",\"center\":[-1.3,0.2,-0.6],\"radius\":0.3}]"}}};
+  for (const auto& [file, sets] : cases)
+    for (const bool packets : {true, false}) {
+      std::vector<Scene> scenes;
+      std::vector<Image> alone;
+      RenderOptions options;
+      options.packets = packets;
+      options.share_meshes = false;
+      for (const std::vector<std::string>& lighting : lightings) {
+        std::vector<std::string> with = sets;
+        for (const char* s : {"/representation=\"displacement\"", "/displacement/edge_length=0.03",
+                              "/camera/width=20", "/camera/height=20", "/camera/spp=9"})
+          with.push_back(s);
+        with.insert(with.end(), lighting.begin(), lighting.end());
+        scenes.push_back(scene_with(file, with));
+        alone.push_back(render(scenes.back(), options));
+      }
+      RenderStats stats;
+      const std::vector<Image> together = render_lightings(scenes, options, &stats);
+      ASSERT_EQ(together.size(), scenes.size());
+      EXPECT_EQ(stats.camera_samples, 20u * 20u * 9u) << "each camera ray traced once";
+      for (std::size_t k = 0; k < scenes.size(); ++k) {
+        ASSERT_EQ(together[k].pixels.size(), alone[k].pixels.size());
+        EXPECT_EQ(std::memcmp(together[k].pixels.data(), alone[k].pixels.data(),
+                              alone[k].pixels.size() * sizeof(float)),
+                  0)
+            << file << ", lighting " << k << (packets ? ", packets" : ", one ray at a time");
+        if (k > 0) {  // not all alike: the lightings do differ
+          EXPECT_NE(std::memcmp(together[k].pixels.data(), together[0].pixels.data(),
+                                alone[k].pixels.size() * sizeof(float)),
+                    0)
+              << file << ", lighting " << k;
+        }
+      }
+    }
+  Scene bump = scene_with("sphere-weave.json", {"/camera/width=8", "/camera/height=8"});
+  EXPECT_THROW(render_lightings({bump}), std::invalid_argument);
+  EXPECT_THROW(render_lightings({}), std::invalid_argument);
+}
+
 // ospray renders: on a closed sphere every light below Ng is already behind
 // the sphere, so its side test changes no radiance; on a plane lit from just
 // below its horizon, raw bump lets the bump normals catch the light and

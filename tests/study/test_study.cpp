@@ -81,6 +81,24 @@ std::string read_text(const std::string& p) {
   return s.str();
 }
 
+// The cache entry `exr` (its header's `attributes`) has the bits of its own
+// scene, the one its header records, rendered alone. The cache stores the
+// channels sorted by name: they are compared channel by channel.
+template <typename Attributes>
+void expect_its_own_render(const std::string& exr, const Attributes& attributes) {
+  const Image cached = read_image(exr);
+  const Image alone =
+      penumbra::render(scene_from_json(json::parse(attributes.at("penumbra:scene")), exr));
+  ASSERT_EQ(cached.pixels.size(), alone.pixels.size());
+  for (const std::string& name : alone.channels) {
+    const int a = alone.channel_index(name), c = cached.channel_index(name);
+    ASSERT_GE(c, 0) << name;
+    for (int y = 0; y < alone.height; ++y)
+      for (int x = 0; x < alone.width; ++x)
+        ASSERT_EQ(cached.at(x, y, c), alone.at(x, y, a)) << exr << " " << name;
+  }
+}
+
 TEST_F(Study, InterruptedAndResumedEqualsCleanWithNoRenderDoneTwice) {
   const ::penumbra::Study study = load_study(write("tiny.json", tiny()));
   StudyOptions clean;
@@ -220,21 +238,37 @@ TEST_F(Study, MethodsOfAVariantShareAPassWithTheBitsOfSeparateRenders) {
       const std::string exr = path("out/" + render["exr"].get<std::string>());
       const auto attributes = read_image_attributes(exr);
       if (attributes.at("penumbra:representation") != "bump") continue;
-      const Image cached = read_image(exr);
-      const Image alone =
-          penumbra::render(scene_from_json(json::parse(attributes.at("penumbra:scene")), exr));
-      ASSERT_EQ(cached.pixels.size(), alone.pixels.size());
-      // The cache stores channels sorted by name; compare channel by channel.
-      for (const std::string& name : alone.channels) {
-        const int a = alone.channel_index(name), c = cached.channel_index(name);
-        ASSERT_GE(c, 0) << name;
-        for (int y = 0; y < alone.height; ++y)
-          for (int x = 0; x < alone.width; ++x)
-            ASSERT_EQ(cached.at(x, y, c), alone.at(x, y, a)) << exr << " " << name;
-      }
+      expect_its_own_render(exr, attributes);
       ++checked;
     }
   EXPECT_EQ(checked, 2 * 5);
+}
+
+// The displacement truths of variants that differ only in their light (and
+// their convergence checks) share a pass; every truth in the cache has the
+// bits of its own scene (the one its header records) rendered alone.
+TEST_F(Study, TruthsOfOneGeometryShareAPassWithTheBitsOfSeparateRenders) {
+  json j = tiny();
+  j["renderers"] = {"evaluator"};
+  j["methods"] = {"none"};
+  j["axes"] = {{{"pointer", "/height/amplitude"}, {"values", {0.02}}},
+               {{"pointer", "/light/direction"}, {"values", {{-1, 0, -0.2}, {-1, 0, 0.4}}}}};
+  const ::penumbra::Study study = load_study(write("tiny.json", j));
+  const StudyRunStats stats = run_study(study, test_study_options(path("out")));
+  ASSERT_TRUE(stats.complete());
+  // The first round's truth, edge and sample checks: each a pass of both lights.
+  EXPECT_GE(stats.truth_batches, 3u);
+  EXPECT_EQ(stats.batched_truths, 2 * stats.truth_batches);
+  int checked = 0;
+  for (const auto& entry : fs::directory_iterator(path("out/cache"))) {
+    if (entry.path().extension() != ".exr") continue;
+    const std::string exr = entry.path().string();
+    const auto attributes = read_image_attributes(exr);
+    if (attributes.at("penumbra:representation") != "displacement") continue;
+    expect_its_own_render(exr, attributes);
+    ++checked;
+  }
+  EXPECT_GE(checked, 6);
 }
 
 // A compound axis sets several pointers per value; a renderer that cannot
