@@ -27,6 +27,7 @@ struct RunArgs {
   double timeout = 600.0;
   long max_renders = -1;
   bool no_figures = false, no_fit = false, quiet = false, dry_run = false;
+  bool no_shared_truths = false;
   bool self_contained = false;  // report.html embeds its images
   double max_memory_gib = kDefaultMaxMemoryBytes / kGiB;
   std::vector<std::string> add_methods;  // --add-method, in the order given
@@ -208,6 +209,7 @@ StudyOptions study_options(const RunArgs& a, const Study& study, const CommandCo
   o.max_new_renders = a.max_renders;
   o.figures = !a.no_figures;
   o.fit = !a.no_fit;
+  o.shared_truths = !a.no_shared_truths;
   o.self_contained_html = a.self_contained;
   o.interrupted = &StopSignals::interrupted();
   o.dry_run = a.dry_run;
@@ -351,6 +353,10 @@ Command add_run_command(CLI::App& app, SharedOptions& shared) {
   cmd->add_flag("--no-figures", a->no_figures, "skip matplotlib figures and report.html");
   cmd->add_flag("--no-fit", a->no_fit,
                 "skip penumbra fit into OUT/fit (the report's What is achievable section)");
+  cmd->add_flag("--no-shared-truths", a->no_shared_truths,
+                "render each ground truth alone rather than in one pass with the truths of the "
+                "other lights and materials on its mesh (same bits, slower: to measure what the "
+                "pass saves)");
   cmd->add_flag("--self-contained", a->self_contained,
                 "report.html embeds every image (one file to mail; default: it links "
                 "images/ and figures/ beside it)");

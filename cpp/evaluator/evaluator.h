@@ -81,8 +81,9 @@ std::vector<Image> render_methods(const Scene& scene,
                                   const std::vector<TerminatorSettings>& methods,
                                   const RenderOptions& options = {}, RenderStats* stats = nullptr);
 
-// Displacement truths of `scenes`, which must differ only in their light and
-// material (the caller checks: renderers.h, render_evaluator_lightings), in
+// Displacement truths of `scenes`, which must differ only in their light,
+// material and terminator (the caller checks: renderers.h,
+// render_evaluator_lightings), in
 // one pass: image k has the bits render() gives for scenes[k]. The displaced
 // mesh is built (or taken from the process's cache) once, and each camera
 // ray and its hit are traced once for all of them; each scene's light

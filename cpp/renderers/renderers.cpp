@@ -30,10 +30,11 @@ void check_output(const RendererInfo& info, const Image& image, const Scene& sce
 // A pass's images, each checked as render_with checks one: errors[k] says
 // why image k cannot be used (its scene: scene_of(k)).
 template <typename SceneOf>
-MethodsRun checked_pass(std::vector<Image> images, double seconds, SceneOf scene_of) {
+MethodsRun checked_pass(std::vector<Image> images, const RenderStats& stats, SceneOf scene_of) {
   MethodsRun run;
   run.images = std::move(images);
-  run.seconds = seconds;
+  run.seconds = stats.seconds;
+  run.stats = stats;
   run.errors.resize(run.images.size());
   for (std::size_t k = 0; k < run.images.size(); ++k) {
     try {
@@ -68,8 +69,7 @@ MethodsRun render_evaluator_methods(const Scene& scene,
   if (processes_cancelled()) throw RenderCancelled("not started (interrupted)");
   RenderStats stats;
   std::vector<Image> images = render_methods(scene, methods, settings.progress, &stats);
-  return checked_pass(std::move(images), stats.seconds,
-                      [&](std::size_t) -> const Scene& { return scene; });
+  return checked_pass(std::move(images), stats, [&](std::size_t) -> const Scene& { return scene; });
 }
 
 MethodsRun render_evaluator_lightings(const std::vector<Scene>& scenes,
@@ -77,7 +77,7 @@ MethodsRun render_evaluator_lightings(const std::vector<Scene>& scenes,
   if (processes_cancelled()) throw RenderCancelled("not started (interrupted)");
   RenderStats stats;
   std::vector<Image> images = render_lightings(scenes, settings.progress, &stats);
-  return checked_pass(std::move(images), stats.seconds,
+  return checked_pass(std::move(images), stats,
                       [&](std::size_t k) -> const Scene& { return scenes[k]; });
 }
 

@@ -28,6 +28,7 @@ struct MethodsRun {
   std::vector<Image> images;
   std::vector<std::string> errors;
   double seconds = 0.0;  // wall time of the whole pass
+  RenderStats stats;     // the whole pass's (its mesh built once)
 };
 MethodsRun render_evaluator_methods(const Scene& scene,
                                     const std::vector<TerminatorSettings>& methods,
@@ -35,8 +36,8 @@ MethodsRun render_evaluator_methods(const Scene& scene,
 
 // The evaluator's displacement truths of `scenes` in one pass
 // (render_lightings, evaluator/evaluator.h): the scenes must differ only in
-// their light and material, which the caller checks (study/rendering.h
-// groups them by their JSON without /light and /material); images[k] has
+// their light, material and terminator, which the caller checks
+// (study/rendering.h groups them by their JSON without those); images[k] has
 // the bits render_with gives for scenes[k], errors[k] as above.
 MethodsRun render_evaluator_lightings(const std::vector<Scene>& scenes,
                                       const RenderSettings& settings);

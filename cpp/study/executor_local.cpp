@@ -19,7 +19,7 @@ class LocalExecutor : public Executor {
     if (options_.log)
       options_.log(fmt::format("{} renders: {} cached, {} to do, {} in parallel", jobs.size(),
                                round.cached, todo.size(), options_.parallelism.renders));
-    MethodBatches batches(jobs, todo);
+    MethodBatches batches(jobs, todo, options_.shared_truths);
     stats.method_batches += batches.batches();
     stats.batched_renders += batches.members();
     stats.truth_batches += batches.truth_batches();

@@ -88,22 +88,24 @@ struct MethodBatches::Batch {
   std::vector<char> taken;             // per slot
 };
 
-MethodBatches::MethodBatches(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo)
+MethodBatches::MethodBatches(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo,
+                             bool truths)
     : jobs_(jobs) {
   // Bump renders by their scene without its terminator; displacement
-  // truths by theirs without the light and the material.
+  // truths by theirs without the light, the material and the terminator,
+  // which each truth of the pass keeps (render_lightings).
   std::map<std::string, std::vector<std::size_t>> groups;
   std::set<std::string> keys;
   for (std::size_t i : todo) {
     const Job& job = jobs[i];
     const bool bump = job.representation == Representation::kBump;
     if (job.renderer != RendererKind::kEvaluator ||
-        (!bump && job.representation != Representation::kDisplacement) ||
+        (!bump && (!truths || job.representation != Representation::kDisplacement)) ||
         !shares_samples(job.scene().terminator) || !keys.insert(job.key).second)
       continue;
     nlohmann::json scene = job.scene_json();
     for (const char* part : bump ? std::vector<const char*>{"terminator"}
-                                 : std::vector<const char*>{"light", "material"})
+                                 : std::vector<const char*>{"light", "material", "terminator"})
       scene.erase(part);
     groups[(bump ? "methods:" : "lightings:") + scene.dump()].push_back(i);
   }
@@ -164,6 +166,10 @@ std::optional<RendererRun> MethodBatches::take(const Job& job, const RenderSetti
   RendererRun out;
   out.image = pass.images[slot];
   out.seconds = pass.seconds / double(batch.jobs.size());
+  // The pass's mesh is recorded as built by its first member, as reused by
+  // the others (their cache entries' penumbra:mesh_build_seconds).
+  out.stats = pass.stats;
+  out.stats.mesh_reused = pass.stats.mesh_reused || slot != 0;
   {
     // The last member frees the pass's images.
     const std::lock_guard<std::mutex> lock(batch.mutex);
@@ -200,13 +206,15 @@ Image render_into_cache(const Job& job, const RenderCache& cache, double timeout
   } catch (const RenderCancelled&) {
     throw TaskCancelled{};
   }
-  // A batch member's cost is its share of the pass (for the cost estimates).
+  // A batch member's cost is its share of the pass (for the cost estimates),
+  // on the worker's threads as a render alone counts them: the pass ran on
+  // one worker while the others rendered too, so that wall times the
+  // machine's cores would count the cores the others used twice.
   const double wall_seconds =
       shared ? run.seconds
              : std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const unsigned used_threads = threads > 0 && !shared
-                                    ? static_cast<unsigned>(threads)
-                                    : std::max(1u, std::thread::hardware_concurrency());
+  const unsigned used_threads = threads > 0 ? static_cast<unsigned>(threads)
+                                            : std::max(1u, std::thread::hardware_concurrency());
   if (core_seconds) *core_seconds = wall_seconds * used_threads;
   std::vector<std::pair<std::string, std::string>> attributes{
       {"penumbra:version", kPenumbraVersion},

@@ -35,8 +35,8 @@ Renderers probe_renderers(const std::vector<RendererKind>& kinds, double timeout
 
 // Evaluator bump renders of one variant that differ only in their method
 // share their samples, and so do the displacement truths (and their
-// convergence checks) of variants that differ only in their light and
-// material: the first of them to start renders them all in one pass
+// convergence checks) of variants that differ only in their light,
+// material and terminator: the first of them to start renders them all in one pass
 // (render_evaluator_methods, render_evaluator_lightings), with every core;
 // the others wait for it and take their image. Each is still its own job:
 // cached under its own key, counted, failed or cancelled alone. The images
@@ -45,8 +45,9 @@ Renderers probe_renderers(const std::vector<RendererKind>& kinds, double timeout
 // would, so it needs no more memory than its largest member. Thread-safe.
 class MethodBatches {
  public:
-  // Batches of two or more among `jobs[todo]`.
-  MethodBatches(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo);
+  // Batches of two or more among `jobs[todo]`; the truths' only with `truths`.
+  MethodBatches(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo,
+                bool truths = true);
   ~MethodBatches();
 
   // The run of `job` when it is in a batch (its share of the pass's wall

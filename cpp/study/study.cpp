@@ -83,16 +83,31 @@ std::vector<std::size_t> use_cache(const std::vector<Job>& jobs, const RenderCac
 
 // The jobs of `todo` in plan order, each group placed at its first member;
 // Blender groups sorted by method, so that renders with the same material
-// follow each other. Blender groups are groups of tasks for one worker
-// (execute_tasks), in `group_starts`; an evaluator render uses its own.
+// follow each other. Each group is a group of tasks for one worker
+// (execute_tasks), in `group_starts`: a serving Blender keeps its mesh, and
+// the evaluator's renders that share a pass (MethodBatches: the truths on one
+// mesh, the methods of one variant) are taken by the worker whose task
+// renders the pass, which then finds their images ready, while the other
+// workers go on to other renders instead of waiting for that pass.
 struct Order {
   std::vector<std::size_t> todo, group_starts;
 };
+// render_group_key, and for an evaluator bump render its variant's scene
+// without the terminator (the methods that MethodBatches renders together).
+std::string local_group_key(const Job& job) {
+  std::string key = render_group_key(job);
+  if (!key.empty() || job.renderer != RendererKind::kEvaluator ||
+      job.representation != Representation::kBump)
+    return key;
+  nlohmann::json scene = job.scene_json();
+  scene.erase("terminator");
+  return "evaluator-bump:" + scene.dump();
+}
 Order group_by_mesh(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo) {
   std::vector<std::string> keys(todo.size());
   std::map<std::string, std::vector<std::size_t>> groups;
   for (std::size_t k = 0; k < todo.size(); ++k) {
-    keys[k] = render_group_key(jobs[todo[k]]);
+    keys[k] = local_group_key(jobs[todo[k]]);
     if (!keys[k].empty()) groups[keys[k]].push_back(todo[k]);
   }
   Order order;
@@ -115,7 +130,7 @@ Order group_by_mesh(const std::vector<Job>& jobs, const std::vector<std::size_t>
       std::stable_sort(members.begin(), members.end(),
                        [&](std::size_t a, std::size_t b) { return terminator[a] < terminator[b]; });
     }
-    for (std::size_t m = 0; m < members.size(); ++m) add(members[m], !blender || m == 0);
+    for (std::size_t m = 0; m < members.size(); ++m) add(members[m], m == 0);
     groups.erase(group);
   }
   return order;

@@ -42,6 +42,9 @@ struct StudyOptions {
   // report has its "What is achievable" section (study/fit.h); kept while
   // report.json and the evaluator's code are unchanged.
   bool fit = true;
+  // The local executor renders the ground truths of one displaced mesh in
+  // shared passes (study/rendering.h, MethodBatches); false: each alone.
+  bool shared_truths = true;
   // report.html embeds its images as data: URIs (one file to mail) instead
   // of linking images/ and figures/ beside it.
   bool self_contained_html = false;

@@ -210,7 +210,7 @@ TEST(Render, TruthsOfSeveralLightsRenderedTogetherHaveTheBitsOfTheirOwnRenders) 
   const std::vector<std::vector<std::string>> lightings{
       {},
       {"/light/direction=[-1,0.7,-0.2]"},
-      {"/material/specular={\"weight\":0.4,\"roughness\":0.3}"},
+      {"/material/specular={\"weight\":0.4,\"roughness\":0.3}", "/terminator/lobes=\"all\""},
       {"/light={\"type\":\"point\",\"position\":[-6,1,-2],\"intensity\":40}"},
       {"/light={\"type\":\"sphere\",\"position\":[-3,0,-1],\"radius\":0.5,\"power\":100}"},
       {"/light={\"type\":\"quad\",\"corner\":[-3,-1,-2],\"edge_u\":[0,2,0],"

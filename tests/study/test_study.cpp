@@ -269,6 +269,32 @@ TEST_F(Study, TruthsOfOneGeometryShareAPassWithTheBitsOfSeparateRenders) {
     ++checked;
   }
   EXPECT_GE(checked, 6);
+
+  // Interrupted after the first render, inside a shared pass: the pass's
+  // other truth is not cached, and the resumed run renders it once, and
+  // every other render once, to the same report.
+  StudyOptions first = test_study_options(path("resumed"));
+  first.max_new_renders = 1;
+  const StudyRunStats b1 = run_study(study, first);
+  EXPECT_EQ(b1.rendered, 1u);
+  StudyOptions second = first;
+  second.max_new_renders = -1;
+  const StudyRunStats b2 = run_study(study, second);
+  ASSERT_TRUE(b2.complete());
+  EXPECT_EQ(b1.rendered + b2.rendered, stats.rendered);
+  EXPECT_EQ(report_without_provenance(path("out/report.json")),
+            report_without_provenance(path("resumed/report.json")));
+
+  // Each truth alone (--no-shared-truths): no truth pass, the same report
+  // and metrics.csv to the byte.
+  StudyOptions alone = test_study_options(path("alone"));
+  alone.shared_truths = false;
+  const StudyRunStats c = run_study(study, alone);
+  ASSERT_TRUE(c.complete());
+  EXPECT_EQ(c.truth_batches, 0u);
+  EXPECT_EQ(report_without_provenance(path("out/report.json")),
+            report_without_provenance(path("alone/report.json")));
+  EXPECT_EQ(read_text(path("out/metrics.csv")), read_text(path("alone/metrics.csv")));
 }
 
 // A compound axis sets several pointers per value; a renderer that cannot
