@@ -135,6 +135,17 @@ int bench(const BenchArgs& a, const CommandContext& c) {
       "wall, {:.3f} CPU-s; in one pass {:.3f} s wall, {:.3f} CPU-s ({:.2f}x the CPU-s alone)\n",
       t.lightings, t.alone_seconds, t.alone_cpu_seconds, t.pass_seconds, t.pass_cpu_seconds,
       t.pass_cpu_seconds / t.alone_cpu_seconds);
+  const ExtendedTruthTiming e = bench_extended_truth(a.size, a.spp);
+  if (e.nested) {
+    out << fmt::format(
+        "the truth at {} spp (a convergence check): from scratch {:.3f} CPU-s; extending the "
+        "sums of {} spp {:.3f} CPU-s ({:.2f}x)\n",
+        e.extended_spp, e.scratch_cpu_seconds, e.spp, e.extended_cpu_seconds,
+        e.extended_cpu_seconds / e.scratch_cpu_seconds);
+  } else {
+    out << fmt::format("the truth at {} spp: does not nest {} spp, not timed\n", e.extended_spp,
+                       e.spp);
+  }
   print_mesh_file_line(a, out);
   return kExitOk;
 }

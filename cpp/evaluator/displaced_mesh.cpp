@@ -218,13 +218,14 @@ struct CachedMesh {
 // Most recent first.
 std::mutex cache_mutex;
 std::list<CachedMesh> cached_meshes;
+std::size_t cache_limit = kMeshCacheTriangles;  // under cache_mutex
 
 void trim_cache() {
   std::size_t total = 0;
   for (auto it = cached_meshes.begin(); it != cached_meshes.end();) {
     total += it->triangles;
     // Never drop a build in flight (triangles 0): others may wait on it.
-    if (it->triangles > 0 && total > kMeshCacheTriangles && it != cached_meshes.begin())
+    if (it->triangles > 0 && total > cache_limit && it != cached_meshes.begin())
       it = cached_meshes.erase(it);
     else
       ++it;
@@ -232,6 +233,17 @@ void trim_cache() {
 }
 
 }  // namespace
+
+void set_mesh_cache_triangles(std::size_t triangles) {
+  std::lock_guard<std::mutex> lock(cache_mutex);
+  cache_limit = triangles;
+  trim_cache();
+}
+
+std::size_t mesh_cache_triangles() {
+  std::lock_guard<std::mutex> lock(cache_mutex);
+  return cache_limit;
+}
 
 std::shared_ptr<const DisplacedMesh> shared_displaced_mesh(const Scene& scene, bool* reused) {
   const std::string key = displaced_mesh_key(scene);

@@ -80,13 +80,21 @@ std::string displaced_mesh_key(const Scene& scene);
 // asked for the same key. A study renders one geometry many times (the
 // truth's convergence checks at more samples; variants that differ in light,
 // material or method), and the build is most of a truth's cost. The meshes
-// built last are kept while they hold at most kMeshCacheTriangles triangles
-// together (about 67 bytes each with the BVH, measured: half a GiB); a
+// built last are kept while they hold at most mesh_cache_triangles()
+// triangles together (kMeshBytesPerTriangle each with the BVH, measured); a
 // render asking for a key being built waits for that build. Queries on a
 // shared mesh are thread-safe (Embree's rtcIntersect1/rtcOccluded1 on a
 // committed scene). `reused` says whether it came from the cache.
-inline constexpr std::size_t kMeshCacheTriangles = 8'000'000;
 std::shared_ptr<const DisplacedMesh> shared_displaced_mesh(const Scene& scene,
                                                            bool* reused = nullptr);
+
+// The default limit: half a GiB of meshes.
+inline constexpr std::size_t kMeshCacheTriangles = 8'000'000;
+inline constexpr double kMeshBytesPerTriangle = 67.0;
+// The process's limit (thread-safe); a study sets it from its memory budget
+// (StudyOptions::max_memory_bytes), so that the meshes of one round of
+// convergence checks are still there for the next.
+void set_mesh_cache_triangles(std::size_t triangles);
+std::size_t mesh_cache_triangles();
 
 }  // namespace penumbra

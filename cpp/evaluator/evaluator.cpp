@@ -80,17 +80,18 @@ LightSample sample_light(const Light& light, const Vec3& p, const LightUniforms&
 // The area-light point of sample s of a pixel: the pixel's samples fall in
 // the same nx x ny strata as its camera samples, shuffled (permute_index)
 // so that a sample's light stratum does not follow its camera stratum, and
-// jittered within, counter-based from the pixel's key like the camera's.
+// jittered within, counter-based from the pixel's key like the camera's;
+// nested where the camera's are (a jittered camera: core/sample_pattern.h),
+// plain where the camera takes its strata's centres, whose grids do not
+// nest, so that a render of such a camera never needs them nested.
 LightUniforms light_uniforms(const Scene& scene, std::uint64_t pixel_key, int s, int nx, int ny) {
   if (!is_area_light(scene.light)) return {};
-  const Camera& camera = scene.camera;
   constexpr std::uint64_t kLightStream = 0x6c69676874ull;  // "light"
   const std::uint64_t key = mix64(pixel_key ^ kLightStream);
-  const std::uint32_t stratum = permute_index(std::uint32_t(s), std::uint32_t(camera.spp),
-                                              static_cast<std::uint32_t>(key >> 32u));
-  const int sx = int(stratum) % nx, sy = int(stratum) / nx;
-  return {(sx + splitmix_double(key, 2 * std::uint64_t(s))) / nx,
-          (sy + splitmix_double(key, 2 * std::uint64_t(s) + 1)) / ny};
+  const StratumPoint p =
+      stratum_point(s, scene.camera.spp,
+                    {key, true, static_cast<std::uint32_t>(key >> 32u), scene.camera.jitter});
+  return {(p.sx + p.x) / nx, (p.sy + p.y) / ny};
 }
 
 // The cosine of analysis.theta at base point p of normal n: of the sampled
@@ -493,6 +494,61 @@ struct SampleAngles {
   double theta = 0.0, deviation = 0.0, view = 0.0;  // degrees
 };
 
+// The sums a resumed render starts from (RenderOptions::resume) and where
+// a render leaves its own (RenderOptions::sums), pixel by pixel from any
+// thread: each pixel's slots are its own.
+class PixelSumsIo {
+ public:
+  PixelSumsIo(const Camera& camera, const RenderOptions& options, std::size_t images)
+      : camera_(camera), resume_(options.resume), out_(options.sums) {
+    const std::size_t values =
+        std::size_t(camera.width) * std::size_t(camera.height) * kSampleSumChannels;
+    if (resume_) {
+      if (resume_->size() != images)
+        throw std::invalid_argument("render: resume needs the sums of every image");
+      for (const SampleSums& r : *resume_)
+        if (r.width != camera.width || r.height != camera.height || r.values.size() != values ||
+            r.spp != resume_->front().spp || !camera.jitter || !nests(r.spp, camera.spp))
+          throw std::invalid_argument(fmt::format(
+              "render: sums of {} samples at {}x{} cannot be extended to {} jittered samples at "
+              "{}x{} (core/sample_pattern.h, nests)",
+              r.spp, r.width, r.height, camera.spp, camera.width, camera.height));
+      first_sample_ = resume_->front().spp;
+    }
+    if (out_) {
+      out_->assign(images, SampleSums{camera.spp, camera.width, camera.height, {}});
+      for (SampleSums& o : *out_) o.values.assign(values, 0.0);
+    }
+  }
+  int first_sample() const { return first_sample_; }
+  // The samples this render draws, of each pixel.
+  int drawn() const { return camera_.spp - first_sample_; }
+  void start(std::size_t pixel, PixelSums* sums, std::size_t images) const {
+    for (std::size_t k = 0; k < images; ++k) {
+      sums[k] = {};
+      if (!resume_) continue;
+      const double* v = &(*resume_)[k].values[pixel * kSampleSumChannels];
+      sums[k] = {v[0], v[1], v[2], v[3], v[4], v[5], v[6]};
+    }
+  }
+  void finish(std::size_t pixel, const PixelSums* sums, std::size_t images) const {
+    if (!out_) return;
+    for (std::size_t k = 0; k < images; ++k) {
+      double* v = &(*out_)[k].values[pixel * kSampleSumChannels];
+      const PixelSums& p = sums[k];
+      v[0] = p.radiance, v[1] = p.hits, v[2] = p.theta, v[3] = p.deviation, v[4] = p.g,
+      v[5] = p.g_count, v[6] = p.view;
+    }
+  }
+
+ private:
+  const Camera& camera_;
+  const std::vector<SampleSums>* resume_;
+  std::vector<SampleSums>* out_;
+  int first_sample_ = 0;
+};
+static_assert(sizeof(PixelSums) == kSampleSumChannels * sizeof(double));
+
 void write_pixel(const PixelSums& sums, double inv_spp, float* out) {
   const float radiance = static_cast<float>(sums.radiance * inv_spp);
   out[0] = out[1] = out[2] = radiance;
@@ -515,10 +571,13 @@ void write_pixel(const PixelSums& sums, double inv_spp, float* out) {
 struct Jitter {
   double x = 0.5, y = 0.5;  // stratum centres without jitter
 };
-Jitter sample_jitter(const Camera& camera, std::uint64_t pixel_key, int k) {
-  if (!camera.jitter) return {};
-  return {splitmix_double(pixel_key, 2 * std::uint64_t(k)),
-          splitmix_double(pixel_key, 2 * std::uint64_t(k) + 1)};
+
+// Camera sample s of a pixel: its stratum and its jitter within it, from
+// the nested pattern of the camera's samples (core/sample_pattern.h); a
+// camera that does not jitter takes the plain grid's centres.
+StratumPoint camera_stratum(const Camera& camera, std::uint64_t pixel_key, int s, int nx) {
+  if (!camera.jitter) return {s % nx, s / nx, 0.5, 0.5};
+  return stratum_point(s, camera.spp, {pixel_key});
 }
 
 // The camera ray of sample (sx, sy) of pixel (i, j), at `jitter` within
@@ -771,6 +830,7 @@ struct PixelTask {
   PixelSums* sums = nullptr;  // one per pass
   std::uint64_t* shadow_rays = nullptr;
   const SampleSink* sink = nullptr;  // one pass's samples (scalar path only)
+  int first_sample = 0;              // a resumed render's: the samples its sums hold
 };
 
 // The rows of a render through packets: rays, hits, bump normals, shadow
@@ -825,14 +885,13 @@ void PacketRows::render_row(int j, std::uint64_t* shadow_rays, const SampleSink*
     const std::size_t slot = std::size_t(i) % kSlots;
     std::fill_n(sums_.begin() + std::ptrdiff_t(slot * pass_count_), pass_count_, PixelSums{});
     // Strata in the order of the scalar path's loops, y outer.
-    for (int sample = 0, sx = 0, sy = 0; sample < camera.spp; ++sample) {
+    for (int sample = 0; sample < camera.spp; ++sample) {
       const std::size_t k = rays.count++;
       samples.i[k] = i, samples.j[k] = j;
-      samples.sx[k] = sx, samples.sy[k] = sy;
-      const Jitter jitter = sample_jitter(camera, key, sample);
-      samples.jx[k] = jitter.x, samples.jy[k] = jitter.y;
+      const StratumPoint p = camera_stratum(camera, key, sample, setup_.nx);
+      samples.sx[k] = p.sx, samples.sy[k] = p.sy;
+      samples.jx[k] = p.x, samples.jy[k] = p.y;
       lane_slot_[k] = slot;
-      if (++sx == setup_.nx) sx = 0, ++sy;
       if (rays.count == kPacketSize) flush(shadow_rays);
     }
     complete_.push_back(i);
@@ -906,9 +965,8 @@ struct SampleBlock {
   void camera_rays(const Camera& camera, const Vec3& orthographic_direction, int i, int j,
                    std::uint64_t key, int first, std::size_t n, int nx, int ny) {
     for (std::size_t k = 0; k < n; ++k) {
-      const int s = first + int(k);
-      rays[k] = camera_ray(camera, orthographic_direction, i, j, s % nx, s / nx, nx, ny,
-                           sample_jitter(camera, key, s));
+      const StratumPoint p = camera_stratum(camera, key, first + int(k), nx);
+      rays[k] = camera_ray(camera, orthographic_direction, i, j, p.sx, p.sy, nx, ny, {p.x, p.y});
     }
   }
   void wait(const PendingShadow& p) {
@@ -951,7 +1009,7 @@ void shade_pixel_packets(const Scene& scene, const Tracer& tracer, const Props& 
   // Kept per thread: one allocation per pixel was 2 % of a 16-spp truth.
   thread_local std::vector<LitPass> lit;
   const int count = nx * ny;
-  for (int first = 0; first < count; first += int(kRays)) {
+  for (int first = pixel.first_sample; first < count; first += int(kRays)) {
     const std::size_t n = std::min<std::size_t>(kRays, count - first);
     b.camera_rays(camera, orthographic_direction, pixel.i, pixel.j, pixel.key, first, n, nx, ny);
     tracer.primary_packet(b.rays, n, b.hits, b.found);
@@ -986,17 +1044,16 @@ void shade_pixel(const Scene& scene, const Tracer& tracer, const Props& props,
   // fields it uses; `on_prop` is the one field only props set.
   SurfaceHit hit;
   Material material = scene.material;  // a filtered map sets its lobe per sample
-  for (int sy = 0; sy < ny; ++sy) {
-    for (int sx = 0; sx < nx; ++sx) {
-      const Ray ray = camera_ray(camera, orthographic_direction, pixel.i, pixel.j, sx, sy, nx, ny,
-                                 sample_jitter(camera, pixel.key, sy * nx + sx));
-      hit.on_prop = false;
-      material.filtered.active = false;
-      const bool found = tracer.primary(ray, &hit);
-      if (!(props.nearer(ray, found, &hit) || found)) continue;
-      shader.shade(ray, hit, light_uniforms(scene, pixel.key, sy * nx + sx, nx, ny), &material,
-                   pixel.rng, pixel.sums, pixel.shadow_rays, pixel.sink, pixel.i);
-    }
+  for (int s = pixel.first_sample; s < camera.spp; ++s) {
+    const StratumPoint p = camera_stratum(camera, pixel.key, s, nx);
+    const Ray ray = camera_ray(camera, orthographic_direction, pixel.i, pixel.j, p.sx, p.sy, nx, ny,
+                               {p.x, p.y});
+    hit.on_prop = false;
+    material.filtered.active = false;
+    const bool found = tracer.primary(ray, &hit);
+    if (!(props.nearer(ray, found, &hit) || found)) continue;
+    shader.shade(ray, hit, light_uniforms(scene, pixel.key, s, nx, ny), &material, pixel.rng,
+                 pixel.sums, pixel.shadow_rays, pixel.sink, pixel.i);
   }
 }
 
@@ -1057,6 +1114,9 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   TallyRequest* const tally = request.tally;
   RecordRequest* const record = request.record;
   const bool sinks = tally || record;
+  if ((options.resume || options.sums) && (sinks || !std::is_same_v<Tracer, MeshTracer>))
+    throw std::invalid_argument("render: only displacement truths resume or keep their sums");
+  const PixelSumsIo sums_io(camera, options, pass_count);
   // A user method's recording goes through packets too (PacketRows): its
   // samples come in the scalar path's order.
   const bool packets = !tally && traces_packets(scene, shader, passes, options);
@@ -1095,12 +1155,14 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
               const std::uint64_t pixel = std::uint64_t(j) * width + i;
               const std::uint64_t key = pixel_key(camera, i, j);
               Pcg32 rng(key);
-              std::fill(sums.begin(), sums.end(), PixelSums{});
+              sums_io.start(pixel, sums.data(), pass_count);
               entries.clear();
               rest = 0.0;
-              shade_pixel(scene, tracer, props, shader,
-                          {i, j, key, &rng, sums.data(), &local_shadow_rays, sink},
-                          options.packets && !sinks);
+              shade_pixel(
+                  scene, tracer, props, shader,
+                  {i, j, key, &rng, sums.data(), &local_shadow_rays, sink, sums_io.first_sample()},
+                  options.packets && !sinks);
+              sums_io.finish(pixel, sums.data(), pass_count);
               if (tally) tally->store(pixel, entries, rest, inv_spp);
               for (std::size_t k = 0; k < pass_count; ++k)
                 write_pixel(sums[k], inv_spp, &(*images)[k].pixels[pixel * channel_count]);
@@ -1119,7 +1181,8 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
         shadow_rays += local_shadow_rays;
       });
   if (stats) {
-    stats->camera_samples = std::uint64_t(width) * height * camera.spp;
+    stats->camera_samples = std::uint64_t(width) * height * std::uint64_t(sums_io.drawn());
+    stats->resumed_spp = sums_io.first_sample();
     stats->shadow_rays += shadow_rays;
     stats->packets = stats->packets || packets ||
                      (requires { Tracer::kPacketRays; } && options.packets && !sinks);
@@ -1406,6 +1469,7 @@ struct LightingPixel {
   std::vector<Pcg32>* rngs = nullptr;      // one per lighting
   std::vector<PixelSums>* sums = nullptr;  // one per lighting
   std::uint64_t* shadow_rays = nullptr;
+  int first_sample = 0;  // a resumed render's: the samples its sums hold
 };
 
 void shade_pixel_lightings(const Scene& first, const MeshTracer& tracer, const Props& props,
@@ -1422,7 +1486,7 @@ void shade_pixel_lightings(const Scene& first, const MeshTracer& tracer, const P
   std::vector<Material> materials;
   for (const Lighting& l : lightings) materials.push_back(l.scene->material);
   const int count = nx * ny;
-  for (int start = 0; start < count; start += int(block)) {
+  for (int start = pixel.first_sample; start < count; start += int(block)) {
     const std::size_t n = std::min<std::size_t>(block, std::size_t(count - start));
     b.camera_rays(camera, orthographic_direction, pixel.i, pixel.j, pixel.key, start, n, nx, ny);
     if (packets) {
@@ -1459,6 +1523,7 @@ void render_lighting_images(const Scene& first, const MeshTracer& tracer, const 
   const Camera& camera = first.camera;
   const std::size_t channel_count = evaluator_channels().size();
   const double inv_spp = 1.0 / camera.spp;
+  const PixelSumsIo sums_io(camera, options, lightings.size());
   std::atomic<int> rows_done{0};
   std::atomic<std::uint64_t> shadow_rays{0};
   std::mutex progress_mutex;
@@ -1471,11 +1536,14 @@ void render_lighting_images(const Scene& first, const MeshTracer& tracer, const 
         for (int j = rows.begin(); j != rows.end(); ++j) {
           for (int i = 0; i < camera.width; ++i) {
             const std::uint64_t key = pixel_key(camera, i, j);
-            rngs.assign(lightings.size(), Pcg32(key));
-            std::fill(sums.begin(), sums.end(), PixelSums{});
-            shade_pixel_lightings(first, tracer, props, lightings,
-                                  {i, j, key, &rngs, &sums, &local_shadow_rays}, options.packets);
             const std::size_t pixel = std::size_t(j) * std::size_t(camera.width) + std::size_t(i);
+            rngs.assign(lightings.size(), Pcg32(key));
+            sums_io.start(pixel, sums.data(), sums.size());
+            shade_pixel_lightings(
+                first, tracer, props, lightings,
+                {i, j, key, &rngs, &sums, &local_shadow_rays, sums_io.first_sample()},
+                options.packets);
+            sums_io.finish(pixel, sums.data(), sums.size());
             for (std::size_t l = 0; l < lightings.size(); ++l)
               write_pixel(sums[l], inv_spp, &(*images)[l].pixels[pixel * channel_count]);
           }
@@ -1492,7 +1560,8 @@ void render_lighting_images(const Scene& first, const MeshTracer& tracer, const 
         shadow_rays += local_shadow_rays;
       });
   stats->camera_samples =
-      std::uint64_t(camera.width) * std::uint64_t(camera.height) * std::uint64_t(camera.spp);
+      std::uint64_t(camera.width) * std::uint64_t(camera.height) * std::uint64_t(sums_io.drawn());
+  stats->resumed_spp = sums_io.first_sample();
   stats->shadow_rays = shadow_rays;
   stats->packets = options.packets;
 }

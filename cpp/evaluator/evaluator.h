@@ -40,6 +40,18 @@ struct RenderStats {
   std::size_t triangles = 0;   // displacement and low-poly meshes: mesh size
   bool mesh_reused = false;    // displacement: the mesh came from this process's cache
   bool packets = false;        // camera rays were traced in SIMD packets (RenderOptions)
+  int resumed_spp = 0;         // samples per pixel taken from RenderOptions::resume
+};
+
+// A render's per-pixel sums over its samples, in double precision, as it
+// adds them before dividing: radiance, coverage, then the analysis
+// channels' sums (theta, deviation, G with its count, view),
+// kSampleSumChannels per pixel, row-major. What a render at 4^k times the
+// samples extends instead of drawing these samples again (issue 45).
+constexpr std::size_t kSampleSumChannels = 7;
+struct SampleSums {
+  int spp = 0, width = 0, height = 0;
+  std::vector<double> values;
 };
 
 struct RenderOptions {
@@ -53,6 +65,14 @@ struct RenderOptions {
   // analytic shape without props, image maps or filtering; core/ray_packet.h).
   // It gives the same bits as the scalar path, which false forces.
   bool packets = true;
+  // Displacement truths (render, render_lightings): per image, the sums of
+  // the same scene rendered with fewer samples, a nested prefix of the
+  // camera's (core/sample_pattern.h, nests): the render draws only the
+  // samples after them, and its images have the bits of renders from
+  // scratch (tested). std::invalid_argument when they do not fit.
+  const std::vector<SampleSums>* resume = nullptr;
+  // Where to put each image's sums, for a later render to extend.
+  std::vector<SampleSums>* sums = nullptr;
 };
 
 Image render(const Scene& scene, const RenderOptions& options = {}, RenderStats* stats = nullptr);

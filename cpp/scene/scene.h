@@ -16,6 +16,7 @@
 #include "core/environment.h"
 #include "core/filtered_map.h"
 #include "core/height.h"
+#include "core/sample_pattern.h"
 #include "core/shading.h"
 #include "core/shadow_origin.h"
 #include "core/shape.h"
@@ -60,16 +61,9 @@ struct Camera {
   bool jitter = true;  // false: stratum centres (deterministic pixel grid)
 };
 
-// Stratification of spp samples into nx * ny strata, nx <= ny, as square as
-// spp allows (16 -> 4x4, 8 -> 2x4, 7 -> 1x7). Samples sit at stratum centres
-// when the camera does not jitter; POV-Ray renders exactly those.
-inline void strata(int spp, int* nx, int* ny) {
-  int best = 1;
-  for (int a = 1; a * a <= spp; ++a)
-    if (spp % a == 0) best = a;
-  *nx = best;
-  *ny = spp / best;
-}
+// Stratification of spp samples: strata() in core/sample_pattern.h. Samples
+// sit at stratum centres when the camera does not jitter; POV-Ray renders
+// exactly those.
 
 // Delta lights (distant, point), area lights (sphere, quad) of uniform
 // radiance and a captured environment at infinity, which the evaluator

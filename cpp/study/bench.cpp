@@ -118,6 +118,32 @@ SharedTruthTiming bench_shared_truths(int size, int spp) {
   return t;
 }
 
+ExtendedTruthTiming bench_extended_truth(int size, int spp) {
+  ExtendedTruthTiming t;
+  t.spp = spp, t.extended_spp = 4 * spp;
+  t.nested = nests(spp, t.extended_spp);
+  if (!t.nested) return t;
+  const auto truth = [&](int samples) {
+    nlohmann::json document = bench_scene(size, samples);
+    document["representation"] = "displacement";
+    document["camera"]["jitter"] = true;  // a grid of stratum centres does not nest
+    return scene_from_json(document, "<bench>");
+  };
+  std::vector<SampleSums> sums;
+  RenderOptions keep;
+  keep.sums = &sums;
+  render(truth(spp), keep);
+  double cpu_before = cpu_seconds();
+  render(truth(t.extended_spp));
+  t.scratch_cpu_seconds = cpu_seconds() - cpu_before;
+  RenderOptions extend;
+  extend.resume = &sums;
+  cpu_before = cpu_seconds();
+  render(truth(t.extended_spp), extend);
+  t.extended_cpu_seconds = cpu_seconds() - cpu_before;
+  return t;
+}
+
 MeshFileTiming bench_mesh_file(int size, int spp, const std::string& folder) {
   MeshFileTiming t;
   Shape sphere;

@@ -54,6 +54,18 @@ struct SharedTruthTiming {
 };
 SharedTruthTiming bench_shared_truths(int size, int spp);
 
+// The displacement truth at four times the bench's samples, as a study's
+// convergence check renders it: from scratch, and extending the sums of
+// the bench's samples (RenderOptions::resume; the same bits), CPU seconds
+// with the mesh cached. `nested` false: 4 x spp does not nest spp
+// (core/sample_pattern.h), and nothing was timed.
+struct ExtendedTruthTiming {
+  int spp = 0, extended_spp = 0;
+  bool nested = false;
+  double scratch_cpu_seconds = 0.0, extended_cpu_seconds = 0.0;
+};
+ExtendedTruthTiming bench_extended_truth(int size, int spp);
+
 // A mesh file of about a million triangles, the unit sphere's 1024-segment
 // UV tessellation written as binary PLY into `folder`: reading it
 // (load_mesh_file: Assimp, welding, bounds) and a bump render of it under

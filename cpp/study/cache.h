@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "evaluator/evaluator.h"
 #include "image/image.h"
 #include "renderers/registry.h"
 
@@ -53,9 +54,25 @@ class RenderCache {
   void store(const std::string& key, const Image& image,
              std::vector<std::pair<std::string, std::string>> metadata) const;
 
+  // A displacement truth's per-pixel sums (evaluator.h, SampleSums), kept
+  // so that a check at 4^k times its samples extends them instead of
+  // drawing them again (issue 45): cache/sums/SAMPLES-sSPP.sums, SAMPLES the
+  // key of the scene without its sample count (samples_key). Little-endian
+  // doubles behind a header, checked by size and an FNV-1a digest; one that
+  // does not verify is never used. Written under a temporary name, then
+  // renamed.
+  std::string sums_path(const std::string& samples_key, int spp) const;
+  std::optional<SampleSums> lookup_sums(const std::string& samples_key, int spp) const;
+  void store_sums(const std::string& samples_key, const SampleSums& sums) const;
+
  private:
   std::string folder_;
 };
+
+// The key of `job`'s scene without /camera/spp: the sample sequence that
+// its renders with 4^k times the samples share (RenderCache::store_sums).
+std::string samples_key(const Job& job,
+                        const std::vector<std::pair<RendererKind, RendererIdentity>>& ids);
 
 // Sets every job's key from its canonical scene and its renderer's identity.
 void assign_keys(Plan& plan, const std::vector<std::pair<RendererKind, RendererIdentity>>& ids);

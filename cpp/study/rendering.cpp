@@ -79,6 +79,76 @@ Renderers probe_renderers(const std::vector<RendererKind>& kinds, double timeout
   return out;
 }
 
+namespace {
+
+// Whether a render keeps its per-pixel sums for a check at 4^k times its
+// samples to extend: evaluator displacement truths that draw no random
+// numbers while shading, seen by a jittered camera (RenderOptions::resume).
+bool keeps_sums(const Job& job, const Scene& scene) {
+  return job.renderer == RendererKind::kEvaluator &&
+         job.representation == Representation::kDisplacement && shares_samples(scene.terminator) &&
+         scene.camera.jitter;
+}
+
+// The sample counts whose sums a render of `spp` samples can extend, the
+// most first (core/sample_pattern.h, nests).
+std::vector<int> nested_counts(int spp) {
+  std::vector<int> out;
+  for (int n = spp; nests_quarter(n); n /= 4) out.push_back(n / 4);
+  return out;
+}
+
+// The cached sums of every one of `keys` at the most samples below `spp`
+// that all of them have; empty when there are none.
+std::vector<SampleSums> resumable_sums(const RenderCache& cache,
+                                       const std::vector<std::string>& keys, int spp) {
+  for (int fewer : nested_counts(spp)) {
+    std::vector<SampleSums> found;
+    for (const std::string& key : keys) {
+      std::optional<SampleSums> sums = cache.lookup_sums(key, fewer);
+      if (!sums) break;
+      found.push_back(std::move(*sums));
+    }
+    if (found.size() == keys.size()) return found;
+  }
+  return {};
+}
+
+// The renders of `scenes` (the jobs `jobs`) by `render_pass`, extending the
+// cached sums of their scenes where they keep them, and keeping theirs
+// (each where errors(k) is empty).
+template <typename Render>
+auto render_keeping_sums(const std::vector<const Job*>& jobs, const std::vector<Scene>& scenes,
+                         RenderSettings settings, const RenderCache& cache,
+                         const Renderers& renderers, Render&& render_pass) {
+  std::vector<std::string> keys;
+  for (std::size_t k = 0; k < jobs.size(); ++k)
+    if (keeps_sums(*jobs[k], scenes[k]))
+      keys.push_back(samples_key(*jobs[k], renderers.identities));
+  if (keys.size() != jobs.size()) return render_pass(settings, [](std::size_t) { return false; });
+  const std::vector<SampleSums> resume = resumable_sums(cache, keys, scenes.front().camera.spp);
+  std::vector<SampleSums> sums;
+  if (!resume.empty()) settings.progress.resume = &resume;
+  settings.progress.sums = &sums;
+  return render_pass(settings, [&](std::size_t k) {
+    cache.store_sums(keys[k], sums[k]);
+    return true;
+  });
+}
+
+}  // namespace
+
+std::string shared_pass_key(const Job& job) {
+  if (job.renderer != RendererKind::kEvaluator) return {};
+  const bool bump = job.representation == Representation::kBump;
+  if (!bump && job.representation != Representation::kDisplacement) return {};
+  nlohmann::json scene = job.scene_json();
+  for (const char* part : bump ? std::vector<const char*>{"terminator"}
+                               : std::vector<const char*>{"light", "material", "terminator"})
+    scene.erase(part);
+  return (bump ? "methods:" : "lightings:") + scene.dump();
+}
+
 struct MethodBatches::Batch {
   std::vector<std::size_t> jobs;  // indices into jobs_
   bool lightings = false;         // displacement truths of one geometry (else methods)
@@ -98,16 +168,11 @@ MethodBatches::MethodBatches(const std::vector<Job>& jobs, const std::vector<std
   std::set<std::string> keys;
   for (std::size_t i : todo) {
     const Job& job = jobs[i];
-    const bool bump = job.representation == Representation::kBump;
-    if (job.renderer != RendererKind::kEvaluator ||
-        (!bump && (!truths || job.representation != Representation::kDisplacement)) ||
+    std::string key = shared_pass_key(job);
+    if (key.empty() || (!truths && job.representation == Representation::kDisplacement) ||
         !shares_samples(job.scene().terminator) || !keys.insert(job.key).second)
       continue;
-    nlohmann::json scene = job.scene_json();
-    for (const char* part : bump ? std::vector<const char*>{"terminator"}
-                                 : std::vector<const char*>{"light", "material", "terminator"})
-      scene.erase(part);
-    groups[(bump ? "methods:" : "lightings:") + scene.dump()].push_back(i);
+    groups[std::move(key)].push_back(i);
   }
   for (auto& [scene, members] : groups) {
     if (members.size() < 2) continue;
@@ -125,18 +190,31 @@ MethodBatches::MethodBatches(const std::vector<Job>& jobs, const std::vector<std
 
 MethodBatches::~MethodBatches() = default;
 
-MethodsRun MethodBatches::render_batch(const Batch& batch, const RenderSettings& settings) const {
+MethodsRun MethodBatches::render_batch(const Batch& batch, const RenderSettings& settings,
+                                       const RenderCache& cache, const Renderers& renderers) const {
   if (batch.lightings) {
     std::vector<Scene> scenes;
-    for (std::size_t i : batch.jobs) scenes.push_back(jobs_[i].scene());
-    return render_evaluator_lightings(scenes, settings);
+    std::vector<const Job*> members;
+    for (std::size_t i : batch.jobs) {
+      scenes.push_back(jobs_[i].scene());
+      members.push_back(&jobs_[i]);
+    }
+    return render_keeping_sums(members, scenes, settings, cache, renderers,
+                               [&](const RenderSettings& s, auto&& keep) {
+                                 MethodsRun run = render_evaluator_lightings(scenes, s);
+                                 for (std::size_t k = 0; k < scenes.size(); ++k)
+                                   if (run.errors[k].empty()) keep(k);
+                                 return run;
+                               });
   }
   std::vector<TerminatorSettings> methods;
   for (std::size_t i : batch.jobs) methods.push_back(jobs_[i].scene().terminator);
   return render_evaluator_methods(jobs_[batch.jobs.front()].scene(), methods, settings);
 }
 
-std::optional<RendererRun> MethodBatches::take(const Job& job, const RenderSettings& settings) {
+std::optional<RendererRun> MethodBatches::take(const Job& job, const RenderSettings& settings,
+                                               const RenderCache& cache,
+                                               const Renderers& renderers) {
   const auto found = member_.find(job.key);
   if (found == member_.end()) return std::nullopt;
   Batch& batch = *batches_[found->second.first];
@@ -156,7 +234,7 @@ std::optional<RendererRun> MethodBatches::take(const Job& job, const RenderSetti
   }
   if (owner) {
     try {
-      promise.set_value(render_batch(batch, settings));
+      promise.set_value(render_batch(batch, settings, cache, renderers));
     } catch (...) {
       promise.set_exception(std::current_exception());
     }
@@ -201,8 +279,18 @@ Image render_into_cache(const Job& job, const RenderCache& cache, double timeout
   const auto start = std::chrono::steady_clock::now();
   std::optional<RendererRun> shared;
   try {
-    shared = batches ? batches->take(job, settings) : std::nullopt;
-    run = shared ? std::move(*shared) : render_with(job.renderer, job.scene(), settings);
+    shared = batches ? batches->take(job, settings, cache, renderers) : std::nullopt;
+    if (shared) {
+      run = std::move(*shared);
+    } else {
+      const Scene scene = job.scene();
+      run = render_keeping_sums({&job}, {scene}, settings, cache, renderers,
+                                [&](const RenderSettings& s, auto&& keep) {
+                                  RendererRun alone = render_with(job.renderer, scene, s);
+                                  keep(0);
+                                  return alone;
+                                });
+    }
   } catch (const RenderCancelled&) {
     throw TaskCancelled{};
   }
@@ -237,6 +325,9 @@ Image render_into_cache(const Job& job, const RenderCache& cache, double timeout
         fmt::format("{:.3f}", run.stats.mesh_reused ? 0.0 : run.stats.build_seconds));
     attributes.emplace_back("penumbra:mesh_triangles", std::to_string(run.stats.triangles));
   }
+  // A truth that extended the sums of fewer samples: how many it took.
+  if (!external && run.stats.resumed_spp > 0)
+    attributes.emplace_back("penumbra:resumed_spp", std::to_string(run.stats.resumed_spp));
   cache.store(job.key, run.image, attributes);
   if (!external) fs::remove(settings.log_path, ignored);  // only a process writes a log
   return std::move(run.image);

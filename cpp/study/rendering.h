@@ -33,6 +33,12 @@ std::vector<RendererKind> study_renderers(const Study& study);
 Renderers probe_renderers(const std::vector<RendererKind>& kinds, double timeout_s,
                           const std::string& probe_cache = "");
 
+// What a job's shared pass is keyed by: an evaluator bump render's scene
+// without its terminator ("methods:", its variant's methods), an evaluator
+// displacement truth's without its light, material and terminator
+// ("lightings:", the truths on one mesh); empty for any other render.
+std::string shared_pass_key(const Job& job);
+
 // Evaluator bump renders of one variant that differ only in their method
 // share their samples, and so do the displacement truths (and their
 // convergence checks) of variants that differ only in their light,
@@ -53,7 +59,10 @@ class MethodBatches {
   // The run of `job` when it is in a batch (its share of the pass's wall
   // time in `seconds`); nullopt when it renders alone. Throws what the pass
   // threw, and RendererError when its image has NaN or Inf values.
-  std::optional<RendererRun> take(const Job& job, const RenderSettings& settings);
+  // A truths' pass extends and keeps its truths' sums in `cache` as a truth
+  // rendered alone does (render_into_cache).
+  std::optional<RendererRun> take(const Job& job, const RenderSettings& settings,
+                                  const RenderCache& cache, const Renderers& renderers);
 
   // Passes over the methods of one variant, and the renders they hold.
   std::size_t batches() const { return method_batches_; }
@@ -64,7 +73,8 @@ class MethodBatches {
 
  private:
   struct Batch;
-  MethodsRun render_batch(const Batch& batch, const RenderSettings& settings) const;
+  MethodsRun render_batch(const Batch& batch, const RenderSettings& settings,
+                          const RenderCache& cache, const Renderers& renderers) const;
   std::size_t method_batches_ = 0, method_members_ = 0, truth_batches_ = 0, truth_members_ = 0;
   const std::vector<Job>& jobs_;
   std::map<std::string, std::pair<std::size_t, std::size_t>> member_;  // key -> batch, slot
@@ -72,7 +82,10 @@ class MethodBatches {
 };
 
 // Renders `job` with `threads` threads and writes it into the cache; returns
-// the image. Throws RendererError (or ExportError), TaskCancelled when
+// the image. An evaluator displacement truth extends the cached sums of its
+// scene at a quarter (or 4^-k) of its samples where the cache holds them,
+// with the bits of a render from scratch, and keeps its own sums there
+// (RenderCache::store_sums, issue 45). Throws RendererError (or ExportError), TaskCancelled when
 // interrupted. With `batches`, a job in a batch takes its image from the
 // batch's shared pass. `core_seconds`, when given, receives the render's cost
 // as its cache entry records it: wall seconds times threads (a batch

@@ -13,6 +13,7 @@
 
 #include <fmt/format.h>
 
+#include "evaluator/displaced_mesh.h"
 #include "image/image_io.h"
 #include "scene/scene_json.h"
 #include "study/cache.h"
@@ -92,16 +93,12 @@ std::vector<std::size_t> use_cache(const std::vector<Job>& jobs, const RenderCac
 struct Order {
   std::vector<std::size_t> todo, group_starts;
 };
-// render_group_key, and for an evaluator bump render its variant's scene
-// without the terminator (the methods that MethodBatches renders together).
+// render_group_key, and for an evaluator bump render its shared pass's
+// (the methods that MethodBatches renders together).
 std::string local_group_key(const Job& job) {
   std::string key = render_group_key(job);
-  if (!key.empty() || job.renderer != RendererKind::kEvaluator ||
-      job.representation != Representation::kBump)
-    return key;
-  nlohmann::json scene = job.scene_json();
-  scene.erase("terminator");
-  return "evaluator-bump:" + scene.dump();
+  if (!key.empty() || job.representation != Representation::kBump) return key;
+  return shared_pass_key(job);
 }
 Order group_by_mesh(const std::vector<Job>& jobs, const std::vector<std::size_t>& todo) {
   std::vector<std::string> keys(todo.size());
@@ -172,7 +169,7 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
 
 // The study folder's subfolders, cleared of what killed runs left.
 void prepare_folders(const fs::path& out, const StudyOptions& options, StudyRunStats& stats) {
-  for (const char* sub : {"cache", "images", "images/flip"}) {
+  for (const char* sub : {"cache", "cache/sums", "images", "images/flip"}) {
     std::error_code ec;
     fs::create_directories(out / sub, ec);
     if (ec)
@@ -503,8 +500,31 @@ StudyRunStats run_prepared(const Study& study, Plan& plan, Renderers& renderers,
 
 }  // namespace
 
+namespace {
+
+// The process's mesh cache for a run: a quarter of its memory budget, in
+// the meshes' measured bytes per triangle (never below the default), so that
+// the displaced meshes of one round of convergence checks are still there
+// when the next round (in the reverse order, converge_truths) asks for them.
+class MeshCacheForRun {
+ public:
+  explicit MeshCacheForRun(double max_memory_bytes) : before_(mesh_cache_triangles()) {
+    const double triangles = max_memory_bytes / 4.0 / kMeshBytesPerTriangle;
+    set_mesh_cache_triangles(std::max(kMeshCacheTriangles, static_cast<std::size_t>(triangles)));
+  }
+  ~MeshCacheForRun() { set_mesh_cache_triangles(before_); }
+  MeshCacheForRun(const MeshCacheForRun&) = delete;
+  MeshCacheForRun& operator=(const MeshCacheForRun&) = delete;
+
+ private:
+  std::size_t before_;
+};
+
+}  // namespace
+
 StudyRunStats run_study(const Study& study, const StudyOptions& options) {
   const auto start = std::chrono::steady_clock::now();
+  const MeshCacheForRun mesh_cache(options.max_memory_bytes);
   const fs::path out(options.output_dir);
   const std::unique_ptr<Executor> executor = make_executor(options);
   Renderers renderers = probe_renderers(study_renderers(study), options.timeout_s,

@@ -258,6 +258,91 @@ TEST(Render, TruthsOfSeveralLightsRenderedTogetherHaveTheBitsOfTheirOwnRenders) 
   EXPECT_THROW(render_lightings({}), std::invalid_argument);
 }
 
+// A truth at 4^k times the samples that extends the sums of fewer
+// (RenderOptions::resume) has the bits of the same truth rendered from
+// scratch: alone and in a lightings pass, through Embree packets and one
+// ray at a time, under a distant light and a sphere light (whose samples
+// nest too), one level up (16 -> 64) and two (16 -> 256). It draws only
+// the samples it adds.
+TEST(Render, ATruthExtendedFromFewerSamplesHasTheBitsOfOneRenderedFromScratch) {
+  const std::vector<std::vector<std::string>> lightings{
+      {}, {"/light={\"type\":\"sphere\",\"position\":[-3,0,-1],\"radius\":0.5,\"power\":100}"}};
+  const auto scene_at = [](int spp, const std::vector<std::string>& lighting) {
+    std::vector<std::string> with{"/representation=\"displacement\"",
+                                  "/displacement/edge_length=0.03",
+                                  "/camera/width=12",
+                                  "/camera/height=12",
+                                  "/camera/jitter=true",
+                                  "/camera/spp=" + std::to_string(spp)};
+    with.insert(with.end(), lighting.begin(), lighting.end());
+    return scene_with("sphere-weave.json", with);
+  };
+  const auto same_bits = [](const Image& a, const Image& b) {
+    return a.pixels.size() == b.pixels.size() &&
+           std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0;
+  };
+  for (const bool packets : {true, false}) {
+    RenderOptions options;
+    options.packets = packets;
+    const std::string path = packets ? "packets" : "one ray at a time";
+    for (std::size_t l = 0; l < lightings.size(); ++l) {
+      std::vector<SampleSums> s16, s64, s64_scratch;
+      RenderOptions keep16 = options;
+      keep16.sums = &s16;
+      render(scene_at(16, lightings[l]), keep16);
+      RenderOptions extend = options;
+      extend.resume = &s16;
+      extend.sums = &s64;
+      RenderStats stats;
+      const Image extended = render(scene_at(64, lightings[l]), extend, &stats);
+      EXPECT_EQ(stats.camera_samples, 12u * 12u * 48u) << "only the samples it adds";
+      EXPECT_EQ(stats.resumed_spp, 16);
+      RenderOptions keep64 = options;
+      keep64.sums = &s64_scratch;
+      EXPECT_TRUE(same_bits(extended, render(scene_at(64, lightings[l]), keep64)))
+          << path << ", lighting " << l;
+      ASSERT_EQ(s64.size(), 1u);
+      EXPECT_EQ(s64[0].values, s64_scratch[0].values) << "the sums a later check extends";
+      const Image scratch256 = render(scene_at(256, lightings[l]), options);
+      RenderOptions from16 = options, from64 = options;
+      from16.resume = &s16;
+      from64.resume = &s64;
+      EXPECT_TRUE(same_bits(render(scene_at(256, lightings[l]), from16), scratch256)) << path;
+      EXPECT_TRUE(same_bits(render(scene_at(256, lightings[l]), from64), scratch256)) << path;
+      // Not the 16-sample image: the samples added do count.
+      EXPECT_FALSE(same_bits(scratch256, render(scene_at(16, lightings[l]), options)));
+    }
+    // A lightings pass extends each truth's own sums.
+    std::vector<Scene> at16, at64;
+    for (const auto& lighting : lightings) {
+      at16.push_back(scene_at(16, lighting));
+      at64.push_back(scene_at(64, lighting));
+    }
+    std::vector<SampleSums> pass16;
+    RenderOptions keep = options;
+    keep.sums = &pass16;
+    render_lightings(at16, keep);
+    RenderOptions extend = options;
+    extend.resume = &pass16;
+    const std::vector<Image> extended = render_lightings(at64, extend);
+    for (std::size_t l = 0; l < at64.size(); ++l)
+      EXPECT_TRUE(same_bits(extended[l], render(at64[l], options))) << path << ", pass " << l;
+  }
+  // Sums the pattern does not nest (16 samples are a plain grid, not 4's
+  // extended) or of another scene size are refused; so is a bump render.
+  std::vector<SampleSums> s4;
+  RenderOptions keep4;
+  keep4.sums = &s4;
+  render(scene_at(4, {}), keep4);
+  RenderOptions wrong;
+  wrong.resume = &s4;
+  EXPECT_THROW(render(scene_at(64, {}), wrong), std::invalid_argument);
+  s4[0].width = 6;
+  EXPECT_THROW(render(scene_at(4, {}), wrong), std::invalid_argument);
+  Scene bump = scene_with("sphere-weave.json", {"/camera/width=8", "/camera/height=8"});
+  EXPECT_THROW(render(bump, keep4), std::invalid_argument);
+}
+
 // ospray renders: on a closed sphere every light below Ng is already behind
 // the sphere, so its side test changes no radiance; on a plane lit from just
 // below its horizon, raw bump lets the bump normals catch the light and

@@ -253,22 +253,28 @@ TEST_F(Study, TruthsOfOneGeometryShareAPassWithTheBitsOfSeparateRenders) {
   j["methods"] = {"none"};
   j["axes"] = {{{"pointer", "/height/amplitude"}, {"values", {0.02}}},
                {{"pointer", "/light/direction"}, {"values", {{-1, 0, -0.2}, {-1, 0, 0.4}}}}};
+  // 16 jittered samples: the sample check's 64 extend the truth's sums.
+  j["set"]["/camera/spp"] = 16;
+  j["set"]["/camera/jitter"] = true;
   const ::penumbra::Study study = load_study(write("tiny.json", j));
   const StudyRunStats stats = run_study(study, test_study_options(path("out")));
   ASSERT_TRUE(stats.complete());
   // The first round's truth, edge and sample checks: each a pass of both lights.
   EXPECT_GE(stats.truth_batches, 3u);
   EXPECT_EQ(stats.batched_truths, 2 * stats.truth_batches);
-  int checked = 0;
+  int checked = 0, extended = 0;
   for (const auto& entry : fs::directory_iterator(path("out/cache"))) {
     if (entry.path().extension() != ".exr") continue;
     const std::string exr = entry.path().string();
     const auto attributes = read_image_attributes(exr);
     if (attributes.at("penumbra:representation") != "displacement") continue;
-    expect_its_own_render(exr, attributes);
+    expect_its_own_render(exr, attributes);  // extended or not, the bits of a render from scratch
     ++checked;
+    extended +=
+        attributes.count("penumbra:resumed_spp") && attributes.at("penumbra:resumed_spp") == "16";
   }
   EXPECT_GE(checked, 6);
+  EXPECT_EQ(extended, 2) << "each light's sample check extends its truth's 16 samples";
 
   // Interrupted after the first render, inside a shared pass: the pass's
   // other truth is not cached, and the resumed run renders it once, and
