@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <memory>
@@ -168,8 +169,11 @@ Renders render_jobs(const std::string& study_file, const std::vector<Job>& jobs,
 }
 
 // The study folder's subfolders, cleared of what killed runs left.
+// The folders a run makes in its output folder, each after its parent.
+constexpr const char* kRunFolders[] = {"cache", "cache/sums", "images", "images/flip"};
+
 void prepare_folders(const fs::path& out, const StudyOptions& options, StudyRunStats& stats) {
-  for (const char* sub : {"cache", "cache/sums", "images", "images/flip"}) {
+  for (const char* sub : kRunFolders) {
     std::error_code ec;
     fs::create_directories(out / sub, ec);
     if (ec)
@@ -187,8 +191,8 @@ void prepare_folders(const fs::path& out, const StudyOptions& options, StudyRunS
 // found bad late) leaves no empty folders behind, nor one it created.
 void remove_empty_folders(const fs::path& out, bool out_existed) {
   std::error_code ec;
-  for (const char* sub : {"cache", "images/flip", "images"})
-    if (fs::is_empty(out / sub, ec) && !ec) fs::remove(out / sub, ec);
+  for (auto sub = std::rbegin(kRunFolders); sub != std::rend(kRunFolders); ++sub)
+    if (fs::is_empty(out / *sub, ec) && !ec) fs::remove(out / *sub, ec);
   // The lock file of a folder this run made (its lock is released by now).
   if (!out_existed) fs::remove(out / kFolderLockName, ec);
   if (!out_existed && fs::is_empty(out, ec) && !ec) fs::remove(out, ec);
