@@ -1,5 +1,8 @@
 #include "core/sample_pattern.h"
 
+#include <array>
+#include <cstddef>
+
 #include "core/light_sampling.h"
 #include "core/random.h"
 
@@ -24,6 +27,26 @@ bool nests(int fewer, int spp) {
 
 namespace {
 
+// strata() and nests_quarter() of a count, remembered per thread: a render
+// asks for the same few counts (spp, spp/4, ...) at every sample, and
+// computing them again cost a third of a 1024-sample truth's time.
+struct Level {
+  int spp = 0, nx = 1, ny = 1;
+  bool nests = false;
+};
+
+Level level_of(int spp) {
+  thread_local std::array<Level, 8> known{};
+  thread_local std::size_t next = 0;
+  for (const Level& l : known)
+    if (l.spp == spp) return l;
+  Level& l = known[next++ % known.size()];
+  l.spp = spp;
+  strata(spp, &l.nx, &l.ny);
+  l.nests = nests_quarter(spp);
+  return l;
+}
+
 StratumPoint jittered(int stratum_x, int stratum_y, int s, const PatternKeys& keys) {
   const auto n = 2 * static_cast<std::uint64_t>(s);
   return {stratum_x, stratum_y, splitmix_double(keys.key, n), splitmix_double(keys.key, n + 1)};
@@ -39,9 +62,9 @@ StratumPoint finer(const StratumPoint& p) {
 }  // namespace
 
 StratumPoint stratum_point(int s, int spp, const PatternKeys& keys) {
-  int nx, ny;
-  strata(spp, &nx, &ny);
-  if (!keys.nested || !nests_quarter(spp)) {
+  const Level level = level_of(spp);
+  const int nx = level.nx;
+  if (!keys.nested || !level.nests) {
     const int stratum =
         keys.shuffle
             ? static_cast<int>(permute_index(std::uint32_t(s), std::uint32_t(spp), keys.seed))
