@@ -32,6 +32,9 @@ CONTOUR_METHODS = ('chiang2019', 'estevez2019', 'fitted')
 # A method that sees more than the floor's inputs (light, deviation): its
 # share is not bounded by 1 (docs/achievable.md, "Each method's share").
 MORE_INPUTS = {'chiang2019': '⟨Ns,ωi⟩'}
+# fit.json's inputs (core/factor_table.h's names) in words.
+INPUT_WORDS = {'light': 'light angle', 'deviation': 'deviation',
+               'shading': 'shading angle', 'view': 'view angle'}
 
 
 class Checker:
@@ -129,6 +132,12 @@ def load_fit(path):
                else c.paired(doc, '', 'held_out_minus_best')),
            'constants': [constant_of(c, e, p)
                          for e, p in c.array(doc, '', 'constants')],
+           # absent before fit.json's contents 5: light,deviation, none nested
+           'inputs': (c.get(doc, '', 'inputs', str, 'a string')
+                      if 'inputs' in doc else 'light,deviation'),
+           'nested': [nested_of(c, e, p)
+                      for e, p in (c.array(doc, '', 'nested_floors')
+                                   if 'nested_floors' in doc else [])],
            'pictures': None}
     # null: a grid other than light,deviation (no contour to draw)
     if doc.get('pictures') is not None:
@@ -141,6 +150,23 @@ def floor_of(c, e, p):
             'variants': c.get(e, p, 'variants', int, 'an integer'),
             'floor': c.interval(e, p, 'floor'),
             'none': c.interval(e, p, 'none')}
+
+
+def nested_of(c, e, p):
+    """A floor of fewer inputs on the fit's own grid, and the fit's floor
+    minus it, paired."""
+    f = floor_of(c, e, p)
+    f['inputs'] = c.get(e, p, 'inputs', str, 'a string')
+    f['gain'] = c.paired(e, p, 'gain')
+    return f
+
+
+def inputs_text(inputs):
+    """'light,deviation,shading' as words: 'light angle, deviation and
+    shading angle'."""
+    words = [INPUT_WORDS.get(i, i) for i in inputs.split(',')]
+    return ', '.join(words[:-1]) + ' and ' + words[-1] if len(words) > 1 \
+        else words[0]
 
 
 def method_of(c, e, p):
@@ -235,21 +261,29 @@ def share_groups(methods):
              'lo': m['share'][1], 'hi': m['share'][2]} for m in rows]
 
 
+def more_inputs(fit):
+    """The methods that see an input the fit's grid lacks, with it."""
+    inputs = fit['inputs'].split(',')
+    return {m: w for m, w in MORE_INPUTS.items() if 'shading' not in inputs}
+
+
 def share_caption(fit):
-    more = ', '.join(f'{m} (also sees {w})' for m, w in MORE_INPUTS.items())
+    more = ', '.join(f'{m} (also sees {w})'
+                     for m, w in more_inputs(fit).items())
     return (f'Each method\'s share of the achievable improvement, '
             f'(E_none − E_method) / (E_none − E_floor) (fraction; 0: raw '
             f'bump, dashed; 1: the study floor, the lowest pooled '
-            f'terminator-profile RMSE of any factor G(light angle, '
-            f'deviation) on the grid, dotted), over {fit["variants"]} '
+            f'terminator-profile RMSE of any factor G of the '
+            f'{inputs_text(fit["inputs"])} on the grid, dotted), over '
+            f'{fit["variants"]} '
             'variants; bars: 95 % percentile bootstrap over variants. '
             'Bands: tie groups, in order: the highest share not yet '
             'grouped leads the next group, which holds every lower one '
             'whose share minus the leader\'s, paired over the same '
-            'resamples, has a 95 % interval holding 0. † not bounded by 1: '
-            + more +
-            '; methods that are not factors of these inputs (microfacet, '
-            'adjustment) are not bounded either.')
+            'resamples, has a 95 % interval holding 0. '
+            + (f'† not bounded by 1: {more}; methods' if more else 'Methods')
+            + ' that are not factors of these inputs (microfacet, '
+            'adjustment) are not bounded by 1.')
 
 
 def share_fig(fit, style):
@@ -276,7 +310,7 @@ def share_fig(fit, style):
     styles = series_styles(m['method'] for m in fit['methods'])
     interval_points(ax, placed, styles, lim)
     ax.set_yticks([p['y'] for p in placed],
-                  [p['method'] + (' †' if p['method'] in MORE_INPUTS else '')
+                  [p['method'] + (' †' if p['method'] in more_inputs(fit) else '')
                    for p in placed])
     ax.set_ylim(placed[-1]['y'] + 0.7, -0.7)
     ax.set_xlabel('share of the achievable improvement on raw bump\n'

@@ -10,7 +10,7 @@ fitted with it, appears only beside it and labelled in-sample.
 """
 import math
 
-from penumbra_achievable import MORE_INPUTS, share_caption
+from penumbra_achievable import inputs_text, more_inputs, share_caption
 from penumbra_context import ci_cell, figure_file, table
 from penumbra_data import fmt
 
@@ -206,6 +206,30 @@ def constants_context(fit):
             'table': table(head, rows) if rows else None}
 
 
+def sees_more(fit, method):
+    """Whether a method sees an input the floor's grid does not, so that
+    the floor does not bound it."""
+    return method in more_inputs(fit)
+
+
+def nested_sentences(fit):
+    """Per floor of fewer inputs on the same grid: what the fit's added
+    inputs lower the floor by, paired, and that this is in-sample."""
+    out = []
+    for n in fit['nested']:
+        d = n['gain']['difference']
+        gain = [-d[0], -d[2], -d[1]]
+        out.append(
+            f'On the same grid, a factor of the {inputs_text(n["inputs"])} '
+            f'alone reaches E* = {pct(n["floor"])} {PCT}; the added inputs '
+            f'lower the floor by {pct(gain)} percentage points (paired over '
+            'the same resamples' + ('; a tie' if n['gain']['tie'] else '') +
+            '). Both floors are in-sample, and a grid with more inputs has '
+            'more cells to fit: the held-out table below is the test of '
+            'whether the inputs help on scenes the fit never saw.')
+    return out
+
+
 def achievable_context(fit, figs, fit_file):
     """The section's context; fit None: the line saying how to get it."""
     if fit is None:
@@ -220,10 +244,13 @@ def achievable_context(fit, figs, fit_file):
     shares = table(
         ['method', f'E ({PCT})', 'share of the achievable improvement '
          '(fraction)'],
-        [[m['method'] + (' †' if m['method'] in MORE_INPUTS else ''),
+        [[m['method'] + (' †' if sees_more(fit, m['method']) else ''),
           pct_cell(m['error']), frac_cell(m['share'])]
          for m in fit['methods']])
     return {'absent': None, 'file': fit_file, 'unit': fit['unit'],
+            'inputs': inputs_text(fit['inputs']),
+            'nested': nested_sentences(fit),
+            'dagger': any(sees_more(fit, m['method']) for m in fit['methods']),
             'floor': pct(f['floor']), 'none': pct(f['none']),
             'variants': f['variants'], 'pct': PCT,
             'unconverged': fit['unconverged_truths'],

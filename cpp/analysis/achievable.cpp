@@ -1,12 +1,14 @@
 #include "analysis/achievable.h"
 
 #include <Eigen/Dense>
+#include <Eigen/Sparse>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
 #include <stdexcept>
+#include <type_traits>
 
 namespace penumbra {
 
@@ -28,14 +30,14 @@ std::vector<std::size_t> terminator_bins(const TallyVariant& v) {
 }
 
 // The normal equations of the mean squared error over variants, in the
-// cells `index` maps to variables (-1: fixed at 1), and the prior.
-struct Quadratic {
-  Eigen::MatrixXd h;  // objective = g' h g - 2 f' g + c
+// cells `index` maps to variables (-1: fixed at 1), and the prior: objective
+// = g' h g - 2 f' g + c, h's terms listed in the order they are added.
+struct Terms {
+  std::vector<Eigen::Triplet<double>> h;
   Eigen::VectorXd f;
 };
 
-void add_variant(const TallyVariant& v, const std::vector<int>& index, double weight,
-                 Quadratic& q) {
+void add_variant(const TallyVariant& v, const std::vector<int>& index, double weight, Terms& q) {
   const std::vector<std::size_t> bins = terminator_bins(v);
   if (bins.empty()) return;
   const double w = weight / double(bins.size());
@@ -51,7 +53,7 @@ void add_variant(const TallyVariant& v, const std::vector<int>& index, double we
     }
     for (const auto& [i, ai] : a) {
       q.f[i] += w * ai * y;
-      for (const auto& [j, aj] : a) q.h(i, j) += w * ai * aj;
+      for (const auto& [j, aj] : a) q.h.emplace_back(i, j, w * ai * aj);
     }
   }
 }
@@ -59,7 +61,7 @@ void add_variant(const TallyVariant& v, const std::vector<int>& index, double we
 // Squared second differences along each axis and (G - 1)^2, each a mean
 // over its terms.
 void add_prior(const FactorGrid& grid, const std::vector<int>& index,
-               const std::vector<char>& constrained, const FloorOptions& o, Quadratic& q) {
+               const std::vector<char>& constrained, const FloorOptions& o, Terms& q) {
   const int cells = grid.cells();
   std::vector<std::array<int, 3>> terms;
   int stride = 1;
@@ -78,16 +80,40 @@ void add_prior(const FactorGrid& grid, const std::vector<int>& index,
   const double coefficient[3] = {1.0, -2.0, 1.0};
   for (const auto& t : terms)
     for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) q.h(t[a], t[b]) += w * coefficient[a] * coefficient[b];
+      for (int b = 0; b < 3; ++b) q.h.emplace_back(t[a], t[b], w * coefficient[a] * coefficient[b]);
   // The ridge ties only the cells no variant lights (their G is otherwise
   // any linear continuation of their neighbours); lit cells stay unbiased.
   const double r = o.ridge / double(std::max<Eigen::Index>(1, q.f.size()));
   for (std::size_t c = 0; c < index.size(); ++c)
-    if (index[c] >= 0 && !constrained[c]) q.h(index[c], index[c]) += r, q.f[index[c]] += r;
+    if (index[c] >= 0 && !constrained[c])
+      q.h.emplace_back(index[c], index[c], r), q.f[index[c]] += r;
+}
+
+// The quadratic with h dense or sparse (Matrix: Eigen::MatrixXd or
+// Eigen::SparseMatrix<double>).
+template <typename Matrix>
+struct Quadratic {
+  Matrix h;
+  Eigen::VectorXd f;
+};
+
+Quadratic<Eigen::MatrixXd> dense(const Terms& t) {
+  const Eigen::Index n = t.f.size();
+  Quadratic<Eigen::MatrixXd> q{Eigen::MatrixXd::Zero(n, n), t.f};
+  for (const Eigen::Triplet<double>& e : t.h) q.h(e.row(), e.col()) += e.value();
+  return q;
+}
+
+Quadratic<Eigen::SparseMatrix<double>> sparse(const Terms& t) {
+  const Eigen::Index n = t.f.size();
+  Quadratic<Eigen::SparseMatrix<double>> q{Eigen::SparseMatrix<double>(n, n), t.f};
+  q.h.setFromTriplets(t.h.begin(), t.h.end());
+  return q;
 }
 
 // The largest violation of the bounded problem's optimality conditions.
-double kkt_residual(const Quadratic& q, const Eigen::VectorXd& x, const FloorOptions& o) {
+template <typename Matrix>
+double kkt_residual(const Quadratic<Matrix>& q, const Eigen::VectorXd& x, const FloorOptions& o) {
   const Eigen::VectorXd grad = 2.0 * (q.h * x - q.f);
   double worst = 0.0;
   for (Eigen::Index i = 0; i < x.size(); ++i) {
@@ -104,7 +130,9 @@ Eigen::VectorXd clamp(Eigen::VectorXd x, const FloorOptions& o) {
 }
 
 // Accelerated projected gradient (FISTA) from G = 1: finds the active set.
-Eigen::VectorXd projected_gradient(const Quadratic& q, const FloorOptions& o, int* iterations) {
+template <typename Matrix>
+Eigen::VectorXd projected_gradient(const Quadratic<Matrix>& q, const FloorOptions& o,
+                                   int* iterations) {
   const Eigen::Index n = q.f.size();
   // A fixed start (not Eigen's Random, which draws from std::rand).
   Eigen::VectorXd v(n);
@@ -117,7 +145,7 @@ Eigen::VectorXd projected_gradient(const Quadratic& q, const FloorOptions& o, in
   }
   const double step = 1.0 / (2.0 * lipschitz * 1.01 + 1e-300);
   Eigen::VectorXd x = clamp(Eigen::VectorXd::Ones(n), o), y = x;
-  const double scale = std::max(2.0 * q.f.lpNorm<Eigen::Infinity>(), 1e-300);
+  const double scale = std::max(2.0 * q.f.template lpNorm<Eigen::Infinity>(), 1e-300);
   double t = 1.0;
   for (*iterations = 0; *iterations < o.max_iterations; ++*iterations) {
     const Eigen::VectorXd next = clamp(y - step * 2.0 * (q.h * y - q.f), o);
@@ -132,12 +160,62 @@ Eigen::VectorXd projected_gradient(const Quadratic& q, const FloorOptions& o, in
   return x;
 }
 
+// The free cells' normal equations solved, the others held at x. Dense:
+// Eigen's LDLT, whose pivoting also solves the semidefinite systems of a
+// floor without a prior (fewer lit bins than cells). Sparse: a simplicial
+// LDLT, for the prior's definite systems.
+Eigen::VectorXd solve_free(const Quadratic<Eigen::MatrixXd>& q, const Eigen::VectorXd& x,
+                           const std::vector<Eigen::Index>& free) {
+  const Eigen::Index m = static_cast<Eigen::Index>(free.size());
+  Eigen::MatrixXd hff(m, m);
+  Eigen::VectorXd rhs(m);
+  for (Eigen::Index a = 0; a < m; ++a) {
+    rhs[a] = q.f[free[a]] - q.h.row(free[a]).dot(x) + q.h.row(free[a])(free).dot(x(free));
+    for (Eigen::Index b = 0; b < m; ++b) hff(a, b) = q.h(free[a], free[b]);
+  }
+  return hff.ldlt().solve(rhs);
+}
+
+Eigen::VectorXd solve_free(const Quadratic<Eigen::SparseMatrix<double>>& q,
+                           const Eigen::VectorXd& x, const std::vector<Eigen::Index>& free) {
+  const Eigen::Index m = static_cast<Eigen::Index>(free.size());
+  std::vector<Eigen::Index> position(static_cast<std::size_t>(x.size()), -1);
+  Eigen::VectorXd held = x;
+  for (Eigen::Index a = 0; a < m; ++a) position[std::size_t(free[a])] = a, held[free[a]] = 0.0;
+  std::vector<Eigen::Triplet<double>> terms;
+  for (Eigen::Index col = 0; col < q.h.outerSize(); ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(q.h, col); it; ++it)
+      if (position[std::size_t(it.row())] >= 0 && position[std::size_t(it.col())] >= 0)
+        terms.emplace_back(position[std::size_t(it.row())], position[std::size_t(it.col())],
+                           it.value());
+  Eigen::SparseMatrix<double> hff(m, m);
+  hff.setFromTriplets(terms.begin(), terms.end());
+  const Eigen::VectorXd pushed = q.h * held;
+  Eigen::VectorXd rhs(m);
+  for (Eigen::Index a = 0; a < m; ++a) rhs[a] = q.f[free[a]] - pushed[free[a]];
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(hff);
+  if (ldlt.info() != Eigen::Success) return x(free);  // not definite: leave x as it is
+  return ldlt.solve(rhs);
+}
+
+constexpr int kSparseActiveSetRounds = 8;
+
+double objective(const auto& q, const Eigen::VectorXd& g) {
+  return g.dot(q.h * g) - 2.0 * q.f.dot(g);
+}
+
 // Cells strictly inside the bounds solve their normal equations exactly,
 // the others held at their bound; repeated while a solve leaves the bounds
-// or a held cell's gradient points inside.
-Eigen::VectorXd active_set(const Quadratic& q, Eigen::VectorXd x, const FloorOptions& o) {
+// or a held cell's gradient points inside, at most `rounds` times. Clamping
+// a whole solve can cycle between active sets: with `keep_lowest`, the
+// round of the lowest objective is returned rather than the last.
+template <typename Matrix>
+Eigen::VectorXd active_set(const Quadratic<Matrix>& q, Eigen::VectorXd x, const FloorOptions& o,
+                           int rounds, bool keep_lowest) {
   const Eigen::Index n = x.size();
-  for (int round = 0; round < 100; ++round) {
+  Eigen::VectorXd lowest = x;
+  double lowest_value = objective(q, x);
+  for (int round = 0; round < rounds; ++round) {
     const Eigen::VectorXd grad = 2.0 * (q.h * x - q.f);
     std::vector<Eigen::Index> free;
     for (Eigen::Index i = 0; i < n; ++i) {
@@ -145,20 +223,37 @@ Eigen::VectorXd active_set(const Quadratic& q, Eigen::VectorXd x, const FloorOpt
       const bool high = x[i] >= o.g_max && grad[i] <= 0.0;
       if (!low && !high) free.push_back(i);
     }
-    if (free.empty()) return x;
-    const Eigen::Index m = static_cast<Eigen::Index>(free.size());
-    Eigen::MatrixXd hff(m, m);
-    Eigen::VectorXd rhs(m);
-    for (Eigen::Index a = 0; a < m; ++a) {
-      rhs[a] = q.f[free[a]] - q.h.row(free[a]).dot(x) + q.h.row(free[a])(free).dot(x(free));
-      for (Eigen::Index b = 0; b < m; ++b) hff(a, b) = q.h(free[a], free[b]);
-    }
-    const Eigen::VectorXd solved = hff.ldlt().solve(rhs);
+    if (free.empty()) break;
+    const Eigen::VectorXd solved = solve_free(q, x, free);
     const Eigen::VectorXd before = x;
-    for (Eigen::Index a = 0; a < m; ++a) x[free[a]] = solved[a];
+    for (std::size_t a = 0; a < free.size(); ++a) x[free[a]] = solved[Eigen::Index(a)];
     x = clamp(x, o);
-    if ((x - before).lpNorm<Eigen::Infinity>() < 1e-15) return x;
+    if (const double v = objective(q, x); keep_lowest && v <= lowest_value)
+      lowest = x, lowest_value = v;
+    if ((x - before).lpNorm<Eigen::Infinity>() < 1e-15) break;
   }
+  return keep_lowest ? lowest : x;
+}
+
+bool sparse_solve(const FloorOptions& options, int variables) {
+  return options.smoothness > 0.0 && variables > options.dense_variables;
+}
+
+// The bounded minimum of q (FloorSolution's iterations, KKT residual).
+template <typename Matrix>
+Eigen::VectorXd minimise(const Quadratic<Matrix>& q, const FloorOptions& options,
+                         FloorSolution& s) {
+  Eigen::VectorXd x = projected_gradient(q, options, &s.iterations);
+  // The active-set solve is exact where the free cells' system is well
+  // posed and the active set settles; where it is singular (fewer lit
+  // profile bins than cells) it can land above its start, so the lower of
+  // the two is kept. A sparse solve has fewer rounds, each a factorisation
+  // of thousands of cells, and keeps its lowest.
+  const bool sparse = std::is_same_v<Matrix, Eigen::SparseMatrix<double>>;
+  const Eigen::VectorXd refined =
+      active_set(q, x, options, sparse ? kSparseActiveSetRounds : 100, sparse);
+  if (objective(q, refined) <= objective(q, x)) x = refined;
+  s.kkt_residual = kkt_residual(q, x, options);
   return x;
 }
 
@@ -195,6 +290,39 @@ ProfileTally profile_tally(const Image& image, const PixelTally& tally, double r
   return t;
 }
 
+ProfileTally marginal_tally(const ProfileTally& t, const FactorGrid& from, const FactorGrid& to) {
+  // Per axis of `from`: its stride in `to`, 0 where it is summed out.
+  std::vector<int> to_stride(from.axes.size(), 0);
+  for (std::size_t b = 0, stride = 1; b < to.axes.size(); ++b) {
+    const FactorAxis& axis = to.axes[b];
+    const auto same = [&axis](const FactorAxis& a) {
+      return a.input == axis.input && a.min_deg == axis.min_deg && a.max_deg == axis.max_deg &&
+             a.step_deg == axis.step_deg;
+    };
+    const auto it = std::find_if(from.axes.begin(), from.axes.end(), same);
+    if (it == from.axes.end())
+      throw std::invalid_argument("marginal_tally: an axis of the target grid is not the source's");
+    to_stride[std::size_t(it - from.axes.begin())] = int(stride);
+    stride *= std::size_t(axis.cells());
+  }
+  const auto target = [&](int cell) {
+    int index = 0;
+    for (std::size_t a = 0; a < from.axes.size(); ++a) {
+      const int n = from.axes[a].cells();
+      index += (cell % n) * to_stride[a];
+      cell /= n;
+    }
+    return index;
+  };
+  ProfileTally m = t;
+  for (auto& bin : m.scaled) {
+    std::map<int, double> summed;
+    for (const auto& [cell, light] : bin) summed[target(cell)] += light;
+    bin.assign(summed.begin(), summed.end());
+  }
+  return m;
+}
+
 Profile ProfileTally::profile(const std::vector<double>& g) const {
   Profile p;
   p.bin_degrees = bin_degrees;
@@ -227,17 +355,12 @@ FloorSolution solve_floor(const FactorGrid& grid, const std::vector<TallyVariant
   int n = 0;
   for (int c = 0; c < cells; ++c)
     if (options.smoothness > 0.0 || s.constrained[static_cast<std::size_t>(c)]) index[c] = n++;
-  Quadratic q{Eigen::MatrixXd::Zero(n, n), Eigen::VectorXd::Zero(n)};
-  for (const TallyVariant& v : variants) add_variant(v, index, 1.0 / double(variants.size()), q);
-  add_prior(grid, index, s.constrained, options, q);
-  Eigen::VectorXd x = projected_gradient(q, options, &s.iterations);
-  // The active-set solve is exact where the free cells' system is well
-  // posed; where it is singular (fewer lit profile bins than cells) it can
-  // land above its start, so the lower of the two is kept.
-  const Eigen::VectorXd refined = active_set(q, x, options);
-  const auto value = [&q](const Eigen::VectorXd& g) { return g.dot(q.h * g) - 2.0 * q.f.dot(g); };
-  if (value(refined) <= value(x)) x = refined;
-  s.kkt_residual = kkt_residual(q, x, options);
+  Terms terms{{}, Eigen::VectorXd::Zero(n)};
+  for (const TallyVariant& v : variants)
+    add_variant(v, index, 1.0 / double(variants.size()), terms);
+  add_prior(grid, index, s.constrained, options, terms);
+  const Eigen::VectorXd x = sparse_solve(options, n) ? minimise(sparse(terms), options, s)
+                                                     : minimise(dense(terms), options, s);
   s.g.assign(static_cast<std::size_t>(cells), 1.0);
   for (int c = 0; c < cells; ++c)
     if (index[c] >= 0) s.g[static_cast<std::size_t>(c)] = x[index[c]];

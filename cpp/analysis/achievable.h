@@ -44,6 +44,14 @@ struct ProfileTally {
 ProfileTally profile_tally(const Image& image, const PixelTally& tally, double radiance_scale,
                            const ProfileOptions& options = {});
 
+// `t`, tallied on `from`, as on `to`: a grid whose axes are some of
+// `from`'s, the others summed out. Every G of `to` is the G of `from` that
+// is constant along the summed axes, so the profile of a G of `to` through
+// this tally is that of its extension through `t`; a point outside `from`
+// on a summed axis stays raw bump, as it does in `t`. std::invalid_argument
+// where an axis of `to` is not one of `from`'s.
+ProfileTally marginal_tally(const ProfileTally& t, const FactorGrid& from, const FactorGrid& to);
+
 // One variant of a fit: its tally and its truth's profile.
 struct TallyVariant {
   std::string id;
@@ -64,6 +72,15 @@ struct FloorOptions {
   double smoothness = 0.0;
   double ridge = 1e-9;
   int max_iterations = 5000;
+  // Above this many variables a smoothed solve (smoothness > 0, every cell
+  // a variable) works on a sparse h: profile bins couple only cells of
+  // neighbouring light angles and the prior only neighbours, so a grid
+  // with a third input keeps h about 1 % full, where a dense factorisation
+  // of its thousands of cells takes a minute. Up to it, and for every solve
+  // without a prior (the lit cells alone, whose system can be
+  // semidefinite), h is dense. Both reach the same minimum within the
+  // solver's tolerance (tested).
+  int dense_variables = 1024;
 };
 
 struct FloorSolution {

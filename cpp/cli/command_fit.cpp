@@ -16,6 +16,7 @@ namespace {
 
 struct FitArgs {
   std::string folder, output;
+  std::string inputs = kFitInputSets[0];
   int resamples = 2000;
   std::vector<double> smoothness = FitOptions().smoothness;
   std::vector<std::string> emit;  // languages (factor_emit.h)
@@ -53,8 +54,16 @@ void print_summary(const FitResult& r, std::ostream& out) {
       "{} re-traced differ from the cache); terminator RMSE pooled over variants, % of "
       "albedo*E/pi, 95 % bootstrap intervals over variants\n",
       r.study, r.variants.size(), r.skipped, r.unconverged.size(), r.retraced_different);
-  out << fmt::format("  raw bump {}; floor of any light,deviation factor {}\n",
-                     pct(r.study_floor.none), pct(r.study_floor.floor));
+  out << fmt::format("  raw bump {}; floor of any {} factor {}\n", pct(r.study_floor.none),
+                     grid_inputs(r.grid), pct(r.study_floor.floor));
+  for (const NestedFloor& n : r.nested) {
+    const PairedError& d = n.gain;
+    out << fmt::format(
+        "    of a {} factor on the same grid {}; the added inputs lower it by {:.2f} [{:.2f}, "
+        "{:.2f}] percentage points, paired{}\n",
+        n.inputs, pct(n.floor.floor), -100 * d.difference.value, -100 * d.difference.interval.high,
+        -100 * d.difference.interval.low, d.tie ? ": a tie" : "");
+  }
   out << fmt::format("  fitted table, each scene family held out: {}\n", pct(r.held_out_pooled));
   if (!r.held_out.empty() && !r.best_method.empty()) {
     const PairedError& d = r.held_out_minus_best;
@@ -79,6 +88,7 @@ int fit_into(const FitArgs& a, const CommandContext& c) {
   options.folder = a.folder;
   options.resamples = a.resamples;
   options.smoothness = a.smoothness;
+  options.grid = fit_grid(a.inputs);
   options.jobs = c.parallelism.threads();
   const auto start = std::chrono::steady_clock::now();
   options.progress = [&c, start](const std::string& line) {
@@ -119,12 +129,27 @@ Command add_fit_command(CLI::App& app, SharedOptions&) {
   auto a = std::make_shared<FitArgs>();
   CLI::App* cmd = app.add_subcommand(
       "fit",
-      "what any terminator factor of the light and deviation angles could achieve on a finished "
-      "study, each method's share of it, and a table fitted without the family it is measured on");
+      "what any terminator factor of the light and deviation angles (or more, --inputs) could "
+      "achieve on a finished study, each method's share of it, and a table fitted without the "
+      "family it is measured on");
   cmd->add_option("folder", a->folder, "finished study output folder (report.json, cache/)");
   cmd->add_option("-o,--output", a->output,
                   "folder for fit.json, fit.csv and table.json (default: FOLDER/fit, where the "
                   "study's report finds it)");
+  cmd->add_option("--inputs", a->inputs,
+                  "the angles the factor may depend on, each set on its own grid "
+                  "(docs/achievable.md): light,deviation (Conty Estevez's and Deshmukh's), "
+                  "light,deviation,shading (Chiang's), light,deviation,shading,view")
+      ->check(CLI::Validator(
+          [](std::string& inputs) {
+            for (const std::string set : kFitInputSets)
+              if (inputs == set) return std::string();
+            return "expected light,deviation | light,deviation,shading | "
+                   "light,deviation,shading,view, got " +
+                   inputs;
+          },
+          "SET"))
+      ->capture_default_str();
   cmd->add_option("--emit", a->emit,
                   "also write the fitted table as a function a renderer can paste: "
                   "OUT/fitted.c, .glsl or .osl (repeatable)")

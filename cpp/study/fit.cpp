@@ -39,6 +39,30 @@ FactorGrid default_fit_grid() {
   return {{{FactorInput::kLight, 20.0, 120.0, 2.0}, {FactorInput::kDeviation, 0.0, 60.0, 4.0}}};
 }
 
+FactorGrid fit_grid(const std::string& inputs) {
+  if (inputs == kFitInputSets[0]) return default_fit_grid();
+  const FactorAxis deviation{FactorInput::kDeviation, 0.0, 60.0, 6.0},
+      shading{FactorInput::kShading, 0.0, 180.0, 12.0};
+  if (inputs == kFitInputSets[1])
+    return {{{FactorInput::kLight, 20.0, 120.0, 4.0}, deviation, shading}};
+  if (inputs == kFitInputSets[2])
+    return {{{FactorInput::kLight, 20.0, 120.0, 5.0},
+             {FactorInput::kDeviation, 0.0, 60.0, 10.0},
+             {FactorInput::kShading, 0.0, 180.0, 15.0},
+             {FactorInput::kView, 0.0, 90.0, 45.0}}};
+  throw std::invalid_argument(
+      "expected light,deviation, light,deviation,shading or "
+      "light,deviation,shading,view as the inputs, got " +
+      inputs);
+}
+
+std::string grid_inputs(const FactorGrid& grid) {
+  std::string out;
+  for (const FactorAxis& a : grid.axes)
+    out += (out.empty() ? "" : ",") + std::string(name_of<FactorInput>(kFactorInputNames, a.input));
+  return out;
+}
+
 namespace {
 
 constexpr double kConfidence = 0.95;
@@ -225,27 +249,65 @@ bool light_deviation_grid(const FactorGrid& grid) {
          grid.axes[1].input == FactorInput::kDeviation;
 }
 
-// A factor of the light and deviation angles as a table at the cells'
-// centres (the vectors are any with those angles to Ng).
+bool has_axis(const FactorGrid& grid, FactorInput input) {
+  return std::any_of(grid.axes.begin(), grid.axes.end(),
+                     [input](const FactorAxis& a) { return a.input == input; });
+}
+
+// The angle of `input` at a cell's centre, radians; `fallback` where the
+// grid has no such axis.
+double centre_angle(const FactorGrid& grid, const std::vector<double>& centre, FactorInput input,
+                    double fallback) {
+  for (std::size_t a = 0; a < grid.axes.size(); ++a)
+    if (grid.axes[a].input == input) return radians(centre[a]);
+  return fallback;
+}
+
+// A factor of Ng, Ns and wi as a table at the cells' centres (a grid with
+// light and deviation axes): vectors with the centre's angles between them.
+// Without a shading axis Ns leans towards the light; a centre whose
+// shading angle no vectors of its light and deviation angles have
+// (|light - deviation| > shading or shading > light + deviation) takes the
+// nearest that some do: only points beside it weigh it.
 template <typename Factor>
 std::vector<double> table_of(const FactorGrid& grid, Factor&& factor) {
   std::vector<double> g(std::size_t(grid.cells()));
   for (int c = 0; c < grid.cells(); ++c) {
     const std::vector<double> centre = grid.centre(c);
-    const double l = radians(centre[0]), d = radians(centre[1]);
-    const Vec3 ng{0, 0, 1}, ns{std::sin(d), 0, std::cos(d)}, wi{std::sin(l), 0, std::cos(l)};
+    const double l = centre_angle(grid, centre, FactorInput::kLight, 0.0),
+                 d = centre_angle(grid, centre, FactorInput::kDeviation, 0.0),
+                 s = centre_angle(grid, centre, FactorInput::kShading, 0.0);
+    // The azimuth of wi about Ng from Ns's plane that makes <Ns,wi> = cos s.
+    const double across = std::sin(d) * std::sin(l);
+    const double cos_phi =
+        has_axis(grid, FactorInput::kShading) && across > 1e-12
+            ? std::clamp((std::cos(s) - std::cos(d) * std::cos(l)) / across, -1.0, 1.0)
+            : 1.0;
+    const double sin_phi = std::sqrt(std::max(0.0, 1.0 - cos_phi * cos_phi));
+    const Vec3 ng{0, 0, 1}, ns{std::sin(d), 0, std::cos(d)},
+        wi{std::sin(l) * cos_phi, std::sin(l) * sin_phi, std::cos(l)};
     g[std::size_t(c)] = factor(ng, ns, wi);
   }
   return g;
 }
 
-// The shipped factors that are functions of light and deviation alone.
+// The shipped factors that are functions of the cosines between Ng, Ns and
+// wi alone, and the inputs they need.
 struct GridMethod {
   const char* id;
   double (*factor)(const Vec3& ng, const Vec3& ns, const Vec3& wi);
+  bool needs_shading;
 };
-constexpr GridMethod kGridMethods[] = {{"estevez2019", estevez2019},
-                                       {"deshmukh2020", deshmukh2020}};
+constexpr GridMethod kGridMethods[] = {{"estevez2019", estevez2019, false},
+                                       {"deshmukh2020", deshmukh2020, false},
+                                       {"chiang2019", chiang2019, true},
+                                       {"chiang2019-sine", chiang2019_sine, true}};
+
+// Whether a method's factor is a function of the grid's inputs.
+bool on_grid(const GridMethod& m, const FactorGrid& grid) {
+  return has_axis(grid, FactorInput::kLight) && has_axis(grid, FactorInput::kDeviation) &&
+         (!m.needs_shading || has_axis(grid, FactorInput::kShading));
+}
 
 }  // namespace
 
@@ -488,6 +550,33 @@ FloorFit floor_over(const FitResult& r, const std::string& scope,
   return f;
 }
 
+// The study floor of each shorter set of kFitInputSets on the grid's own
+// axes (NestedFloor).
+void fit_nested_floors(const FitOptions& o, const std::vector<double>& none, FitResult* r) {
+  const std::string inputs = grid_inputs(r->grid);
+  const std::vector<std::size_t> index = all_of(r->variants.size());
+  for (const std::string shorter : kFitInputSets) {
+    if (inputs.rfind(shorter + ",", 0) != 0) continue;
+    FactorGrid grid;
+    const auto axes = std::count(shorter.begin(), shorter.end(), ',') + 1;
+    grid.axes.assign(r->grid.axes.begin(), r->grid.axes.begin() + axes);
+    say(o, fmt::format("floor of a {} factor on the same grid", shorter));
+    std::vector<TallyVariant> data;
+    for (const FitVariant& v : r->variants)
+      data.push_back({v.id, marginal_tally(v.data.tally, r->grid, grid), v.data.truth});
+    NestedFloor n;
+    n.inputs = shorter;
+    n.floor.scope = "study";
+    n.floor.variants = data.size();
+    n.floor.solution = solve_floor(grid, data);
+    n.floor.floor = pooled_error(n.floor.solution.variant_rmse, index, o);
+    n.floor.none = pooled_error(none, index, o);
+    n.gain =
+        paired_error(r->study_floor.solution.variant_rmse, n.floor.solution.variant_rmse, index, o);
+    r->nested.push_back(std::move(n));
+  }
+}
+
 // The smoothed floor solves of a fit, each (training variants, smoothness)
 // solved once: the leave-one-family-out choice of smoothness within each
 // held-out family's complement solves the same pairs of families left out
@@ -696,7 +785,7 @@ void fit_shares(const FitOptions& o, const std::vector<double>& none,
       return (e_none - pooled(values, k)) / (e_none - pooled(floor, k));
     });
     for (const GridMethod& m : kGridMethods) {
-      if (method != m.id || !light_deviation_grid(r->grid)) continue;
+      if (method != m.id || !on_grid(m, r->grid)) continue;
       s.on_grid_inputs = true;
       s.grid_error = pooled(rmse_of(r->variants, table_of(r->grid, m.factor)), index);
       s.resolution_error = std::abs(s.grid_error - s.error.value);
@@ -877,6 +966,7 @@ FitResult fit_study(const FitOptions& o) {
     }
   say(o, fmt::format("floor over the study's {} variants", r.variants.size()));
   r.study_floor = floor_over(r, "study", all_of(r.variants.size()), none, o);
+  fit_nested_floors(o, none, &r);
   for (const auto& [family, index] : families(r.variants))
     r.family_floors.push_back(floor_over(r, family, index, none, o));
   fit_shares(o, none, methods, &r);
@@ -912,7 +1002,10 @@ json floor_json(const FloorFit& f) {
           {"variants", f.variants},
           {"floor", interval_json(f.floor)},
           {"none", interval_json(f.none)},
-          {"kkt_residual", f.solution.kkt_residual}};
+          {"kkt_residual", f.solution.kkt_residual},
+          // The cells some variant lights: the floor's free values.
+          {"lit_cells",
+           std::count(f.solution.constrained.begin(), f.solution.constrained.end(), char(1))}};
 }
 
 // G over the grid's cells for the report's contour figure (light,deviation
@@ -957,6 +1050,7 @@ json result_json(const FitResult& r) {
       {"unit",
        "terminator-profile RMSE, fraction of albedo*E/pi, pooled over variants as a "
        "root mean square; intervals: 95 % percentile bootstrap over variants"},
+      {"inputs", grid_inputs(r.grid)},
       {"grid", factor_grid_json(r.grid)},
       {"variants", r.variants.size()},
       {"skipped", r.skipped},
@@ -975,10 +1069,17 @@ json result_json(const FitResult& r) {
       {"seconds", r.seconds},
       // Arrays even when empty (one scene family: nothing to hold out).
       {"family_floors", json::array()},
+      {"nested_floors", json::array()},
       {"held_out", json::array()},
       {"methods", json::array()},
       {"constants", json::array()}};
   for (const FloorFit& f : r.family_floors) j["family_floors"].push_back(floor_json(f));
+  for (const NestedFloor& n : r.nested) {
+    json f = floor_json(n.floor);
+    f["inputs"] = n.inputs;
+    f["gain"] = paired_json(n.gain);
+    j["nested_floors"].push_back(f);
+  }
   for (const HeldOutFit& h : r.held_out)
     j["held_out"].push_back(
         {{"family", h.family},
@@ -1027,6 +1128,10 @@ std::string result_csv(const FitResult& r) {
   row("floor", "study", r.study_floor.floor, unit);
   row("none", "study", r.study_floor.none, unit);
   for (const FloorFit& f : r.family_floors) row("floor", f.scope, f.floor, unit);
+  for (const NestedFloor& n : r.nested) {
+    row("floor_of:" + n.inputs, "study", n.floor.floor, unit);
+    row("floor_minus_floor_of:" + n.inputs, "study", n.gain.difference, unit);
+  }
   for (const HeldOutFit& h : r.held_out) {
     row("fitted_table_held_out", h.family, h.held_out, unit);
     if (!h.best_method.empty())
@@ -1078,8 +1183,9 @@ void write_fit(const FitResult& r, const std::filesystem::path& out) {
 // What fit.json holds, raised when it gains a quantity, so that a study's
 // fit step redoes a fit written without it (2: deshmukh2020's constants;
 // 3: intervals on the constants' errors, paired differences, share groups;
-// 4: variants whose truth did not converge left out and named).
-constexpr const char* kFitContents = "4";
+// 4: variants whose truth did not converge left out and named; 5: the
+// inputs, nested floors, chiang2019 on grids with a shading axis).
+constexpr const char* kFitContents = "5";
 
 std::string fit_inputs_digest(const std::filesystem::path& study) {
   std::uint64_t h = fnv1a(without_run_keys(read_file((study / "report.json").string())));

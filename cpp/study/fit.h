@@ -35,6 +35,25 @@ namespace penumbra {
 // that is.
 FactorGrid default_fit_grid();
 
+// The input sets `penumbra fit --inputs` offers, each on its own grid:
+//   light,deviation               default_fit_grid()
+//   light,deviation,shading       light [20, 120) in 4-degree cells, deviation
+//                                 [0, 60) in 6, shading [0, 180) in 12
+//   light,deviation,shading,view  as above with light in 5-degree cells and
+//                                 view [0, 90) in 30
+// The added axes are coarser so that the cells some variant can light stay
+// near the default grid's count (a point's shading angle lies within its
+// deviation of its light angle, so a third of the shading cells can be lit
+// at each light and deviation): with many more free cells than the
+// profiles have bins, any floor reaches zero and says nothing. Shading
+// spans every angle, so no point leaves the grid through it.
+inline constexpr const char* kFitInputSets[] = {"light,deviation", "light,deviation,shading",
+                                                "light,deviation,shading,view"};
+// The grid of one of kFitInputSets; std::invalid_argument for another set.
+FactorGrid fit_grid(const std::string& inputs);
+// The inputs of a grid, comma-separated in axis order ("light,deviation").
+std::string grid_inputs(const FactorGrid& grid);
+
 struct FitOptions {
   std::string folder;  // a finished study's output folder
   FactorGrid grid = default_fit_grid();
@@ -73,6 +92,17 @@ struct FloorFit {
   std::size_t variants = 0;
   PooledError floor, none;
   FloorSolution solution;
+};
+
+// The study floor of a factor of fewer inputs on the same grid: the fit's
+// tallies with the other axes summed out (marginal_tally), so that every G
+// it ranges over is one the fit's floor ranges over too. The fit's floor
+// minus this one, paired over variants, is what the other inputs buy at the
+// grid's resolution (never above 0 but for the solver's tolerance).
+struct NestedFloor {
+  std::string inputs;  // "light,deviation"
+  FloorFit floor;
+  PairedError gain;  // the fit's study floor minus this floor
 };
 
 struct HeldOutFit {
@@ -132,6 +162,7 @@ struct FitResult {
   std::vector<std::string> unconverged;
   double outside_share = 0.0;  // of the terminator bins' tallied light, outside the grid
   FloorFit study_floor;
+  std::vector<NestedFloor> nested;  // each shorter set of kFitInputSets, shortest first
   std::vector<FloorFit> family_floors;
   std::vector<HeldOutFit> held_out;
   PooledError held_out_pooled;  // every family's held-out errors pooled

@@ -315,6 +315,46 @@ class BadFitJson(unittest.TestCase):
         self.assertIn('achievable-share.png', page)
 
 
+class MoreInputs(unittest.TestCase):
+    """A fit of light, deviation and shading (penumbra fit --inputs): the
+    section names its inputs, states the nested floor's gain in
+    percentage points with its interval, and drops chiang2019's dagger
+    (the floor of these inputs bounds it)."""
+
+    def test_section_names_the_inputs_and_the_gain(self):
+        doc = ff.fit_doc(with_pictures=False)
+        doc['inputs'] = 'light,deviation,shading'
+        doc['pictures'] = None
+        doc['constants'] = []
+        doc['nested_floors'] = [{
+            'scope': 'study', 'variants': 36, 'kkt_residual': 1e-12,
+            'inputs': 'light,deviation', 'floor': ff.iv(0.0330, 0.0240, 0.0420),
+            'none': doc['floor']['none'],
+            'gain': ff.paired(-0.0030, -0.0051, -0.0014)}]
+        page = page_of(study('shading', doc))
+        self.assertIn('one factor G of the light angle, deviation and '
+                      'shading angle shared by all', page)
+        self.assertIn('On the same grid, a factor of the light angle and '
+                      'deviation alone reaches E* = 3.30 [2.40, 4.20] % of '
+                      'albedo·E/π; the added inputs lower the floor by 0.30 '
+                      '[0.14, 0.51] percentage points (paired over the same '
+                      'resamples).', page)
+        shares = rows_of(page, 'achievable-shares')
+        self.assertEqual([r[0] for r in shares if r[0].endswith('†')], [])
+        self.assertNotIn('also sees ⟨Ns,ωi⟩', page)
+        # The default inputs keep the dagger.
+        self.assertIn('chiang2019 †', page_of(study('plain', ff.fit_doc())))
+
+    def test_a_nested_floor_without_its_gain_is_refused(self):
+        doc = ff.fit_doc()
+        doc['nested_floors'] = [dict(doc['floor'], inputs='light,deviation')]
+        path = study('no-gain', doc)
+        r = run('report', path)
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertRegex(r.stderr, r'^report\.py: \S*fit\.json: '
+                         r'/nested_floors/0/gain: expected')
+
+
 if __name__ == '__main__':
     try:
         unittest.main(argv=[sys.argv[0]] + sys.argv[2:], verbosity=2)

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -57,13 +58,16 @@ class Fit : public TempDirTest {
     run_study(load_study(path(name + ".json")), test_study_options(path(name)));
     return path(name);
   }
-  static FitResult fit(const std::string& folder, int jobs = 0) {
+  // Coarser than the default grid (210 cells rather than 750), for time.
+  static FactorGrid grid() {
+    return {{{FactorInput::kLight, 50.0, 120.0, 2.0}, {FactorInput::kDeviation, 0.0, 36.0, 6.0}}};
+  }
+  static FitResult fit(const std::string& folder, int jobs = 0, FactorGrid g = grid()) {
     FitOptions o;
     o.folder = folder;
     o.jobs = jobs;
     o.resamples = 200;
-    // Coarser than the default grid (210 cells rather than 840), for time.
-    o.grid = {{{FactorInput::kLight, 50.0, 120.0, 2.0}, {FactorInput::kDeviation, 0.0, 36.0, 6.0}}};
+    o.grid = std::move(g);
     return fit_study(o);
   }
 };
@@ -200,6 +204,56 @@ TEST_F(Fit, FloorIsBelowTheShippedFactorsAndHeldOutTablesNeverSawTheirFamily) {
 
 // Truths that are raw bump under estevez2019's own term with a known k:
 // the refit finds it (to the golden section's 1e-4 in log k).
+// A shading axis over every angle added to the grid: the floor of
+// light,deviation on the same axes, summed out of the new tallies, is the
+// floor a light,deviation fit finds (to the solver's tolerance), the new
+// floor is never above it, chiang2019 (a function of all three angles) is
+// tabulated on the grid, and the smoothed solves of its 1,260 cells are
+// sparse (FloorOptions::dense_variables).
+TEST_F(Fit, AShadingInputNeverRaisesTheFloorOfTheSameLightAndDeviationAxes) {
+  const std::string folder = run_small_study("study");
+  const FitResult plain = fit(folder);
+  FactorGrid with_shading = grid();
+  with_shading.axes.push_back({FactorInput::kShading, 0.0, 180.0, 30.0});
+  ASSERT_GT(with_shading.cells(), FloorOptions().dense_variables);
+  const FitResult r = fit(folder, 0, with_shading);
+  EXPECT_EQ(grid_inputs(r.grid), "light,deviation,shading");
+  ASSERT_EQ(r.nested.size(), 1u);
+  const NestedFloor& n = r.nested[0];
+  EXPECT_EQ(n.inputs, "light,deviation");
+  EXPECT_NEAR(n.floor.floor.value, plain.study_floor.floor.value,
+              1e-6 * plain.study_floor.floor.value);
+  EXPECT_LE(r.study_floor.floor.value, n.floor.floor.value * (1.0 + 1e-6));
+  expect_paired(n.gain, r.study_floor.floor.value, n.floor.floor.value, "nested");
+  EXPECT_LT(n.gain.difference.value, 0.0) << "the shading input bought nothing: the test is weak";
+  std::set<std::string> on_grid;
+  for (const MethodShare& s : r.shares)
+    if (s.on_grid_inputs) {
+      on_grid.insert(s.method);
+      EXPECT_LE(r.study_floor.floor.value, s.grid_error * (1.0 + 1e-6)) << s.method;
+    }
+  EXPECT_EQ(on_grid, (std::set<std::string>{"chiang2019", "deshmukh2020", "estevez2019"}));
+  EXPECT_TRUE(r.constants.empty());  // fitted on light,deviation grids only
+  EXPECT_EQ(r.table.values.size(), std::size_t(with_shading.cells()));
+  EXPECT_TRUE(plain.nested.empty());
+}
+
+TEST(FitGrid, EachInputSetHasItsGridAndNoOtherSetIsTaken) {
+  for (const std::string inputs : kFitInputSets) {
+    const FactorGrid g = fit_grid(inputs);
+    EXPECT_EQ(grid_inputs(g), inputs);
+    for (const FactorAxis& a : g.axes) {
+      EXPECT_NEAR(a.cells() * a.step_deg, a.max_deg - a.min_deg, 1e-9) << inputs;
+      // No point leaves the grid through the shading axis: it spans every angle.
+      if (a.input == FactorInput::kShading) {
+        EXPECT_EQ(a.max_deg - a.min_deg, 180.0);
+      }
+    }
+  }
+  EXPECT_EQ(fit_grid("light,deviation").cells(), default_fit_grid().cells());
+  EXPECT_THROW(fit_grid("light,shading"), std::invalid_argument);
+}
+
 TEST_F(Fit, RefittingEstevez2019OnItsOwnTermRecoversItsConstant) {
   const FitResult r = fit(run_small_study("study"));
   for (const double k : {1.0 / 8.0, 0.3}) {
