@@ -1,6 +1,7 @@
 // `penumbra fit`: what is achievable on a finished study (study/fit.h).
 #include <chrono>
 #include <filesystem>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -142,11 +143,12 @@ Command add_fit_command(CLI::App& app, SharedOptions&) {
                   "light,deviation,shading (Chiang's), light,deviation,shading,view")
       ->check(CLI::Validator(
           [](std::string& inputs) {
-            for (const std::string set : kFitInputSets)
-              if (inputs == set) return std::string();
-            return "expected light,deviation | light,deviation,shading | "
-                   "light,deviation,shading,view, got " +
-                   inputs;
+            try {
+              fit_grid(inputs);
+              return std::string();
+            } catch (const std::invalid_argument& e) {
+              return std::string(e.what());
+            }
           },
           "SET"))
       ->capture_default_str();
