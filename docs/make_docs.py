@@ -199,7 +199,7 @@ def renderers_section(renderers):
         executable = (f'{code(r["executable"])} or {code("$" + r["executable_variable"])}'
                       if r['executable'] else '-')
         flags = [name for name in ('height_maps', 'normal_maps', 'plane', 'props',
-                                   'consistent_normals') if r.get(name)]
+                                   'consistent_normals', 'mesh_bump') if r.get(name)]
         rows.append([code(r['id']), cell(r['name']), package, executable,
                      str(len(r['bump_methods'])), str(len(r['offsets'])),
                      cell(', '.join(f.replace('_', ' ') for f in flags))])
@@ -219,7 +219,8 @@ def renderers_section(renderers):
                 lines.append((label, cell(r[key])))
         for key, label in (('height_maps', 'image height maps'), ('normal_maps', 'normal maps'),
                            ('plane', 'the plane'),
-                           ('consistent_normals', 'consistent normal interpolation')):
+                           ('consistent_normals', 'consistent normal interpolation'),
+                           ('mesh_bump', 'bump on a mesh shape')):
             why = r.get(key + '_why_not', '')
             lines.append((label, 'yes' if r.get(key) else 'no' + (f': {cell(why)}' if why else '')))
         lines.append(('props (extra spheres)', 'yes' if r.get('props') else 'no'))

@@ -46,7 +46,9 @@ json renderer_json(const RendererInfo& info) {
           {"plane", info.plane},
           {"plane_why_not", info.plane_why_not},
           {"consistent_normals", info.consistent_normals},
-          {"consistent_normals_why_not", info.consistent_normals_why_not}};
+          {"consistent_normals_why_not", info.consistent_normals_why_not},
+          {"mesh_bump", info.mesh_bump},
+          {"mesh_bump_why_not", info.mesh_bump_why_not}};
 }
 
 std::string join_ids(const json& ids) {
@@ -75,6 +77,7 @@ void print_renderer(const RendererInfo& info, std::ostream& out) {
   if (*info.plane_why_not) out << fmt::format("  plane: {}\n", info.plane_why_not);
   if (*info.consistent_normals_why_not)
     out << fmt::format("  consistent normals: {}\n", info.consistent_normals_why_not);
+  if (*info.mesh_bump_why_not) out << fmt::format("  mesh bump: {}\n", info.mesh_bump_why_not);
 }
 
 }  // namespace

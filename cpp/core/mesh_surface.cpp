@@ -111,6 +111,15 @@ SurfaceGeometry mesh_surface_at(const TriangleMesh& mesh, std::uint32_t triangle
   return g;
 }
 
+Vec3 facet_bump_gradient(const Vec3& gradient, const Vec3& ng, const Vec3& ni) {
+  // Either side of ng gives the same g'; ni in the triangle's plane (a
+  // broken vertex normal) has no such vector, and the projection stands in.
+  const double cos_delta = dot(ng, ni);
+  if (std::abs(cos_delta) < 1e-9) return gradient - ni * dot(gradient, ni);
+  const Vec3 in_plane = gradient - ng * dot(gradient, ng);
+  return in_plane - ng * (dot(in_plane, ni) / cos_delta);
+}
+
 Vec3 mesh_displaced_normal(const TriangleMesh& mesh, std::uint32_t triangle, const double b[3],
                            double amplitude, const HeightSample& h) {
   const unsigned* c = corners(mesh, triangle);

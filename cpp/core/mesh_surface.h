@@ -87,6 +87,24 @@ void measure_mesh(MeshSurface* m);
 SurfaceGeometry mesh_surface_at(const TriangleMesh& mesh, std::uint32_t triangle,
                                 const double b[3]);
 
+// The gradient the bump of a mesh uses, given h's gradient `gradient` at a
+// point of a flat triangle of unit normal `ng`, shaded by the unit
+// interpolated normal `ni` (<ng, ni> > 0): the vector orthogonal to ni whose
+// derivative along every direction in the triangle's plane is h's,
+//   g' = g_t - ng <g_t, ni> / <ng, ni>,  g_t = g - ng <g, ng>.
+// h is only defined on the triangle, so its derivative along ng must not
+// count, and the truth P + A h Ni tilts the facet by exactly these
+// derivatives: to first order in A, dP'/db_1 x dP'/db_2 = e1 x e2 - A s and
+// Ni - A g' = (det Ni - A s) / det with s = <g, e1> (e2 x Ni) + <g, e2>
+// (Ni x e1), det = <e1 x e2, Ni>, so the bump turns Ni by the displacement's
+// own turn of the facet. Cycles' Bump node computes the same from its
+// differentials on the triangle (blender/blender
+// intern/cycles/kernel/svm/displace.h, svm_node_set_bump: Rx = dPdy x N,
+// Ry = N x dPdx, surfgrad / det). Projecting g onto the plane normal to ni
+// instead differs by up to A |g| sin(delta) tan(delta), delta the angle
+// between ng and ni.
+Vec3 facet_bump_gradient(const Vec3& gradient, const Vec3& ng, const Vec3& ni);
+
 // The exact normal of the truth P'(b) at b, on Ni's side:
 //   dP'/db_j = (v_j - v_0) + A <grad h, v_j - v_0> Ni + A h (I - Ni Ni^T)(n_j - n_0) / |m|
 // (j = 1, 2), Ns = normalize(dP'/db_1 x dP'/db_2).

@@ -343,14 +343,16 @@ PixelDifferentials pixel_differentials(const Camera& c, const Ray& ray, double t
 
 // The bump normal of a sample: the analytic or image height's exact
 // normal, a normal map's, or a filtered map's mean normal, which also sets
-// the sample's filtered specular lobe in *material.
+// the sample's filtered specular lobe in *material. On a mesh shape h is
+// differentiated over the flat triangle of normal `ng` (facet_bump_gradient).
 struct BumpNormals {
   const Scene& scene;
   const SurfaceMap* height_map;
   const SurfaceMap* normal_map;
   const FilteredMap* filtered;
 
-  Vec3 at(const SurfaceGeometry& g, const Ray& ray, double t, Material* material) const {
+  Vec3 at(const SurfaceGeometry& g, const Vec3& ng, const Ray& ray, double t,
+          Material* material) const {
     if (filtered) {
       const PixelDifferentials d = pixel_differentials(scene.camera, ray, t, g.n);
       const FilteredSample f =
@@ -359,8 +361,9 @@ struct BumpNormals {
       return f.ns;
     }
     if (normal_map) return normal_map_normal(*normal_map, scene.shape, g);
-    return displaced_normal(g, scene.height.amplitude,
-                            height_at(scene.height.function, height_map, scene.shape, g));
+    HeightSample h = height_at(scene.height.function, height_map, scene.shape, g);
+    if (scene.shape.type == ShapeType::kMesh) h.gradient = facet_bump_gradient(h.gradient, ng, g.n);
+    return displaced_normal(g, scene.height.amplitude, h);
   }
 };
 
@@ -694,7 +697,7 @@ typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray&
   if (bumps() && g.displaceable) {
     // The bump perturbs the analytic normal; on a mesh it is carried
     // over to Ni, so that Ns relates to Ni as it would to N.
-    const Vec3 b = hit.has_exact_ns ? hit.exact_ns : bump_.at(g, ray, hit.t, material);
+    const Vec3 b = hit.has_exact_ns ? hit.exact_ns : bump_.at(g, hit.ng, ray, hit.t, material);
     facing.ns = hit.ni == g.n ? b : normalize(rotate_between(g.n, hit.ni, b));
   }
   // Two-sided: the inside of an open cylinder is seen from inside.

@@ -50,6 +50,11 @@ void refuse_unoffered(const Scene& scene, const RendererInfo& info, const char* 
   if (scene.tessellation && scene.tessellation->shading == NormalShading::kConsistent &&
       !info.consistent_normals)
     throw ExportError(std::string(name) + " export: " + info.consistent_normals_why_not);
+  const bool bumps_by_height = scene.representation == Representation::kBump &&
+                               scene.height.amplitude > 0.0 &&
+                               (scene.height.height_map() || !scene.height.function.terms.empty());
+  if (scene.shape.type == ShapeType::kMesh && bumps_by_height && !info.mesh_bump)
+    throw ExportError(std::string(name) + " export: " + info.mesh_bump_why_not);
 }
 
 namespace {

@@ -142,6 +142,11 @@ struct RendererInfo {
   // /shape/tessellation/shading "consistent" (core/consistent_normal.h)
   bool consistent_normals = false;
   const char* consistent_normals_why_not = "";  // "" when they are offered
+  // Bump on a mesh shape (/shape/type "mesh") by a height, differentiated
+  // over the flat triangle as the evaluator does (facet_bump_gradient in
+  // core/mesh_surface.h); normal maps are `normal_maps`.
+  bool mesh_bump = false;
+  const char* mesh_bump_why_not = "";  // "" when it is offered
 
   // Runs a program of its own (and so writes a log and needs a geometry
   // pass for its analysis channels); false for the built-in evaluator.

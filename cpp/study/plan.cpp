@@ -207,15 +207,15 @@ std::string cannot_render_variant(RendererKind r, const json& scene) {
 }
 
 // Why renderer r renders a bump section's truth of this scene but none of
-// its methods ("" when it renders them): an external renderer's bump on a
-// mesh shape is not the evaluator's (its exporter says why).
+// its methods ("" when it renders them): its bump on a mesh shape would not
+// be the evaluator's (the renderer table's mesh_bump_why_not).
 std::string cannot_bump(RendererKind r, SectionKind kind, const json& scene) {
   const json::json_pointer shape("/shape/type");
-  if (kind != SectionKind::kBump || !renderer_info(r).external() || !scene.contains(shape) ||
+  const RendererInfo& info = renderer_info(r);
+  if (kind != SectionKind::kBump || info.mesh_bump || !scene.contains(shape) ||
       scene[shape] != "mesh")
     return "";
-  return "bump on a mesh shape is evaluator-only (the renderer differentiates the height "
-         "elsewhere than across the interpolated normal); the displaced truth is rendered";
+  return std::string(info.mesh_bump_why_not) + "; the displaced truth is rendered";
 }
 
 // ---- expansion ------------------------------------------------------------------

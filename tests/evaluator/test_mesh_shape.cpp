@@ -105,6 +105,79 @@ TEST(MeshSurface, TruthNormalIsTheNormalOfTheDisplacedSurface) {
   }
 }
 
+// The bump of a mesh turns Ni by exactly the displacement's turn of the
+// facet: where h = 0 and grad h = g, the truth P'(b) = P + A h(P) Ni(b) has
+// tangents T_j = e_j + A <g, e_j> Ni, so T1 x T2 - e1 x e2 is linear in A
+// (its A^2 term has Ni x Ni), and the bump's unnormalised normal
+// Ni - A g' must equal Ni + (T1 x T2 - e1 x e2) / det, det =
+// <e1 x e2, Ni> (either sign: the winding is the file's), for any A and
+// any g, its component along Ng included (h lives on the triangle). T_j
+// are central differences of P' with h linear (h = <g, P - P0>) at step
+// 1e-5: truncation of order 1e-10 and rounding of order 1e-16 / 1e-5 on
+// T_j, both divided by det (down to about 1e-2 on these random triangles),
+// so 1e-8 on the unit normal; measured 1.4e-9 (1.7e-8 at step 1e-4, the
+// truncation's step^2). Projecting g onto the plane normal to Ni, as the
+// evaluator did before, misses by up to A |g| sin(delta) tan(delta): 2.7e-2
+// here, which the test must see, or it could not catch the old formula.
+TEST(MeshSurface, BumpTurnsNiAsTheDisplacementTurnsTheFacet) {
+  Pcg32 rng(11);
+  const auto random_vector = [&] {
+    return Vec3{2 * rng.next_double() - 1, 2 * rng.next_double() - 1, 2 * rng.next_double() - 1};
+  };
+  double projection_miss = 0.0, largest_miss = 0.0;
+  for (int i = 0; i < 200; ++i) {
+    TriangleMesh m;
+    const Vec3 ng_dir = normalize(Vec3{0.2, 0.3, 1.0});
+    for (int k = 0; k < 3; ++k) {
+      Vec3 p = random_vector();
+      p = p - ng_dir * dot(p, ng_dir);  // a triangle in the plane normal to ng_dir
+      const Vec3 n = normalize(ng_dir + random_vector() * 0.6);  // within about 50 degrees
+      for (double x : {p.x, p.y, p.z}) m.positions.push_back(float(x));
+      for (double x : {n.x, n.y, n.z}) m.normals.push_back(float(x));
+    }
+    m.triangles = {0, 1, 2};
+    m.side_triangles = 1;
+    const Vec3 v[3] = {{m.positions[0], m.positions[1], m.positions[2]},
+                       {m.positions[3], m.positions[4], m.positions[5]},
+                       {m.positions[6], m.positions[7], m.positions[8]}};
+    const Vec3 e1 = v[1] - v[0], e2 = v[2] - v[0];
+    Vec3 ng = normalize(cross(e1, e2));
+    if (dot(ng, ng_dir) < 0.0) ng = -ng;
+    const double b1 = 0.1 + 0.5 * rng.next_double(), b2 = 0.1 + 0.3 * rng.next_double();
+    const double b[3] = {1.0 - b1 - b2, b1, b2};
+    const SurfaceGeometry g = mesh_surface_at(m, 0, b);
+    const Vec3 gradient = random_vector();
+    const double amplitude = 0.05 * rng.next_double();
+    const auto truth = [&](double c1, double c2) {
+      const double bb[3] = {1.0 - c1 - c2, c1, c2};
+      const SurfaceGeometry q = mesh_surface_at(m, 0, bb);
+      return q.p + q.n * (amplitude * dot(gradient, q.p - g.p));
+    };
+    const double step = 1e-5;
+    const Vec3 t1 = (truth(b1 + step, b2) - truth(b1 - step, b2)) / (2 * step);
+    const Vec3 t2 = (truth(b1, b2 + step) - truth(b1, b2 - step)) / (2 * step);
+    const Vec3 facet = cross(e1, e2);
+    const double det = dot(facet, g.n);
+    const Vec3 expected = normalize(g.n + (cross(t1, t2) - facet) / det);
+    HeightSample h;
+    h.gradient = facet_bump_gradient(gradient, ng, g.n);
+    const double miss = length(displaced_normal(g, amplitude, h) - expected);
+    largest_miss = std::max(largest_miss, miss);
+    EXPECT_LT(miss, 1e-8) << "sample " << i;
+    // The same with Ng on the other side: g' does not depend on it.
+    h.gradient = facet_bump_gradient(gradient, -ng, g.n);
+    EXPECT_LT(length(displaced_normal(g, amplitude, h) - expected), 1e-8) << "sample " << i;
+    h.gradient = gradient - g.n * dot(gradient, g.n);
+    projection_miss =
+        std::max(projection_miss, length(displaced_normal(g, amplitude, h) - expected));
+  }
+  std::printf(
+      "[ mesh     ] the bump misses the displacement's turn by up to %.3g; projecting g onto "
+      "the plane normal to Ni, by up to %.3g\n",
+      largest_miss, projection_miss);
+  EXPECT_GT(projection_miss, 1e-4);
+}
+
 // The octahedron stretched along x, so its edges split into different
 // counts and every triangle has edges of two levels.
 TriangleMesh stretched_octahedron() {

@@ -59,8 +59,9 @@ const RendererEntry& blender_entry() {
            .note =
                "Blender 3.4 Cycles: bump via ray-differential finite differences, ground "
                "truth via a displaced mesh (a mesh shape's: the evaluator's subdivision; "
-               "bump on a mesh shape is evaluator-only, its normal maps are the Normal Map node "
-               "in Blender's MikkTSpace frame); its chiang2019 is the Bump node, which is "
+               "a mesh's bump differentiates h over the flat triangle, as the evaluator's does, "
+               "and its normal maps are the Normal Map node in Blender's MikkTSpace frame); its "
+               "chiang2019 is the Bump node, which is "
                "cycles34 (Chiang's term against Ni after ensure_valid_reflection turns "
                "the bumped normal towards Ng at grazing views); both ids render the same "
                "Blender scene",
@@ -80,7 +81,8 @@ const RendererEntry& blender_entry() {
            .normal_maps = true,
            .plane = true,
            .consistent_normals_why_not = "Cycles interpolates a smooth mesh's normals "
-                                         "linearly; it has no consistent normal interpolation"},
+                                         "linearly; it has no consistent normal interpolation",
+           .mesh_bump = true},
       .render = render_blender,
       .version = external::probe_version,
       .pixel_code_digest = blender_code_digest,

@@ -121,16 +121,10 @@ BlenderShading blender_shading(const Scene& scene, bool has_height) {
     throw ExportError(
         "Blender export: bump on a tessellated shape is evaluator-only (use the smooth "
         "representation, or no /shape/tessellation)");
-  // The same on a mesh shape: Cycles differentiates h over the flat
-  // triangle, the evaluator across the plane normal to Ni.
-  // A normal map is not differentiated: Cycles' Normal Map node reads it in
-  // the MikkTSpace frame the evaluator builds (core/surface_map.h).
-  if (scene.shape.type == ShapeType::kMesh && scene.representation == Representation::kBump &&
-      has_height && !scene.height.normal_map())
-    throw ExportError(
-        "Blender export: bump on a mesh shape is evaluator-only (Cycles differentiates h over "
-        "the flat triangle, the evaluator across the interpolated normal); its smooth and "
-        "displacement representations and its normal maps are exported");
+  // A mesh shape's bump is not refused: the evaluator differentiates h
+  // over the flat triangle and tilts Ni by it as Cycles' Bump node does
+  // (facet_bump_gradient, core/mesh_surface.h), and a normal map is read in
+  // the MikkTSpace frame Cycles' Normal Map node uses (core/surface_map.h).
   switch (scene.representation) {
     case Representation::kSmooth:
       return BlenderShading::kSmooth;

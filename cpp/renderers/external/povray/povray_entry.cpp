@@ -68,7 +68,11 @@ const RendererEntry& povray_entry() {
                                       "scalar function, which a normal map does not give",
                .plane = true,
                .consistent_normals_why_not = "POV-Ray 3.7 interpolates mesh2 normal_vectors "
-                                             "linearly; it has no view-dependent shading normal"},
+                                             "linearly; it has no view-dependent shading normal",
+               .mesh_bump_why_not = "bump on a mesh shape is evaluator-only: POV-Ray's bump "
+                                    "pattern differentiates h in 3D around the hit, the "
+                                    "evaluator over the flat triangle; its smooth and "
+                                    "displacement representations are exported"},
       .render = render_povray,
       .version = external::probe_version,
       .pixel_code_digest = povray_code_digest,

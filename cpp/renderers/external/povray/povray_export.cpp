@@ -258,16 +258,10 @@ std::string mesh_sdl(const SdlContext& c) {
 }
 
 // A mesh shape: its own triangles and normals, or its displaced truth's
-// (mesh_shape_triangles). Bump is refused as on a tessellated shape: POV-Ray
-// differentiates h in 3D around the hit, the evaluator across the plane
-// normal to Ni, and h of a mesh is not constant along Ni.
+// (mesh_shape_triangles). Its bump was refused before (refuse_unoffered,
+// the renderer table's mesh_bump_why_not).
 std::string mesh_shape_sdl(const SdlContext& c) {
   const Scene& scene = c.scene;
-  if (scene.representation == Representation::kBump && c.has_height)
-    throw ExportError(
-        "POV-Ray export: bump on a mesh shape is evaluator-only (POV-Ray's bump pattern "
-        "differentiates h in 3D, the evaluator across the interpolated normal); its smooth and "
-        "displacement representations are exported");
   const bool truth = scene.representation == Representation::kDisplacement;
   const TriangleMesh mesh = external::mesh_shape_triangles(scene, truth);
   return fmt::format(
