@@ -16,6 +16,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <assimp/Importer.hpp>
 
 #include "util/files.h"
@@ -50,27 +51,69 @@ struct RawMesh {
   std::vector<unsigned> triangles;
 };
 
-// Appends every triangle of the file's meshes; their nodes' transforms are
-// already in the vertices (aiProcess_PreTransformVertices).
-RawMesh read_triangles(const aiScene& scene) {
+// A mesh of the file where its node places it: the node's transform times
+// its ancestors', in double (row-major, column vectors, as aiMatrix4x4),
+// and the cofactor matrix that turns its normals (det M times the inverse
+// transpose). Without a transform the vertices are already placed
+// (aiProcess_PreTransformVertices).
+struct PlacedMesh {
+  const aiMesh* mesh = nullptr;
+  bool transformed = false;
+  double m[3][4] = {};
+  double cofactor[3][3] = {};
+};
+
+PlacedMesh placed(const aiMesh* mesh, const aiMatrix4x4& t) {
+  PlacedMesh out{mesh, true};
+  const ai_real* row[3] = {&t.a1, &t.b1, &t.c1};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j) out.m[i][j] = row[i][j];
+  const auto& a = out.m;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+      out.cofactor[i][j] = a[i1][j1] * a[i2][j2] - a[i1][j2] * a[i2][j1];
+    }
+  return out;
+}
+
+Vec3 place_point(const PlacedMesh& p, const aiVector3D& v) {
+  if (!p.transformed) return {v.x, v.y, v.z};
+  const auto& m = p.m;
+  return {m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z + m[0][3],
+          m[1][0] * v.x + m[1][1] * v.y + m[1][2] * v.z + m[1][3],
+          m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z + m[2][3]};
+}
+
+// The normal turned by the inverse transpose: the cofactor matrix divided
+// by det M, whose sign keeps the normal on its side under a mirroring.
+Vec3 place_normal(const PlacedMesh& p, const aiVector3D& n) {
+  if (!p.transformed) return {n.x, n.y, n.z};
+  const auto& c = p.cofactor;
+  const double det = p.m[0][0] * c[0][0] + p.m[0][1] * c[0][1] + p.m[0][2] * c[0][2];
+  const Vec3 out{c[0][0] * n.x + c[0][1] * n.y + c[0][2] * n.z,
+                 c[1][0] * n.x + c[1][1] * n.y + c[1][2] * n.z,
+                 c[2][0] * n.x + c[2][1] * n.y + c[2][2] * n.z};
+  const double l = length(out);
+  return l > 0.0 ? out * (std::copysign(1.0, det) / l) : out;
+}
+
+// Every triangle of the given meshes.
+RawMesh read_triangles(const std::vector<PlacedMesh>& meshes) {
   RawMesh raw;
   bool all_normals = true, all_uvs = true;
-  for (unsigned m = 0; m < scene.mNumMeshes; ++m)
-    if (scene.mMeshes[m]->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) {
-      all_normals = all_normals && scene.mMeshes[m]->HasNormals();
-      all_uvs = all_uvs && scene.mMeshes[m]->HasTextureCoords(0);
+  for (const PlacedMesh& p : meshes)
+    if (p.mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) {
+      all_normals = all_normals && p.mesh->HasNormals();
+      all_uvs = all_uvs && p.mesh->HasTextureCoords(0);
     }
-  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
-    const aiMesh& mesh = *scene.mMeshes[m];
+  for (std::size_t m = 0; m < meshes.size(); ++m) {
+    const aiMesh& mesh = *meshes[m].mesh;
     if (!(mesh.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
     const auto first = static_cast<unsigned>(raw.positions.size());
     for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
-      const aiVector3D& p = mesh.mVertices[v];
-      raw.positions.push_back({p.x, p.y, p.z});
-      if (all_normals) {
-        const aiVector3D& n = mesh.mNormals[v];
-        raw.normals.push_back({n.x, n.y, n.z});
-      }
+      raw.positions.push_back(place_point(meshes[m], mesh.mVertices[v]));
+      if (all_normals) raw.normals.push_back(place_normal(meshes[m], mesh.mNormals[v]));
       if (all_uvs) {
         const aiVector3D& uv = mesh.mTextureCoords[0][v];
         raw.uvs.push_back({uv.x, uv.y});
@@ -88,6 +131,62 @@ RawMesh read_triangles(const aiScene& scene) {
     }
   }
   return raw;
+}
+
+// Deeper node trees are refused rather than walked (a file may nest its
+// nodes without end).
+constexpr int kMaxNodeDepth = 256;
+
+// The node and those under it, depth first, with their transforms.
+void collect_meshes(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent, int depth,
+                    std::vector<PlacedMesh>* out) {
+  if (depth > kMaxNodeDepth)
+    throw MeshFileError(fmt::format("its nodes nest deeper than {}", kMaxNodeDepth));
+  const aiMatrix4x4 global = parent * node.mTransformation;
+  for (unsigned i = 0; i < node.mNumMeshes; ++i) {
+    if (node.mMeshes[i] >= scene.mNumMeshes)
+      throw MeshFileError(fmt::format("node \"{}\" names mesh {} of {}", node.mName.C_Str(),
+                                      node.mMeshes[i], scene.mNumMeshes));
+    out->push_back(placed(scene.mMeshes[node.mMeshes[i]], global));
+  }
+  for (unsigned c = 0; c < node.mNumChildren; ++c)
+    collect_meshes(scene, *node.mChildren[c], global, depth + 1, out);
+}
+
+// The names of the first nodes, depth first, for a message.
+void node_names(const aiNode& node, int depth, std::vector<std::string>* out) {
+  if (out->size() >= 24 || depth > kMaxNodeDepth) return;
+  if (node.mName.length > 0) out->push_back(fmt::format("\"{}\"", node.mName.C_Str()));
+  for (unsigned c = 0; c < node.mNumChildren; ++c) node_names(*node.mChildren[c], depth + 1, out);
+}
+
+// The file's meshes: all of them, already placed, or those of the first
+// node named `node` (depth first) and of the nodes under it, placed by
+// their nodes and its ancestors.
+std::vector<PlacedMesh> meshes_to_read(const aiScene& scene, const std::string& node) {
+  std::vector<PlacedMesh> out;
+  if (node.empty()) {
+    for (unsigned m = 0; m < scene.mNumMeshes; ++m) out.push_back({scene.mMeshes[m]});
+    return out;
+  }
+  const aiNode* found = scene.mRootNode ? scene.mRootNode->FindNode(node.c_str()) : nullptr;
+  if (!found) {
+    std::vector<std::string> names;
+    if (scene.mRootNode) node_names(*scene.mRootNode, 0, &names);
+    throw MeshNodeError(
+        fmt::format("no node \"{}\" in it; its nodes: {}{}", node,
+                    names.empty() ? "none" : fmt::format("{}", fmt::join(names, ", ")),
+                    names.size() >= 24 ? ", ..." : ""));
+  }
+  aiMatrix4x4 ancestors;
+  int depth = 0;
+  for (const aiNode* a = found->mParent; a; a = a->mParent, ++depth) {
+    if (depth > kMaxNodeDepth)
+      throw MeshFileError(fmt::format("its nodes nest deeper than {}", kMaxNodeDepth));
+    ancestors = a->mTransformation * ancestors;
+  }
+  collect_meshes(scene, *found, ancestors, 0, &out);
+  return out;
 }
 
 Vec3 rotate(const Vec3& v, const Vec3& degrees_xyz) {
@@ -210,7 +309,7 @@ void check_ply_header(const std::string& path, std::uintmax_t size) {
 }
 
 LoadedMesh read_mesh_file(const std::string& path, const MeshTransform& transform,
-                          MeshNormals normals) {
+                          MeshNormals normals, const std::string& node) {
   // A folder, FIFO or device is called what it is (a FIFO would block the
   // reader, /dev/zero never end).
   if (const std::string why = input_file_problem(path); !why.empty()) throw MeshFileError(why);
@@ -221,12 +320,15 @@ LoadedMesh read_mesh_file(const std::string& path, const MeshTransform& transfor
   // and animations are not read at all.
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
                               aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  // A node is looked up in the file's own graph, which pre-transforming
+  // would flatten; then its meshes are placed here.
   const unsigned flags = aiProcess_Triangulate | aiProcess_SortByPType |
-                         aiProcess_PreTransformVertices | aiProcess_ValidateDataStructure;
+                         (node.empty() ? aiProcess_PreTransformVertices : 0u) |
+                         aiProcess_ValidateDataStructure;
   const aiScene* scene = importer.ReadFile(path, flags);  // may throw from aiAssertViolation
   if (!scene)
     throw MeshFileError(fmt::format("not a mesh Assimp reads: {}", importer.GetErrorString()));
-  RawMesh raw = read_triangles(*scene);
+  RawMesh raw = read_triangles(meshes_to_read(*scene, node));
   if (raw.triangles.size() / 3 > kMaxMeshTriangles)
     throw MeshFileError(fmt::format("{} triangles, more than the {} a mesh may have",
                                     raw.triangles.size() / 3, kMaxMeshTriangles));
@@ -247,6 +349,8 @@ LoadedMesh read_mesh_file(const std::string& path, const MeshTransform& transfor
     raw.normals = smooth_normals(raw);
   LoadedMesh loaded;
   MeshSurface surface = surface_from(raw, &loaded.dropped_triangles);
+  if (surface.mesh.triangle_count() == 0 && !node.empty() && loaded.dropped_triangles == 0)
+    throw MeshNodeError(fmt::format("node \"{}\" and the nodes under it hold no triangles", node));
   if (surface.mesh.triangle_count() == 0)
     throw MeshFileError(loaded.dropped_triangles > 0
                             ? "every triangle has zero area"
@@ -265,7 +369,7 @@ LoadedMesh read_mesh_file(const std::string& path, const MeshTransform& transfor
 }  // namespace
 
 LoadedMesh load_mesh_file(const std::string& path, const MeshTransform& transform,
-                          MeshNormals normals) {
+                          MeshNormals normals, const std::string& node) {
   // A study reads each scene once per render job; the mesh behind them is
   // read once.
   static std::mutex mutex;
@@ -274,15 +378,15 @@ LoadedMesh load_mesh_file(const std::string& path, const MeshTransform& transfor
   const auto size = fs::file_size(path, error);
   const auto time = fs::last_write_time(path, error);
   const std::string key = fmt::format(
-      "{}\n{}\n{}\n{:a} {:a} {:a} {:a} {:a} {:a} {:a}\n{}", path, error ? 0 : size,
+      "{}\n{}\n{}\n{:a} {:a} {:a} {:a} {:a} {:a} {:a}\n{}\n{}", path, error ? 0 : size,
       error ? 0 : time.time_since_epoch().count(), transform.scale, transform.rotate_deg.x,
       transform.rotate_deg.y, transform.rotate_deg.z, transform.translate.x, transform.translate.y,
-      transform.translate.z, static_cast<int>(normals));
+      transform.translate.z, static_cast<int>(normals), node);
   {
     std::lock_guard<std::mutex> lock(mutex);
     if (const auto it = loaded.find(key); it != loaded.end()) return it->second;
   }
-  LoadedMesh mesh = read_mesh_file(path, transform, normals);
+  LoadedMesh mesh = read_mesh_file(path, transform, normals, node);
   std::lock_guard<std::mutex> lock(mutex);
   if (loaded.size() > 16) loaded.clear();
   loaded[key] = mesh;

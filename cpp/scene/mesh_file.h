@@ -46,18 +46,29 @@ class MeshFileError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+// The node asked for is not in the file (the reader adds /shape/node).
+class MeshNodeError : public MeshFileError {
+ public:
+  using MeshFileError::MeshFileError;
+};
 
 // The mesh at `path`, transformed; triangles of zero area are dropped (the
 // count is in dropped_triangles). Loaded once per path, size, time and
 // settings in a process, as image maps are. MeshFileError when the file is
 // missing or unreadable, has no triangle left, a vertex that is not finite,
 // or too many triangles.
+// `node`, when not empty, names a node of the file's scene graph (a glTF
+// or Collada node, an OBJ object): only the meshes of that node and of the
+// nodes under it are read, each with its node's transform times its
+// ancestors' (where it sits in the whole file), normals by the inverse
+// transpose, normalised. MeshNodeError when no node has that name, or when
+// it holds no triangle; the message lists the file's node names.
 struct LoadedMesh {
   std::shared_ptr<const MeshSurface> surface;
   std::size_t dropped_triangles = 0;
 };
 LoadedMesh load_mesh_file(const std::string& path, const MeshTransform& transform,
-                          MeshNormals normals);
+                          MeshNormals normals, const std::string& node = "");
 
 // Writes `mesh` (vertices, their normals, triangles) to `path` whole or not
 // at all: binary little-endian PLY holds the floats' bits; OBJ writes each

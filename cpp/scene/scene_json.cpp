@@ -264,7 +264,7 @@ OffsetSettings read_offset(Reader r) {
 }
 
 // /shape of type "mesh": its file (a relative path made relative to the
-// scene file by resolve_map_files), transform and normals.
+// scene file by resolve_map_files), the node to take, transform and normals.
 Shape read_mesh_shape(Reader& r) {
   Shape s;
   s.type = ShapeType::kMesh;
@@ -280,9 +280,14 @@ Shape read_mesh_shape(Reader& r) {
   t.translate = vec3_or(r, "translate", {0, 0, 0});
   const MeshNormals normals =
       r.choice<MeshNormals>("normals", kMeshNormalsNames, MeshNormals::kFile);
+  const std::string node = r.has("node") ? r.string("node") : std::string();
+  if (r.has("node") && node.empty())
+    r.fail("node", "expected the name of a node in the mesh file, got \"\"");
   LoadedMesh loaded;
   try {
-    loaded = load_mesh_file(file, t, normals);
+    loaded = load_mesh_file(file, t, normals, node);
+  } catch (const MeshNodeError& e) {
+    r.fail("node", fmt::format("{}: {}", file, e.what()));
   } catch (const MeshFileError& e) {
     r.fail("file", fmt::format("{}: {}", file, e.what()));
   }

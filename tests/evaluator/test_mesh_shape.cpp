@@ -741,12 +741,16 @@ TEST_F(MeshShapeTest, GltfUvsAreTheFilesWithVTurnedUp) {
 }
 
 // A one-triangle glTF 2.0 file, its buffer embedded as base64: positions,
-// then UVs, as floats; `uvs` may hold what OBJ's text cannot carry through
-// Assimp (its `vt nan` reads as 0), a NaN.
-std::string gltf_triangle(const std::array<float, 9>& positions, const std::array<float, 6>& uvs) {
-  std::string bytes(sizeof positions + sizeof uvs, '\0');
+// then UVs, then the vertex normals where given, as floats; `uvs` may hold
+// what OBJ's text cannot carry through Assimp (its `vt nan` reads as 0), a
+// NaN.
+json gltf_triangle_document(const std::array<float, 9>& positions, const std::array<float, 6>& uvs,
+                            const std::array<float, 9>* normals = nullptr) {
+  std::string bytes(sizeof positions + sizeof uvs + (normals ? sizeof *normals : 0), '\0');
   std::memcpy(bytes.data(), positions.data(), sizeof positions);
   std::memcpy(bytes.data() + sizeof positions, uvs.data(), sizeof uvs);
+  if (normals)
+    std::memcpy(bytes.data() + sizeof positions + sizeof uvs, normals->data(), sizeof *normals);
   static const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string base64;
   for (std::size_t i = 0; i < bytes.size(); i += 3) {
@@ -756,7 +760,7 @@ std::string gltf_triangle(const std::array<float, 9>& positions, const std::arra
     for (std::size_t k = 0; k < 4; ++k)
       base64 += i + k <= bytes.size() ? digits[(n >> (18 - 6 * k)) & 63] : '=';
   }
-  const json doc = {
+  json doc = {
       {"asset", {{"version", "2.0"}}},
       {"scene", 0},
       {"scenes", {{{"nodes", {0}}}}},
@@ -776,7 +780,96 @@ std::string gltf_triangle(const std::array<float, 9>& positions, const std::arra
          {"min", {0, 0, 0}},
          {"max", {1, 1, 0}}},
         {{"bufferView", 1}, {"componentType", 5126}, {"count", 3}, {"type", "VEC2"}}}}};
-  return doc.dump();
+  if (normals) {
+    doc["bufferViews"].push_back({{"buffer", 0},
+                                  {"byteOffset", sizeof positions + sizeof uvs},
+                                  {"byteLength", sizeof *normals}});
+    doc["accessors"].push_back(
+        {{"bufferView", 2}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}});
+    doc["meshes"][0]["primitives"][0]["attributes"]["NORMAL"] = 2;
+  }
+  return doc;
+}
+std::string gltf_triangle(const std::array<float, 9>& positions, const std::array<float, 6>& uvs) {
+  return gltf_triangle_document(positions, uvs).dump();
+}
+
+// A node of a file is read where it sits in the whole file: a glTF
+// triangle with tilted vertex normals under a child node (rotation and a
+// non-uniform scale) of a parent (rotation and translation), read by its
+// child's name, against the whole file read through Assimp's own
+// aiProcess_PreTransformVertices (its positions within 1e-6 of the scene's
+// size, its normals' directions within 1e-6: float matrices either way);
+// the parent's name gives the same triangle; a name the file lacks is
+// refused at /shape/node with the names it has, as an empty one is; and
+// the glTF ClearCoat sample's row R3_BaseNormals is its three tiles, each
+// vertex one of the whole file's.
+TEST_F(MeshShapeTest, ANodeIsReadWhereItSitsInTheFile) {
+  const std::array<float, 9> positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const float s = 1.0f / std::sqrt(1.09f);
+  const std::array<float, 9> normals = {0.3f * s, 0, s, 0, 0.3f * s, s, -0.3f * s, 0, s};
+  json doc = gltf_triangle_document(positions, {0, 0, 1, 0, 0, 1}, &normals);
+  doc["nodes"] = {{{"name", "parent"},
+                   {"children", {1}},
+                   {"rotation", {0.0, 0.38268343, 0.0, 0.92387953}},  // 45 degrees about y
+                   {"translation", {1.0, -2.0, 0.5}}},
+                  {{"name", "child"},
+                   {"mesh", 0},
+                   {"rotation", {0.25881905, 0.0, 0.0, 0.96592583}},  // 30 degrees about x
+                   {"scale", {2.0, 0.5, 1.0}}}};
+  std::ofstream(path("nodes.gltf")) << doc.dump();
+  const LoadedMesh whole = load_mesh_file(path("nodes.gltf"), MeshTransform{}, MeshNormals::kFile);
+  for (const char* node : {"child", "parent"}) {
+    const LoadedMesh part =
+        load_mesh_file(path("nodes.gltf"), MeshTransform{}, MeshNormals::kFile, node);
+    const TriangleMesh &a = part.surface->mesh, &b = whole.surface->mesh;
+    ASSERT_EQ(a.triangles, b.triangles) << node;
+    for (std::size_t v = 0; v < a.vertex_count(); ++v) {
+      const auto at = [](const std::vector<float>& x, std::size_t i) {
+        return Vec3{x[3 * i], x[3 * i + 1], x[3 * i + 2]};
+      };
+      EXPECT_LT(length(at(a.positions, v) - at(b.positions, v)), 1e-6 * 3.0) << node << " " << v;
+      EXPECT_LT(length(normalize(at(a.normals, v)) - normalize(at(b.normals, v))), 1e-6)
+          << node << " " << v;
+    }
+  }
+  json scene = small_scene();
+  for (const char* node : {"stranger", ""}) {
+    scene["shape"] = {{"type", "mesh"}, {"file", path("nodes.gltf")}, {"node", node}};
+    try {
+      scene_from_json(scene, "scene.json");
+      ADD_FAILURE() << "node \"" << node << "\" was read";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.pointer(), "/shape/node");
+      if (*node) {
+        EXPECT_NE(std::string(e.what()).find("\"parent\", \"child\""), std::string::npos)
+            << e.what();
+      }
+    }
+  }
+  const std::string clear_coat = "/usr/share/assimp/models/glTF2/ClearCoat-glTF/ClearCoatTest.gltf";
+  ASSERT_TRUE(std::filesystem::exists(clear_coat)) << "apt-get install assimp-testmodels";
+  const TriangleMesh all = load_mesh_file(clear_coat, {}, MeshNormals::kFile).surface->mesh;
+  const TriangleMesh row =
+      load_mesh_file(clear_coat, {}, MeshNormals::kFile, "R3_BaseNormals").surface->mesh;
+  std::size_t tiles = 0;
+  for (const char* tile : {"R3_BaseLayerSample", "R3_ClearCoatSample", "R3_CoatOnlySample"})
+    tiles +=
+        load_mesh_file(clear_coat, {}, MeshNormals::kFile, tile).surface->mesh.triangle_count();
+  EXPECT_EQ(row.triangle_count(), tiles);
+  EXPECT_LT(row.triangle_count(), all.triangle_count());
+  // Float matrices applied in float (Assimp) or double (the reader) may
+  // part by an ulp: 1e-5 of these few units.
+  std::size_t found = 0;
+  for (std::size_t v = 0; v < row.vertex_count(); ++v)
+    for (std::size_t w = 0; w < all.vertex_count(); ++w)
+      if (std::abs(row.positions[3 * v] - all.positions[3 * w]) < 1e-5f &&
+          std::abs(row.positions[3 * v + 1] - all.positions[3 * w + 1]) < 1e-5f &&
+          std::abs(row.positions[3 * v + 2] - all.positions[3 * w + 2]) < 1e-5f) {
+        ++found;
+        break;
+      }
+  EXPECT_EQ(found, row.vertex_count());
 }
 
 // Texture coordinates that are not numbers are refused where the file is
