@@ -31,6 +31,11 @@ struct MeshSurface {
   // cache keys and mesh keys, wherever its file lies.
   std::string digest;
   std::string file;  // where it was read from, for messages
+  // The normal texture its materials name (glTF normalTexture, an OBJ
+  // material's `norm`), a path; empty with the reason in
+  // normal_texture_why_not when they name none, several, or one Penumbra
+  // cannot read (embedded, or over another UV set).
+  std::string normal_texture, normal_texture_why_not;
   Vec3 bounds_min, bounds_max;
   // The file's first texture coordinates per corner (u, v; 6 per triangle;
   // v up, as OBJ, Blender and Assimp's glTF reader give them), empty when it

@@ -133,6 +133,51 @@ RawMesh read_triangles(const std::vector<PlacedMesh>& meshes) {
   return raw;
 }
 
+// The one normal texture the read meshes' materials name, resolved against
+// the mesh file's folder, or why there is none to read.
+void find_normal_texture(const aiScene& scene, const std::vector<PlacedMesh>& meshes,
+                         const std::string& path, MeshSurface* s) {
+  std::vector<std::string> names;
+  std::size_t without = 0;
+  for (const PlacedMesh& p : meshes) {
+    if (!(p.mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+    const aiMaterial* material = p.mesh->mMaterialIndex < scene.mNumMaterials
+                                     ? scene.mMaterials[p.mesh->mMaterialIndex]
+                                     : nullptr;
+    aiString name;
+    unsigned uv_set = 0;
+    if (!material || material->GetTextureCount(aiTextureType_NORMALS) == 0 ||
+        material->GetTexture(aiTextureType_NORMALS, 0, &name, nullptr, &uv_set) != AI_SUCCESS) {
+      ++without;
+      continue;
+    }
+    if (scene.GetEmbeddedTexture(name.C_Str()) || name.C_Str()[0] == '*') {
+      s->normal_texture_why_not = fmt::format(
+          "its normal texture \"{}\" is embedded in the file, which Penumbra does not "
+          "read; give the image as /height/file",
+          name.C_Str());
+      return;
+    }
+    if (uv_set != 0) {
+      s->normal_texture_why_not = fmt::format(
+          "its normal texture \"{}\" reads texture coordinate set {}; Penumbra reads the first",
+          name.C_Str(), uv_set);
+      return;
+    }
+    if (std::find(names.begin(), names.end(), name.C_Str()) == names.end())
+      names.push_back(name.C_Str());
+  }
+  if (names.empty())
+    s->normal_texture_why_not = "its materials name no normal texture";
+  else if (names.size() > 1 || without > 0)
+    s->normal_texture_why_not = fmt::format(
+        "its meshes name {} normal textures ({}){}; take one node (/shape/node) or give "
+        "/height/file",
+        names.size(), fmt::join(names, ", "), without > 0 ? " and some none" : "");
+  else
+    s->normal_texture = (fs::path(path).parent_path() / names[0]).lexically_normal().string();
+}
+
 // Deeper node trees are refused rather than walked (a file may nest its
 // nodes without end).
 constexpr int kMaxNodeDepth = 256;
@@ -328,7 +373,8 @@ LoadedMesh read_mesh_file(const std::string& path, const MeshTransform& transfor
   const aiScene* scene = importer.ReadFile(path, flags);  // may throw from aiAssertViolation
   if (!scene)
     throw MeshFileError(fmt::format("not a mesh Assimp reads: {}", importer.GetErrorString()));
-  RawMesh raw = read_triangles(meshes_to_read(*scene, node));
+  const std::vector<PlacedMesh> meshes = meshes_to_read(*scene, node);
+  RawMesh raw = read_triangles(meshes);
   if (raw.triangles.size() / 3 > kMaxMeshTriangles)
     throw MeshFileError(fmt::format("{} triangles, more than the {} a mesh may have",
                                     raw.triangles.size() / 3, kMaxMeshTriangles));
@@ -361,6 +407,7 @@ LoadedMesh read_mesh_file(const std::string& path, const MeshTransform& transfor
   if (surface.has_uvs()) surface.tangents = mikktspace_tangents(surface.mesh, surface.uvs);
   surface.digest = digest_of(surface);
   surface.file = path;
+  find_normal_texture(*scene, meshes, path, &surface);
   measure_mesh(&surface);
   loaded.surface = std::make_shared<const MeshSurface>(std::move(surface));
   return loaded;

@@ -344,13 +344,27 @@ Material read_material(Reader r) {
   return m;
 }
 
+// The image a map reads: /height/file, or for a normal map on a mesh
+// without one, the normal texture the mesh file's materials name.
+std::string map_file(Reader& r, MapKind kind, const Shape& shape) {
+  if (kind == MapKind::kNormal && shape.type == ShapeType::kMesh && !r.has("file")) {
+    if (shape.mesh->normal_texture.empty())
+      r.fail("file", fmt::format("expected the path of an image file: the mesh {} has no normal "
+                                 "texture of its own to read ({})",
+                                 shape.mesh->file, shape.mesh->normal_texture_why_not));
+    return shape.mesh->normal_texture;
+  }
+  const std::string file = r.string("file");
+  if (file.empty()) r.fail("file", "expected the path of an image file, got \"\"");
+  return file;
+}
+
 // /height/file and its placement. A relative path is taken from the working
 // directory here; load_scene and studies make it relative to the scene file
 // first, after every override (resolve_map_files).
-void read_map(Reader& r, HeightSpec* h) {
+void read_map(Reader& r, HeightSpec* h, const Shape& shape) {
   const MapKind kind = h->family == HeightFamily::kHeightMap ? MapKind::kHeight : MapKind::kNormal;
-  const std::string file = r.string("file");
-  if (file.empty()) r.fail("file", "expected the path of an image file, got \"\"");
+  const std::string file = map_file(r, kind, shape);
   const std::string channel =
       kind == MapKind::kHeight && r.has("channel") ? r.string("channel") : "";
   std::shared_ptr<const SurfaceMap> loaded;
@@ -448,7 +462,7 @@ HeightSpec read_height(Reader r, const Shape& shape) {
   }
   const bool image = h.family == HeightFamily::kHeightMap || h.family == HeightFamily::kNormalMap;
   if (image) check_map_on_mesh(r, shape);
-  if (image) read_map(r, &h);
+  if (image) read_map(r, &h, shape);
   std::optional<FilterChoice> filter;
   if (image && r.has("filter")) filter = read_filter(r.object("filter"));
   if (h.family == HeightFamily::kNormalMap) {
@@ -868,22 +882,26 @@ nlohmann::json asset_scene_document(const std::string& path) {
   // The box's face towards the camera, with 10 % to spare; a flat mesh seen
   // edge-on still gets a view of its size.
   const double side = 1.1 * std::max({extent.x, extent.y, 0.1 * r});
-  return {{"version", 1},
-          {"name", std::filesystem::path(path).stem().string()},
-          {"camera",
-           {{"projection", "orthographic"},
-            {"position", {c.x, c.y, c.z - 3.0 * r}},
-            {"direction", {0, 0, 1}},
-            {"right", {side, 0, 0}},
-            {"up", {0, side, 0}},
-            {"width", 256},
-            {"height", 256},
-            {"spp", 16},
-            {"seed", 1}}},
-          {"light", {{"type", "distant"}, {"direction", {-1, 0.3, -0.2}}, {"irradiance", kPi}}},
-          {"shape", {{"type", "mesh"}, {"file", file}}},
-          {"material", {{"albedo", 0.8}}},
-          {"representation", "bump"}};
+  nlohmann::json doc = {
+      {"version", 1},
+      {"name", std::filesystem::path(path).stem().string()},
+      {"camera",
+       {{"projection", "orthographic"},
+        {"position", {c.x, c.y, c.z - 3.0 * r}},
+        {"direction", {0, 0, 1}},
+        {"right", {side, 0, 0}},
+        {"up", {0, side, 0}},
+        {"width", 256},
+        {"height", 256},
+        {"spp", 16},
+        {"seed", 1}}},
+      {"light", {{"type", "distant"}, {"direction", {-1, 0.3, -0.2}}, {"irradiance", kPi}}},
+      {"shape", {{"type", "mesh"}, {"file", file}}},
+      {"material", {{"albedo", 0.8}}},
+      {"representation", "bump"}};
+  // An asset that names its own normal map is shaded with it.
+  if (!m.normal_texture.empty() && m.has_uvs()) doc["height"] = {{"type", "normal-map"}};
+  return doc;
 }
 
 }  // namespace penumbra

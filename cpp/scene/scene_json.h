@@ -60,9 +60,10 @@ bool is_scene_file_name(const std::string& path);
 // by an orthographic camera that frames its bounding box with a margin of
 // 10 % (a square view, 256 x 256 px, 16 spp), lit by the sun from the calibration
 // scenes' direction (towards the light (-1, 0.3, -0.2): a terminator crosses
-// the view), albedo 0.8, the bump representation with no height (smooth
-// until a height is set with --set). InputError naming the file when it is
-// not a mesh Assimp reads.
+// the view), albedo 0.8, the bump representation with the asset's own
+// normal map where its materials name one (MeshSurface::normal_texture),
+// no height otherwise (smooth until a height is set with --set). InputError
+// naming the file when it is not a mesh Assimp reads.
 nlohmann::json asset_scene_document(const std::string& path);
 
 }  // namespace penumbra

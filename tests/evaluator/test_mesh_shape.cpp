@@ -872,6 +872,60 @@ TEST_F(MeshShapeTest, ANodeIsReadWhereItSitsInTheFile) {
   EXPECT_EQ(found, row.vertex_count());
 }
 
+// A mesh file's own normal texture is its normal map where /height/file is
+// absent: the ClearCoat sample's tile R3_BaseLayerSample (RibsNormal.png)
+// renders the bits of the same scene naming that file; the whole sample,
+// whose tiles name two textures and some none, is refused at /height/file
+// naming them, as a file whose materials name none is; and a file naming
+// one is shaded with it by default (asset_scene_document).
+TEST_F(MeshShapeTest, AMeshsOwnNormalTextureIsItsNormalMap) {
+  const std::string folder = "/usr/share/assimp/models/glTF2/ClearCoat-glTF/";
+  ASSERT_TRUE(std::filesystem::exists(folder + "ClearCoatTest.gltf"))
+      << "apt-get install assimp-testmodels";
+  json scene = small_scene();
+  scene["shape"] = {
+      {"type", "mesh"}, {"file", folder + "ClearCoatTest.gltf"}, {"node", "R3_BaseLayerSample"}};
+  scene["representation"] = "bump";
+  scene["height"] = {{"type", "normal-map"}};
+  json named = scene;
+  named["height"]["file"] = folder + "RibsNormal.png";
+  const Image own = render(scene_from_json(scene, "own")),
+              file = render(scene_from_json(named, "named"));
+  EXPECT_EQ(own.pixels, file.pixels);
+  json flat = scene;
+  flat["height"] = {{"type", "none"}};
+  EXPECT_NE(own.pixels, render(scene_from_json(flat, "no map")).pixels);
+  const auto refused = [&](const json& doc, const std::string& reason) {
+    try {
+      scene_from_json(doc, "scene.json");
+      ADD_FAILURE() << "read without a normal texture: " << reason;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.pointer(), "/height/file");
+      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos) << e.what();
+    }
+  };
+  json whole = scene;
+  whole["shape"].erase("node");
+  refused(whole, "2 normal textures (RibsNormal.png, PlasticWrap_normals.jpg) and some none");
+  std::ofstream(path("plain.gltf"))
+      << gltf_triangle({0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 0, 1, 0, 0, 1});
+  json plain = scene;
+  plain["shape"] = {{"type", "mesh"}, {"file", path("plain.gltf")}};
+  refused(plain, "name no normal texture");
+  EXPECT_FALSE(asset_scene_document(path("plain.gltf")).contains("height"));
+  json textured = gltf_triangle_document({0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 0, 1, 0, 0, 1});
+  textured["materials"] = {{{"normalTexture", {{"index", 0}}}}};
+  textured["textures"] = {{{"source", 0}}};
+  textured["images"] = {{{"uri", "ribs.png"}}};
+  textured["meshes"][0]["primitives"][0]["material"] = 0;
+  std::ofstream(path("textured.gltf")) << textured.dump();
+  std::filesystem::copy_file(folder + "RibsNormal.png", path("ribs.png"));
+  const json asset = asset_scene_document(path("textured.gltf"));
+  EXPECT_EQ(asset.at("height"), json({{"type", "normal-map"}}));
+  EXPECT_EQ(scene_from_json(asset, "asset").height.map->digest,
+            scene_from_json(named, "named").height.map->digest);
+}
+
 // Texture coordinates that are not numbers are refused where the file is
 // named, with the vertex; the same triangle with finite ones loads with
 // them. (Assimp keeps a glTF buffer's floats as they are.)
