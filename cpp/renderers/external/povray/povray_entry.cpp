@@ -50,7 +50,7 @@ const RendererEntry& povray_entry() {
                .note = "POV-Ray 3.7: bump via normal{function} (image height maps: the same cubic "
                        "B-spline as SDL functions over nearest-texel lookups), ground truth via "
                        "isosurface (image maps, the plane and mesh shapes: the evaluator's "
-                       "displaced mesh as a mesh2; bump on a mesh shape is evaluator-only)",
+                       "displaced mesh as a mesh2; no bump on a mesh shape)",
                .bump_methods = {TerminatorMethod::kNone},
                .other_methods = {TerminatorMethod::kNone},
                .methods_why_not = "POV-Ray has no shadow-terminator method (raw bump only)",
@@ -69,9 +69,9 @@ const RendererEntry& povray_entry() {
                .plane = true,
                .consistent_normals_why_not = "POV-Ray 3.7 interpolates mesh2 normal_vectors "
                                              "linearly; it has no view-dependent shading normal",
-               .mesh_bump_why_not = "bump on a mesh shape is evaluator-only: POV-Ray's bump "
-                                    "pattern differentiates h in 3D around the hit, the "
-                                    "evaluator over the flat triangle; its smooth and "
+               .mesh_bump_why_not = "POV-Ray's bump pattern differentiates h in 3D around the "
+                                    "hit, where the evaluator and Cycles differentiate it over "
+                                    "a mesh's flat triangle; a mesh shape's smooth and "
                                     "displacement representations are exported"},
       .render = render_povray,
       .version = external::probe_version,
