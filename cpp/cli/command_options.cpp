@@ -78,7 +78,13 @@ std::vector<Override> collect_overrides(const SceneArgs& a) {
 }  // namespace
 
 LoadedScene read_scene(const std::string& path, const SceneArgs& a) {
-  if (!is_scene_file_name(path)) return read_scene_document(asset_scene_document(path), path, a);
+  if (!is_scene_file_name(path)) {
+    // The default scene frames what will be read: the node a --set names.
+    std::string node;
+    for (const Override& o : collect_overrides(a))
+      if (o.pointer == "/shape/node" && o.value.is_string()) node = o.value.get<std::string>();
+    return read_scene_document(asset_scene_document(path, node), path, a);
+  }
   return read_scene_document(read_json_file(path), path, a);
 }
 

@@ -866,11 +866,13 @@ bool is_scene_file_name(const std::string& path) {
   return extension == ".json";
 }
 
-nlohmann::json asset_scene_document(const std::string& path) {
+nlohmann::json asset_scene_document(const std::string& path, const std::string& node) {
   const std::string file = std::filesystem::absolute(path).lexically_normal().string();
   LoadedMesh loaded;
   try {
-    loaded = load_mesh_file(file, MeshTransform{}, MeshNormals::kFile);
+    loaded = load_mesh_file(file, MeshTransform{}, MeshNormals::kFile, node);
+  } catch (const MeshNodeError& e) {
+    throw InputError(path, "/shape/node", e.what());
   } catch (const MeshFileError& e) {
     throw InputError(
         path, "",
@@ -899,6 +901,7 @@ nlohmann::json asset_scene_document(const std::string& path) {
       {"shape", {{"type", "mesh"}, {"file", file}}},
       {"material", {{"albedo", 0.8}}},
       {"representation", "bump"}};
+  if (!node.empty()) doc["shape"]["node"] = node;
   // An asset that names its own normal map is shaded with it.
   if (!m.normal_texture.empty() && m.has_uvs()) doc["height"] = {{"type", "normal-map"}};
   return doc;

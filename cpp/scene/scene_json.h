@@ -63,7 +63,9 @@ bool is_scene_file_name(const std::string& path);
 // the view), albedo 0.8, the bump representation with the asset's own
 // normal map where its materials name one (MeshSurface::normal_texture),
 // no height otherwise (smooth until a height is set with --set). InputError
-// naming the file when it is not a mesh Assimp reads.
-nlohmann::json asset_scene_document(const std::string& path);
+// naming the file when it is not a mesh Assimp reads. With `node`, the
+// scene is of that node of the file (/shape/node), framed and shaded as
+// the node's meshes are.
+nlohmann::json asset_scene_document(const std::string& path, const std::string& node = "");
 
 }  // namespace penumbra

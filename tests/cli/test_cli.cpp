@@ -197,6 +197,31 @@ TEST_F(Cli, RenderTakesAMeshFileFramedByADefaultScene) {
   EXPECT_FALSE(fs::exists(path("bad.exr")));
 }
 
+// A mesh file with --set /shape/node: the default scene frames that node
+// and shades it with its own normal texture. The ClearCoat sample's tile
+// R3_BaseLayerSample (RibsNormal.png) fills the view but for its margin,
+// where the whole sample's 6 x 3 tiles and labels would leave most of it
+// empty; a node the file lacks is exit 2 at /shape/node.
+TEST_F(Cli, RenderFramesTheNodeASetNames) {
+  const std::string gltf = "/usr/share/assimp/models/glTF2/ClearCoat-glTF/ClearCoatTest.gltf";
+  ASSERT_TRUE(fs::exists(gltf)) << "apt-get install assimp-testmodels";
+  const Result r = run({"render", gltf, "-o", path("tile.exr"), "--width", "48", "--height", "48",
+                        "--set", "/shape/node=R3_BaseLayerSample"});
+  ASSERT_EQ(r.code, kExitOk) << r.err;
+  std::map<std::string, std::string> attributes;
+  const Image image = read_image(path("tile.exr"), &attributes);
+  const nlohmann::json scene = nlohmann::json::parse(attributes.at("penumbra:scene"));
+  EXPECT_EQ(scene.at("height").at("type"), "normal-map");
+  std::size_t covered = 0;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) covered += image.at(x, y, 3) == 1.0f;
+  EXPECT_GT(covered, 48u * 48u * 6 / 10) << "the tile is framed";
+  const Result bad = run({"render", gltf, "-o", path("bad.exr"), "--set", "/shape/node=nothing"});
+  EXPECT_EQ(bad.code, kExitBadInput);
+  EXPECT_NE(bad.err.find("/shape/node"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(path("bad.exr")));
+}
+
 // `penumbra mesh` writes the triangles a scene stands for. PLY keeps the
 // floats' bits: the mesh read back renders the tessellated sphere's smooth
 // image bit for bit. OBJ keeps 9 significant digits, which name every float
