@@ -224,6 +224,9 @@ def renderers_section(renderers):
             why = r.get(key + '_why_not', '')
             lines.append((label, 'yes' if r.get(key) else 'no' + (f': {cell(why)}' if why else '')))
         lines.append(('props (extra spheres)', 'yes' if r.get('props') else 'no'))
+        if r.get('reference_ni_methods'):
+            lines.append(('reference normal Ni whatever the scene says (on a mesh under Ng: '
+                          'refused)', ', '.join(code(m) for m in r['reference_ni_methods'])))
         out += [f'- {label}: {text}' for label, text in lines]
     return out
 

@@ -48,7 +48,8 @@ json renderer_json(const RendererInfo& info) {
           {"consistent_normals", info.consistent_normals},
           {"consistent_normals_why_not", info.consistent_normals_why_not},
           {"mesh_bump", info.mesh_bump},
-          {"mesh_bump_why_not", info.mesh_bump_why_not}};
+          {"mesh_bump_why_not", info.mesh_bump_why_not},
+          {"reference_ni_methods", method_ids(info.reference_ni_methods)}};
 }
 
 std::string join_ids(const json& ids) {
@@ -78,6 +79,9 @@ void print_renderer(const RendererInfo& info, std::ostream& out) {
   if (*info.consistent_normals_why_not)
     out << fmt::format("  consistent normals: {}\n", info.consistent_normals_why_not);
   if (*info.mesh_bump_why_not) out << fmt::format("  mesh bump: {}\n", info.mesh_bump_why_not);
+  if (!info.reference_ni_methods.empty())
+    out << fmt::format("  reference normal Ni whatever the scene says: {}\n",
+                       join_ids(j["reference_ni_methods"]));
 }
 
 }  // namespace

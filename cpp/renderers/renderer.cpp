@@ -40,6 +40,19 @@ bool offers(const RendererInfo& info, OffsetMethod offset) {
   return std::find(list.begin(), list.end(), offset) != list.end();
 }
 
+std::string mesh_method_why_not(const RendererInfo& info, TerminatorMethod method,
+                                ReferenceNormal reference) {
+  const auto& ni = info.reference_ni_methods;
+  if (reference == ReferenceNormal::kInterpolated ||
+      std::find(ni.begin(), ni.end(), method) == ni.end())
+    return "";
+  return fmt::format(
+      "{} takes the reference normal of `{}` as the interpolated normal Ni; on a mesh shape the "
+      "evaluator's takes /terminator/reference_normal, \"Ng\" here (set it to \"Ni\" to "
+      "compare them)",
+      info.name, method_info(method).id);
+}
+
 void refuse_unoffered(const Scene& scene, const RendererInfo& info, const char* name) {
   if (scene.height.height_map() && !info.height_maps)
     throw ExportError(std::string(name) + " export: " + info.height_maps_why_not);
@@ -55,6 +68,12 @@ void refuse_unoffered(const Scene& scene, const RendererInfo& info, const char* 
                                (scene.height.height_map() || !scene.height.function.terms.empty());
   if (scene.shape.type == ShapeType::kMesh && bumps_by_height && !info.mesh_bump)
     throw ExportError(std::string(name) + " export: " + info.mesh_bump_why_not);
+  const bool bumps = bumps_by_height ||
+                     (scene.representation == Representation::kBump && scene.height.normal_map());
+  if (const std::string why = mesh_method_why_not(info, scene.terminator.method.method,
+                                                  scene.terminator.reference_normal);
+      scene.shape.type == ShapeType::kMesh && bumps && !why.empty())
+    throw ExportError(std::string(name) + " export: " + why);
 }
 
 namespace {

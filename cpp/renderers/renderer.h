@@ -147,6 +147,11 @@ struct RendererInfo {
   // core/mesh_surface.h); normal maps are `normal_maps`.
   bool mesh_bump = false;
   const char* mesh_bump_why_not = "";  // "" when it is offered
+  // Bump methods whose reference normal this renderer takes as the
+  // interpolated Ni whatever /terminator/reference_normal says (Cycles'
+  // Bump node and Normal Map node carry Chiang's term against Ni). On a
+  // mesh with the reference Ng they are not the evaluator's method.
+  std::vector<TerminatorMethod> reference_ni_methods = {};
 
   // Runs a program of its own (and so writes a log and needs a geometry
   // pass for its analysis channels); false for the built-in evaluator.
@@ -188,9 +193,16 @@ std::vector<OffsetMethod> offsets_offered(const RendererInfo& info);
 bool offers(const RendererInfo& info, Representation representation, TerminatorMethod method);
 bool offers(const RendererInfo& info, OffsetMethod offset);
 
+// Why the row's renderer does not render `method`'s bump of a mesh shape
+// whose reference normal is `reference` ("" when it does):
+// reference_ni_methods under Ng.
+std::string mesh_method_why_not(const RendererInfo& info, TerminatorMethod method,
+                                ReferenceNormal reference);
+
 // Refuses, with the row's reason, the scene features the row says its
 // renderer (exported as `name`) cannot render: height or normal maps, the
-// plane, consistent normal interpolation.
+// plane, consistent normal interpolation, bump on a mesh or a method whose
+// reference normal there is not the scene's.
 void refuse_unoffered(const Scene& scene, const RendererInfo& info, const char* name);
 
 // The estimate of a render that holds the evaluator's image plus

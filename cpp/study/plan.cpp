@@ -218,6 +218,20 @@ std::string cannot_bump(RendererKind r, SectionKind kind, const json& scene) {
   return std::string(info.mesh_bump_why_not) + "; the displaced truth is rendered";
 }
 
+// Why renderer r renders this mesh scene's bump but not method m's (""
+// when it does): the method's reference normal there is not the scene's
+// (mesh_method_why_not).
+std::string cannot_bump_method(RendererKind r, const Section& section, const StudyMethod& m,
+                               const json& scene) {
+  const json::json_pointer shape("/shape/type"), reference("/terminator/reference_normal");
+  if (section.kind != SectionKind::kBump || !scene.contains(shape) || scene[shape] != "mesh")
+    return "";
+  const ReferenceNormal normal = scene.contains(reference) && scene[reference] == "Ni"
+                                     ? ReferenceNormal::kInterpolated
+                                     : ReferenceNormal::kGeometric;
+  return mesh_method_why_not(renderer_info(r), *method_from_id(m.id), normal);
+}
+
 // ---- expansion ------------------------------------------------------------------
 
 // The override lists a section shares between its variants: the truth's and
@@ -311,9 +325,17 @@ void add_renderer_jobs(const VariantContext& c, RendererKind r, Variant& v, std:
       plan.skipped.push_back(skipped);
     return;
   }
-  for (std::size_t m = 0; m < c.section.methods.size(); ++m)
-    if (section_offers(c.section.kind, r, c.section.methods[m]))
-      add_job(c, r, m, v, index, shared, plan);
+  for (std::size_t m = 0; m < c.section.methods.size(); ++m) {
+    if (!section_offers(c.section.kind, r, c.section.methods[m])) continue;
+    if (const std::string why = cannot_bump_method(r, c.section, c.section.methods[m], scene);
+        !why.empty()) {
+      const SkippedRenderer skipped{c.section.kind, r, v.scene, why, ""};
+      if (std::find(plan.skipped.begin(), plan.skipped.end(), skipped) == plan.skipped.end())
+        plan.skipped.push_back(skipped);
+      continue;
+    }
+    add_job(c, r, m, v, index, shared, plan);
+  }
 }
 
 void add_section(const Study& study, const Section& section, double max_memory_bytes, Plan& plan) {

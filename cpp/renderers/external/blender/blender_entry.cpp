@@ -82,7 +82,8 @@ const RendererEntry& blender_entry() {
            .plane = true,
            .consistent_normals_why_not = "Cycles interpolates a smooth mesh's normals "
                                          "linearly; it has no consistent normal interpolation",
-           .mesh_bump = true},
+           .mesh_bump = true,
+           .reference_ni_methods = {TerminatorMethod::kChiang2019}},
       .render = render_blender,
       .version = external::probe_version,
       .pixel_code_digest = blender_code_digest,

@@ -557,7 +557,9 @@ TEST_F(Renderers, CyclesRendersANormalMappedMeshLikeTheEvaluator) {
 // on the flat triangle (the Displacement socket for `none`, the Bump node
 // for cycles34) and as a height map baked over the sphere's (u, v) and read
 // through the mesh's UVs. Both differentiate h over the flat triangle and
-// tilt Ni by it (facet_bump_gradient; Cycles' svm_node_set_bump). Cycles
+// tilt Ni by it (facet_bump_gradient; Cycles' svm_node_set_bump); chiang2019
+// takes the reference normal Ni, which Cycles' Bump node always takes, and
+// is refused under the default Ng (mesh_method_why_not). Cycles
 // differences h forward over the pixel footprint, so its slope is the
 // slope half a footprint away: a residual linear in the footprint (the
 // calibration's, docs/calibration.md), and nothing else may remain. So
@@ -580,13 +582,16 @@ TEST_F(Renderers, CyclesBumpsAMeshLikeTheEvaluator) {
   json mapped = doc;
   mapped["height"] = {{"type", "height-map"}, {"file", path("height.exr")}, {"amplitude", 0.03}};
   const double scale = radiance_scale(scene_from_json(doc, "bumped mesh sphere"));
+  json chiang = doc;
+  chiang["terminator"] = {{"method", "chiang2019"}};
+  EXPECT_THROW(export_blender(scene_from_json(chiang, "chiang2019 against Ng")), ExportError);
   for (const auto& [name, base] : {std::pair{"function", doc}, std::pair{"height map", mapped}})
-    for (const char* method : {"none", "cycles34"}) {
+    for (const char* method : {"none", "cycles34", "chiang2019"}) {
       double residual[2];
       int k = 0;
       for (const auto& [pixels, spp] : {std::pair{96, 64}, std::pair{384, 4}}) {
         json d = base;
-        d["terminator"] = {{"method", method}};
+        d["terminator"] = {{"method", method}, {"reference_normal", "Ni"}};
         d["camera"]["width"] = d["camera"]["height"] = pixels;
         d["camera"]["spp"] = spp;
         const Scene scene = scene_from_json(d, "bumped mesh sphere");
