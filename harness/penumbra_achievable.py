@@ -205,6 +205,14 @@ def constant_of(c, e, p):
     return {'method': c.get(e, p, 'method', str, 'a string'),
             'constant': c.get(e, p, 'constant', str, 'a string'),
             'published': number('published'),
+            # absent before fit.json's contents 6: every one published
+            'reference': (c.get(e, p, 'reference', str, 'a string')
+                          if 'reference' in e else 'published'),
+            # null or absent: fitted through the grid, or no render to match
+            'probe_minus_rendered': (
+                num(c.get(e, p, 'probe_minus_rendered', (int, float),
+                          'a number or null'))
+                if e.get('probe_minus_rendered') is not None else None),
             'fitted': c.interval(e, p, 'fitted'),
             'error_published': c.interval(e, p, 'error_published'),
             'error_in_sample': c.interval(e, p, 'error_fitted_in_sample'),

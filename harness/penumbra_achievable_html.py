@@ -130,6 +130,13 @@ def inside(c):
     return math.isfinite(lo + hi) and lo <= c['published'] <= hi
 
 
+def reference_text(c, noun=''):
+    """What a constant is fitted against: the published value, or (a
+    constant no paper publishes, shading-offset's s) the study's own."""
+    return ('the published' + noun if c['reference'] == 'published'
+            else c['reference'])
+
+
 def constant_sentence(group):
     """One sentence for a method's constants: fitted values with their
     intervals against the published ones, and whether those lie inside.
@@ -140,10 +147,12 @@ def constant_sentence(group):
             if bound else '')
     if len(group) == 1:
         c = group[0]
+        ref = reference_text(c)
         return (f'{c["method"]}: fitted {c["constant"]}: {symbol(c)} = '
                 f'{frac(c["fitted"], 3)} (dimensionless; 95 % bootstrap '
-                f'interval over variants) against the published '
-                f'{fmt(c["published"], digits=4)}; the published constant '
+                f'interval over variants) against {ref} '
+                f'{fmt(c["published"], digits=4)}; '
+                f'{reference_text(c, " constant")} '
                 'lies ' + ('inside' if inside(c) else 'outside') +
                 ' the interval.' + edge)
     names = [symbol(c) for c in group]
@@ -185,7 +194,9 @@ def constants_context(fit):
             digits = 3 if len(group) == 1 else 4
             rows.append([c['method'] + ('' if len(group) == 1
                                         else f' {symbol(c)}'),
-                         {'text': fmt(c['published'], digits=5),
+                         {'text': fmt(c['published'], digits=5)
+                          + ('' if c['reference'] == 'published'
+                             else f' ({c["reference"]})'),
                           'cls': 'n'},
                          frac_cell(c['fitted'], digits),
                          'yes' if inside(c) else 'no',
@@ -202,8 +213,14 @@ def constants_context(fit):
             'held out − published, paired (percentage points)',
             'held out vs published',
             f'E fitted, in-sample ({PCT}; fitted on these variants)']
+    probed = [c for c in fit['constants']
+              if c['probe_minus_rendered'] is not None]
     return {'sentences': sentences,
-            'table': table(head, rows) if rows else None}
+            'table': table(head, rows) if rows else None,
+            'probed': ', '.join(c['method'] for c in probed),
+            'probe_check': (fmt(max(c['probe_minus_rendered']
+                                    for c in probed) * 100, digits=2)
+                            if probed else None)}
 
 
 def sees_more(fit, method):

@@ -469,6 +469,16 @@ double microshadow_brinck2016(double cos_theta, double visibility) {
   return clamp01(cos_theta + 2.0 * v * v - 1.0);
 }
 
+double microshadow_chan2018(double cos_theta, double visibility, double p) {
+  const double c = clamp01(cos_theta);
+  if (!(visibility < 1.0)) return c > 0.0 ? 1.0 : 0.0;
+  return std::pow(clamp01(c / std::sqrt(1.0 - std::max(visibility, 0.0))), p);
+}
+
+double microshadow_brinck2016(double cos_theta, double visibility, double q) {
+  return clamp01(cos_theta + 2.0 * std::pow(clamp01(visibility), q) - 1.0);
+}
+
 // The vectors come by reference, not in a ShadingVectors: shade() would
 // copy them out of a ShadingPoint its caller has just written, and those
 // wider loads stall on the narrower stores (a fifth of a bump render).

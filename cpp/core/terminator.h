@@ -173,6 +173,12 @@ double cycles45_conty(const Vec3& ni, const Vec3& ns, const Vec3& wi);
 // Unity's SRP Core does, saturate(cos + 2 visibility^2 - 1).
 double microshadow_chan2018(double cos_theta, double visibility);
 double microshadow_brinck2016(double cos_theta, double visibility);
+// The same with an exponent free, for `penumbra fit` to refit: Chan's
+// saturate(cos / sqrt(1 - V))^p (published p = 2, the square) and Brinck's
+// saturate(cos + 2 V^q - 1) (published q = 2, the square of V). Both keep
+// the published ends: no occlusion at V = 1, all of it at V = 0.
+double microshadow_chan2018(double cos_theta, double visibility, double p);
+double microshadow_brinck2016(double cos_theta, double visibility, double q);
 // Mitsuba 3's eval_shadow_terminator against the unperturbed frame ni.
 double mitsuba3_conty(const Vec3& ni, const Vec3& ns, const Vec3& wi);
 // Cycles' UI mapping of the shading-offset slider s to a frequency.

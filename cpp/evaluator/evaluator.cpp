@@ -411,16 +411,28 @@ class SampleSink {
   virtual ~SampleSink() = default;
   virtual void add(const Material& m, const ShadingPoint& p, double irradiance, double value,
                    bool lit, int column) const = 0;
+  // Whether the sample's ShadingPoint should carry the height field's
+  // visibility though no pass reads it.
+  virtual bool wants_visibility() const { return false; }
 };
 
 // Where a tallied render (render_tallied) puts one pixel's unblocked light:
 // the part a factor scales, split over the factor grid's nodes by each
-// sample's interpolation weights.
+// sample's interpolation weights; and, with probes, the pixel's light under
+// each probe's factors, every value's after the other.
 class TallySink final : public SampleSink {
  public:
   TallySink(const FactorGrid* grid, Lobes lobes, std::vector<std::pair<int, double>>* scaled,
-            double* rest)
-      : grid_(grid), lobes_(lobes), scaled_(scaled), rest_(rest) {}
+            double* rest, const std::vector<FactorProbe>* probes, std::vector<double>* probe_sums)
+      : grid_(grid),
+        lobes_(lobes),
+        scaled_(scaled),
+        rest_(rest),
+        probes_(probes),
+        probe_sums_(probe_sums) {
+    if (probes_)
+      for (const FactorProbe& p : *probes_) visibility_ = visibility_ || p.needs_visibility;
+  }
   void add(const Material& m, const ShadingPoint& p, double irradiance, double value, bool lit,
            int /*column*/) const override {
     if (!lit) return;
@@ -431,13 +443,38 @@ class TallySink final : public SampleSink {
       for (int k = 0; k < n; ++k)
         scaled_->emplace_back(nodes[std::size_t(k)].first, light * nodes[std::size_t(k)].second);
     *rest_ += value - light;
+    if (probing_) add_probes(m, p, irradiance, value);
   }
+  bool wants_visibility() const override { return probing_ && visibility_; }
+  // Whether the probes are tried on the pixel whose samples come next.
+  void probe_pixel(bool probe) { probing_ = probes_ && probe; }
 
  private:
+  // A factor method's sample is raw bump's with the light of its lobes
+  // scaled (shading.cpp, shade): the same shadow ray and light sample.
+  void add_probes(const Material& m, const ShadingPoint& p, double irradiance, double value) const {
+    double scaled_by_lobes[2] = {-1.0, -1.0};  // Lobes::kDiffuse, kAll; computed when needed
+    double* sums = probe_sums_->data();
+    for (const FactorProbe& probe : *probes_) {
+      double& scaled = scaled_by_lobes[probe.lobes == Lobes::kAll ? 1 : 0];
+      if (scaled < 0.0) scaled = factor_scaled_value(m, p.ns, p.wi, p.wo, probe.lobes) * irradiance;
+      factors_.resize(probe.values);
+      probe.factors(p, factors_.data());
+      for (std::size_t k = 0; k < probe.values; ++k)
+        sums[k] += (value - scaled) + scaled * factors_[k];
+      sums += probe.values;
+    }
+  }
+
   const FactorGrid* grid_;
   Lobes lobes_;
   std::vector<std::pair<int, double>>* scaled_;  // (cell, light), unsorted
   double* rest_;                                 // light no cell's G scales
+  const std::vector<FactorProbe>* probes_;       // null: none
+  std::vector<double>* probe_sums_;              // the pixel's, per probe and value
+  mutable std::vector<double> factors_;          // one probe's at a sample
+  bool visibility_ = false;                      // a probe reads it
+  bool probing_ = false;                         // on the current pixel
 };
 
 // The samples of a user method's pass (core/user_method.h) in the order
@@ -667,8 +704,10 @@ class SampleShader {
     ShadingPoint point;
     SampleAngles angles;
   };
+  // `visibility`: compute the height field's visibility though no pass
+  // reads it (a sink wants it).
   Prepared prepare(const Ray& ray, const SurfaceHit& hit, const LightUniforms& u,
-                   Material* material) const;
+                   Material* material, bool visibility = false) const;
   ShadowRay shadow_ray(const SurfaceHit& hit, const Prepared& p) const {
     return hit.on_prop ? ShadowRay{hit.shading_point}
                        : tracer_.shadow_ray(hit, p.facing, p.light.wi);
@@ -688,7 +727,8 @@ template <typename Tracer>
 typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray& ray,
                                                                       const SurfaceHit& hit,
                                                                       const LightUniforms& u,
-                                                                      Material* material) const {
+                                                                      Material* material,
+                                                                      bool visibility) const {
   const SurfaceGeometry& g = hit.geometry;
   const Vec3 wo = -ray.direction;
   Vec3 n = g.n;
@@ -717,7 +757,8 @@ typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray&
                            : ShadingPoint{facing.ng, ni, ns, light.wi, wo};
   // Seen from inside (an open cylinder), the height field is inverted.
   const double amplitude = scene_.height.amplitude;
-  if (needs_visibility_ && displaced_shading_ && g.displaceable && amplitude != 0.0)
+  if ((needs_visibility_ || visibility) && !is_ground_truth_ && displaced_shading_ &&
+      g.displaceable && amplitude != 0.0)
     point.visibility = height_field_visibility(scene_.height.function,
                                                facing.backfacing ? -amplitude : amplitude, g.p, n);
   // Within 1.2e-6 degrees: below what the float channels resolve.
@@ -731,7 +772,7 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Li
                                  Material* material, Pcg32* rng, PixelSums* sums,
                                  std::uint64_t* shadow_rays, const SampleSink* sink,
                                  int column) const {
-  const Prepared p = prepare(ray, hit, u, material);
+  const Prepared p = prepare(ray, hit, u, material, sink && sink->wants_visibility());
   int is_blocked = -1;  // the shadow ray, traced for the first pass that needs it
   double lit_value = 0.0;  // the one pass's, where the light reaches it (sink)
   shade_passes(*material, p.point, p.light, p.angles, rng, sums, [&](std::size_t k, double value) {
@@ -1077,9 +1118,32 @@ struct TallyRequest {
   Lobes lobes = Lobes::kDiffuse;
   std::vector<std::vector<std::pair<int, double>>> scaled;
   std::vector<double> rest;
+  TallyProbes* probes = nullptr;  // null: none
+
+  const std::vector<FactorProbe>* probe_list() const {
+    return probes && !probes->probes.empty() ? &probes->probes : nullptr;
+  }
+  std::size_t probe_values() const {
+    std::size_t n = 0;
+    if (probes)
+      for (const FactorProbe& p : probes->probes) n += p.values;
+    return n;
+  }
+  bool probes_pixel(std::uint64_t pixel) const {
+    return probes && (probes->pixels.empty() || probes->pixels[pixel]);
+  }
 
   void store(std::uint64_t pixel, std::vector<std::pair<int, double>>& entries, double rest_sum,
-             double inv_spp) {
+             const std::vector<double>& probe_sums, double inv_spp) {
+    if (probes) {
+      const double* sums = probe_sums.data();
+      for (std::size_t f = 0; f < probes->probes.size(); ++f) {
+        const std::size_t values = probes->probes[f].values;
+        double* out = probes->radiance[f].data() + pixel * values;
+        for (std::size_t k = 0; k < values; ++k) out[k] = sums[k] * inv_spp;
+        sums += values;
+      }
+    }
     std::sort(entries.begin(), entries.end(),
               [](const auto& a, const auto& b) { return a.first < b.first; });
     std::vector<std::pair<int, double>>& out = scaled[pixel];
@@ -1146,8 +1210,11 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
         std::vector<PixelSums> sums(pass_count);
         std::vector<std::pair<int, double>> entries;  // a tallied pixel's samples
         double rest = 0.0;
+        std::vector<double> probe_sums(tally ? tally->probe_values() : 0);
         std::optional<TallySink> tally_sink;
-        if (tally) tally_sink.emplace(tally->grid, tally->lobes, &entries, &rest);
+        if (tally)
+          tally_sink.emplace(tally->grid, tally->lobes, &entries, &rest, tally->probe_list(),
+                             &probe_sums);
         std::optional<PacketRows> packet_rows;
         if constexpr (std::is_same_v<Tracer, BaseTracer>)
           if (packets) packet_rows.emplace(scene, setup, shader, pass_count, images);
@@ -1171,12 +1238,14 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
               sums_io.start(pixel, sums.data(), pass_count);
               entries.clear();
               rest = 0.0;
+              std::fill(probe_sums.begin(), probe_sums.end(), 0.0);
+              if (tally_sink) tally_sink->probe_pixel(tally->probes_pixel(pixel));
               shade_pixel(
                   scene, tracer, props, shader,
                   {i, j, key, &rng, sums.data(), &local_shadow_rays, sink, sums_io.first_sample()},
                   options.packets && !sinks);
               sums_io.finish(pixel, sums.data(), pass_count);
-              if (tally) tally->store(pixel, entries, rest, inv_spp);
+              if (tally) tally->store(pixel, entries, rest, probe_sums, inv_spp);
               for (std::size_t k = 0; k < pass_count; ++k)
                 write_pixel(sums[k], inv_spp, &(*images)[k].pixels[pixel * channel_count]);
             }
@@ -1639,7 +1708,7 @@ PixelTally flatten(const TallyRequest& request, int width, int height) {
 }  // namespace
 
 Image render_tallied(const Scene& scene, const FactorGrid& grid, PixelTally* tally,
-                     const RenderOptions& options, RenderStats* stats) {
+                     const RenderOptions& options, RenderStats* stats, TallyProbes* probes) {
   const TerminatorSettings& t = scene.terminator;
   if (scene.representation == Representation::kDisplacement ||
       t.method.method != TerminatorMethod::kNone ||
@@ -1656,7 +1725,12 @@ Image render_tallied(const Scene& scene, const FactorGrid& grid, PixelTally* tal
   image.pixels.assign(std::size_t(image.width) * image.height * image.channels.size(), 0.0f);
   const std::size_t pixels = std::size_t(image.width) * image.height;
   TallyRequest request{&grid, t.lobes, std::vector<std::vector<std::pair<int, double>>>(pixels),
-                       std::vector<double>(pixels, 0.0)};
+                       std::vector<double>(pixels, 0.0), probes};
+  if (probes) {
+    probes->radiance.clear();
+    for (const FactorProbe& p : probes->probes)
+      probes->radiance.emplace_back(pixels * p.values, 0.0);
+  }
   if (const auto mesh = low_poly_mesh(scene)) {
     local.triangles = mesh->triangle_count();
     local.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();

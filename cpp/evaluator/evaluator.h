@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/factor_table.h"
+#include "core/shading.h"
 #include "image/image.h"
 #include "scene/scene.h"
 
@@ -122,7 +123,29 @@ std::vector<Image> render_lightings(const std::vector<Scene>& scenes,
 // achievable.h). Traces on the scalar path (no packets), which gives the
 // same bits. std::invalid_argument unless scene.terminator is `none` with
 // no normal adjustment on a bump or smooth render.
+//
+// With `probes`, each of its families of factors is also tried on every
+// sample as it is tallied (FactorProbe): what a factor method would render
+// at each of its parameter values, without rendering it.
+struct FactorProbe {
+  Lobes lobes = Lobes::kDiffuse;  // the lobes the factor scales
+  bool needs_visibility = false;  // reads ShadingPoint::visibility
+  std::size_t values = 0;         // parameter values tried
+  // The factor at one shading point for every value, into out[0, values).
+  std::function<void(const ShadingPoint& point, double* out)> factors;
+};
+struct TallyProbes {
+  std::vector<FactorProbe> probes;
+  // The pixels (row-major) to try them on: empty, all of them. The others'
+  // radiance under the probes is left 0 (a fit reads only its terminator's).
+  std::vector<char> pixels;
+  // Filled by render_tallied, per probe: each pixel's radiance with the
+  // factor at each value (W m^-2 sr^-1), at [pixel * values + value]; as a
+  // render of that factor method would give it, to rounding.
+  std::vector<std::vector<double>> radiance;
+};
 Image render_tallied(const Scene& scene, const FactorGrid& grid, PixelTally* tally,
-                     const RenderOptions& options = {}, RenderStats* stats = nullptr);
+                     const RenderOptions& options = {}, RenderStats* stats = nullptr,
+                     TallyProbes* probes = nullptr);
 
 }  // namespace penumbra

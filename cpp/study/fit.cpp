@@ -6,6 +6,7 @@
 #include <cmath>
 #include <exception>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <random>
@@ -111,6 +112,7 @@ bool same_pixels(const Image& a, const Image& b) {
 // against the cached render) and its truth's profile. nullopt: skipped.
 std::optional<FitVariant> load_variant(const std::filesystem::path& folder, const json& variant,
                                        const FactorGrid& grid, FitResult* result) {
+  const std::vector<ProbedConstant>& probed = result->probed;
   const std::string bump = render_path(variant, "bump"),
                     truth = render_path(variant, "displacement");
   // A render deleted from the cache leaves its variant out (the held-out
@@ -125,7 +127,8 @@ std::optional<FitVariant> load_variant(const std::filesystem::path& folder, cons
       scene_from_json(parse_json_text(attributes["penumbra:scene"], origin), origin);
   if (scene.representation != Representation::kBump || scene.tessellation) return std::nullopt;
   PixelTally tally;
-  const Image traced = render_tallied(scene, grid, &tally);
+  TallyProbes probes = probes_for(probed, scene, cached);
+  const Image traced = render_tallied(scene, grid, &tally, {}, nullptr, &probes);
   ++result->retraced;
   if (!same_pixels(traced, cached)) {
     ++result->retraced_different;
@@ -137,6 +140,7 @@ std::optional<FitVariant> load_variant(const std::filesystem::path& folder, cons
   v.family = variant.at("scene").get<std::string>();
   v.data = {v.id, profile_tally(cached, tally, scale),
             terminator_profile(read_image((folder / truth).string()), scale)};
+  v.probe_rmse = probe_errors(probes, traced, scale, v.data.truth);
   return v;
 }
 
@@ -503,6 +507,12 @@ void load_variants(const FitOptions& o, const json& report, FitResult* r) {
   if (report.contains("ground_truth") && report["ground_truth"].contains("variants"))
     for (const json& g : report["ground_truth"]["variants"])
       if (!g.value("converged", true)) unconverged.insert(g.at("variant").get<std::string>());
+  if (light_deviation_grid(o.grid)) {
+    std::set<std::string> labels;
+    for (const auto& [id, row] : method_errors(report))
+      for (const auto& [label, _] : row) labels.insert(label);
+    r->probed = probed_constants(labels);
+  }
   std::size_t done = 0;
   for (const json& variant : variants) {
     if (unconverged.count(variant.at("id").get<std::string>())) {
@@ -873,10 +883,76 @@ void fit_deshmukh2020_constants(const FitOptions& o, FitResult* r) {
   }
 }
 
-void fit_constants(const FitOptions& o, FitResult* r) {
+// Of the values a probed constant tried, the index with the lowest pooled E
+// over `index` (the first of equals).
+std::size_t best_value(const FitResult& r, std::size_t constant,
+                       const std::vector<std::size_t>& index) {
+  const std::size_t values = r.probed[constant].values.size();
+  std::size_t best = 0;
+  double best_e = std::numeric_limits<double>::infinity();
+  std::vector<double> rmse(r.variants.size());
+  for (std::size_t k = 0; k < values; ++k) {
+    for (std::size_t i : index) rmse[i] = r.variants[i].probe_rmse[constant][k];
+    const double e = pooled(rmse, index);
+    if (e < best_e) best_e = e, best = k;
+  }
+  return best;
+}
+
+// A probed constant refitted as estevez2019's k is, among the values it
+// tried (so to their step), each E that of a render with the value.
+void fit_probed_constant(const FitOptions& o, std::size_t constant, const MethodErrors& errors,
+                         FitResult* r) {
+  const ProbedConstant& p = r->probed[constant];
+  say(o, fmt::format("fitting {}'s constant", method_info(p.method).id));
+  const std::vector<std::size_t> index = all_of(r->variants.size());
+  const auto rmse_at = [&](std::size_t k) {
+    std::vector<double> rmse;
+    for (const FitVariant& v : r->variants) rmse.push_back(v.probe_rmse[constant][k]);
+    return rmse;
+  };
+  FittedConstant c;
+  c.method = std::string(method_info(p.method).id);
+  c.constant = p.constant;
+  c.reference = p.reference;
+  c.published = p.published;
+  const std::size_t best = best_value(*r, constant, index);
+  c.fitted = p.values[best];
+  if (best == 0 || best + 1 == p.values.size())
+    c.at_bound = fmt::format("{} = {:g}", p.constant.substr(0, p.constant.find(' ')), c.fitted);
+  c.in_sample = pooled_error(rmse_at(best), index, o);
+  const std::size_t at =
+      std::size_t(std::find(p.values.begin(), p.values.end(), p.published) - p.values.begin());
+  const std::vector<double> published = rmse_at(at);
+  c.at_published = pooled_error(published, index, o);
+  c.interval =
+      bootstrap(index, std::min(o.resamples, 200), o.seed, [&](const std::vector<std::size_t>& k) {
+        return p.values[best_value(*r, constant, k)];
+      }).interval;
+  std::vector<double> held(r->variants.size(), std::numeric_limits<double>::quiet_NaN());
+  for (const auto& [family, members] : families(r->variants)) {
+    const std::size_t k = best_value(*r, constant, without(r->variants, {family}));
+    for (std::size_t i : members) held[i] = r->variants[i].probe_rmse[constant][k];
+  }
+  c.held_out = pooled_error(held, index, o);
+  c.held_out_minus_published = paired_error(held, published, index, o);
+  if (!p.label.empty()) {
+    c.probe_minus_rendered = 0.0;
+    for (std::size_t i = 0; i < r->variants.size(); ++i) {
+      const auto row = errors.find(r->variants[i].id);
+      if (row == errors.end() || !row->second.count(p.label)) continue;
+      c.probe_minus_rendered =
+          std::max(c.probe_minus_rendered, std::abs(published[i] - row->second.at(p.label)));
+    }
+  }
+  r->constants.push_back(c);
+}
+
+void fit_constants(const FitOptions& o, const MethodErrors& errors, FitResult* r) {
   if (!light_deviation_grid(r->grid)) return;
   fit_estevez2019_constant(o, r);
   fit_deshmukh2020_constants(o, r);
+  for (std::size_t c = 0; c < r->probed.size(); ++c) fit_probed_constant(o, c, errors, r);
 }
 
 }  // namespace
@@ -982,7 +1058,7 @@ FitResult fit_study(const FitOptions& o) {
   options.smoothness = r.table_smoothness;
   r.table = {r.grid,
              solve_floor(r.grid, data_of(r.variants, all_of(r.variants.size())), options).g};
-  fit_constants(o, &r);
+  fit_constants(o, errors, &r);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
@@ -1104,15 +1180,19 @@ json result_json(const FitResult& r) {
     j["methods"].push_back(m);
   }
   for (const FittedConstant& c : r.constants)
-    j["constants"].push_back({{"method", c.method},
-                              {"constant", c.constant},
-                              {"published", c.published},
-                              {"fitted", {c.fitted, c.interval.low, c.interval.high}},
-                              {"error_fitted_in_sample", interval_json(c.in_sample)},
-                              {"error_published", interval_json(c.at_published)},
-                              {"error_fitted_held_out", interval_json(c.held_out)},
-                              {"held_out_minus_published", paired_json(c.held_out_minus_published)},
-                              {"at_bound", c.at_bound.empty() ? json() : json(c.at_bound)}});
+    j["constants"].push_back(
+        {{"method", c.method},
+         {"constant", c.constant},
+         {"reference", c.reference},
+         {"published", c.published},
+         {"fitted", {c.fitted, c.interval.low, c.interval.high}},
+         {"error_fitted_in_sample", interval_json(c.in_sample)},
+         {"error_published", interval_json(c.at_published)},
+         {"error_fitted_held_out", interval_json(c.held_out)},
+         {"held_out_minus_published", paired_json(c.held_out_minus_published)},
+         {"at_bound", c.at_bound.empty() ? json() : json(c.at_bound)},
+         {"probe_minus_rendered",
+          std::isfinite(c.probe_minus_rendered) ? json(c.probe_minus_rendered) : json()}});
   return j;
 }
 
@@ -1184,8 +1264,9 @@ void write_fit(const FitResult& r, const std::filesystem::path& out) {
 // fit step redoes a fit written without it (2: deshmukh2020's constants;
 // 3: intervals on the constants' errors, paired differences, share groups;
 // 4: variants whose truth did not converge left out and named; 5: the
-// inputs, nested floors, chiang2019 on grids with a shading axis).
-constexpr const char* kFitContents = "5";
+// inputs, nested floors, chiang2019 on grids with a shading axis; 6: the
+// probed constants of shading-offset and the micro-shadowing methods).
+constexpr const char* kFitContents = "6";
 
 std::string fit_inputs_digest(const std::filesystem::path& study) {
   std::uint64_t h = fnv1a(without_run_keys(read_file((study / "report.json").string())));

@@ -14,6 +14,7 @@
 // the floor minimises: E = sqrt(mean over variants of RMSE^2).
 #pragma once
 
+#include <cmath>
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -22,6 +23,7 @@
 #include "analysis/achievable.h"
 #include "analysis/statistics.h"
 #include "core/factor_table.h"
+#include "study/fit_probes.h"
 
 namespace penumbra {
 
@@ -85,6 +87,9 @@ struct PairedError {
 struct FitVariant {
   std::string id, family;  // family: the variant's scene
   TallyVariant data;
+  // Per probed constant (FitResult::probed), per value tried: the
+  // terminator RMSE of the method with that value (study/fit_probes.h).
+  std::vector<std::vector<double>> probe_rmse;
 };
 
 struct FloorFit {
@@ -140,6 +145,7 @@ struct MethodShare {
 // interval each constant's own over the same resamples.
 struct FittedConstant {
   std::string method, constant;  // constant: its symbol first, then where it enters
+  std::string reference = "published";  // what `published` is
   double published = 0.0, fitted = 0.0;
   Interval interval;                     // bootstrap over variants, refitted per resample
   PooledError in_sample;                 // E at the fitted value, all variants
@@ -150,6 +156,10 @@ struct FittedConstant {
   // ("d at deviation 60 degrees = 1"), "" where none: E would fall further
   // outside the range, and the interval holds within it.
   std::string at_bound;
+  // Constants fitted through the re-trace's probes: the largest difference,
+  // over the variants, of E at `published` from the error of the study's own
+  // render of the method with it (rounding; NaN where the study has none).
+  double probe_minus_rendered = std::nan("");
 };
 
 struct FitResult {
@@ -172,6 +182,9 @@ struct FitResult {
   PairedError held_out_minus_best;
   std::vector<MethodShare> shares;
   std::vector<FittedConstant> constants;
+  // The constants fitted through the re-trace's probes (light,deviation
+  // fits only), in FitVariant::probe_rmse's order.
+  std::vector<ProbedConstant> probed;
   FactorTable table;  // fitted on every variant, smoothness chosen by leave-one-family-out
   double table_smoothness = 0.0;
   std::vector<double> smoothness_candidates;  // FitOptions::smoothness

@@ -2,6 +2,7 @@
 // statements and independent re-implementations (not against the code's output).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -313,6 +314,26 @@ TEST(MicroShadowing, MatchesTheShaderSources) {
   // Unoccluded: no micro-shadowing wherever the light reaches the surface.
   EXPECT_EQ(microshadow_chan2018(0.01, 1.0), 1.0);
   EXPECT_EQ(microshadow_brinck2016(0.01, 1.0), 1.0);
+}
+
+// The forms `penumbra fit` refits (study/fit_probes.h): at the published
+// exponent 2 they are the published factors to the bit; both keep the
+// published ends (no occlusion at V = 1, all of it at V = 0, for Brinck;
+// Chan's cut at cos = sqrt(1 - V) is sharper as p grows); and Chan's factor
+// falls as p grows where it lies below 1.
+TEST(MicroShadowing, FreeExponentsKeepThePublishedFactorsAtTwo) {
+  for (double ao = 0.0; ao <= 1.0; ao += 1.0 / 64.0)
+    for (double nol = -0.1; nol <= 1.0; nol += 1.0 / 128.0) {
+      EXPECT_EQ(microshadow_chan2018(nol, ao, 2.0), microshadow_chan2018(nol, ao)) << ao << nol;
+      EXPECT_EQ(microshadow_brinck2016(nol, ao, 2.0), microshadow_brinck2016(nol, ao)) << ao << nol;
+      const double low = microshadow_chan2018(nol, ao, 1.0),
+                   high = microshadow_chan2018(nol, ao, 8.0);
+      EXPECT_LE(high, low) << ao << " " << nol;
+      for (double q : {0.5, 4.0}) {
+        EXPECT_NEAR(microshadow_brinck2016(nol, 1.0, q), std::clamp(nol + 1.0, 0.0, 1.0), 1e-15);
+        EXPECT_NEAR(microshadow_brinck2016(nol, 0.0, q), std::clamp(nol - 1.0, 0.0, 1.0), 1e-15);
+      }
+    }
 }
 
 }  // namespace

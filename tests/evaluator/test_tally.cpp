@@ -6,6 +6,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "analysis/achievable.h"
@@ -209,6 +210,60 @@ TEST(Tally, FittedTablesOfConstantsAreExact) {
     for (std::size_t i = 0; i < none.pixels.size(); i += none.channels.size())
       ASSERT_EQ(image.pixels[i], float(g) * none.pixels[i]) << i;
   }
+}
+
+// Factor probes (FactorProbe): a probe of a factor method's factors at
+// several values gives, on each pixel it is tried on, the radiance of a
+// render of the method at each value (float channel: relative 1e-6), with
+// the light of the lobes the method scales (shading-offset the scene's,
+// micro-shadowing all of them, with the height field's visibility, which
+// no pass of raw bump reads); the pixels it is not tried on stay 0; and the
+// tallied image keeps render()'s bits.
+TEST(Tally, ProbesRenderWhatTheirMethodRenders) {
+  const Scene bump =
+      scene_with("sphere-weave.json", {"/camera/width=24", "/camera/height=24", "/camera/spp=4",
+                                       "/material/specular={\"weight\": 0.4, \"roughness\": 0.3}",
+                                       "/terminator/lobes=\"diffuse\""});
+  const std::vector<double> s_values{0.0, 0.4, 0.9};
+  TallyProbes probes;
+  probes.probes.push_back(
+      {Lobes::kDiffuse, false, s_values.size(), [&](const ShadingPoint& p, double* out) {
+         for (std::size_t k = 0; k < s_values.size(); ++k)
+           out[k] = shading_offset(s_values[k], p.ns, p.wi);
+       }});
+  probes.probes.push_back({Lobes::kAll, true, 1, [](const ShadingPoint& p, double* out) {
+                             out[0] = microshadow_chan2018(dot(p.ns, p.wi), p.visibility, 2.0);
+                           }});
+  // Every other pixel.
+  probes.pixels.assign(24 * 24, 0);
+  for (std::size_t p = 0; p < probes.pixels.size(); p += 2) probes.pixels[p] = 1;
+  PixelTally tally;
+  const Image image = render_tallied(bump, light_deviation_grid(1.0), &tally, {}, nullptr, &probes);
+  ASSERT_EQ(image.pixels, render(bump).pixels);
+  std::vector<std::pair<Image, const double*>> expected;
+  for (std::size_t k = 0; k < s_values.size(); ++k) {
+    Scene s = bump;
+    s.terminator.method = {TerminatorMethod::kShadingOffset, s_values[k]};
+    expected.emplace_back(render(s), probes.radiance[0].data() + k);
+  }
+  Scene chan = bump;
+  chan.terminator.method.method = TerminatorMethod::kMicroshadowChan2018;
+  expected.emplace_back(render(chan), probes.radiance[1].data());
+  int darker = 0;
+  for (std::size_t e = 0; e < expected.size(); ++e) {
+    const std::size_t values = e < s_values.size() ? s_values.size() : 1;
+    for (std::size_t p = 0; p < probes.pixels.size(); ++p) {
+      const double probe = expected[e].second[p * values];
+      const double rendered = expected[e].first.pixels[p * image.channels.size()];
+      if (!probes.pixels[p]) {
+        EXPECT_EQ(probe, 0.0) << p;
+        continue;
+      }
+      EXPECT_NEAR(probe, rendered, 1e-6 * rendered + 1e-12) << e << " " << p;
+      darker += rendered < image.pixels[p * image.channels.size()] * (1.0 - 1e-3);
+    }
+  }
+  EXPECT_GT(darker, 50);  // the factors act: not raw bump in disguise
 }
 
 TEST(Tally, RefusesAnythingButRawBump) {

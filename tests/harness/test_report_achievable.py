@@ -121,6 +121,13 @@ class Section(unittest.TestCase):
         self.assertIn('k = {:.3f} [{:.3f}, {:.3f}]'.format(*k), page)
         self.assertIn('against the published 0.125; the published constant '
                       'lies outside the interval.', page)
+        # A constant no paper publishes is fitted against the study's own.
+        self.assertIn("s = 0.075 [0.050, 0.125] (dimensionless; 95 % "
+                      "bootstrap interval over variants) against the "
+                      "study&#39;s value 0.3; the study&#39;s value lies "
+                      "outside the interval.", page)
+        self.assertIn('shading-offset are refitted among the values their '
+                      'rows name', page)
 
     def test_truths_left_out_are_named(self):
         self.assertIn('Left out of every fit: 2 variants whose ground truth '

@@ -12,6 +12,8 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -31,23 +33,20 @@ const std::string kSource = PENUMBRA_SOURCE_DIR;
 
 class Fit : public TempDirTest {
  protected:
-  // Three scene families, four variants each, the evaluator alone.
-  std::string run_small_study(const std::string& name) {
+  // A study of the evaluator alone, 32 x 32 pixels at 4 spp, run into `name`.
+  std::string run_evaluator_study(const std::string& name, const json& scenes, const json& axes,
+                                  const json& methods) {
     const json study{
         {"version", 1},
-        {"name", "fit"},
-        {"scenes",
-         {kSource + "/scenes/sphere-grating.json", kSource + "/scenes/cylinder-grating.json",
-          kSource + "/scenes/sphere-weave.json"}},
+        {"name", name},
+        {"scenes", scenes},
         {"set",
          {{"/camera/width", 32},
           {"/camera/height", 32},
           {"/camera/spp", 4},
           {"/displacement/edge_length", 0.02}}},
-        {"axes",
-         {{{"pointer", "/height/amplitude"}, {"values", {0.01, 0.02}}},
-          {{"pointer", "/light/direction"}, {"values", {{-1, 0, -0.2}, {-1, 0, 0.4}}}}}},
-        {"methods", {"none", "estevez2019", "deshmukh2020", "chiang2019"}},
+        {"axes", axes},
+        {"methods", methods},
         {"renderers", {"evaluator"}},
         // One check each way, accepted at any change: the fit leaves out a
         // truth that did not converge, and these coarse truths test the
@@ -57,6 +56,16 @@ class Fit : public TempDirTest {
     std::ofstream(path(name + ".json")) << study.dump(2);
     run_study(load_study(path(name + ".json")), test_study_options(path(name)));
     return path(name);
+  }
+  // Three scene families, four variants each.
+  std::string run_small_study(const std::string& name) {
+    return run_evaluator_study(
+        name,
+        {kSource + "/scenes/sphere-grating.json", kSource + "/scenes/cylinder-grating.json",
+         kSource + "/scenes/sphere-weave.json"},
+        {{{"pointer", "/height/amplitude"}, {"values", {0.01, 0.02}}},
+         {{"pointer", "/light/direction"}, {"values", {{-1, 0, -0.2}, {-1, 0, 0.4}}}}},
+        {"none", "estevez2019", "deshmukh2020", "chiang2019"});
   }
   // Coarser than the default grid (210 cells rather than 750), for time.
   static FactorGrid grid() {
@@ -123,7 +132,7 @@ void expect_paired_differences(const FitResult& r) {
   expect_paired(r.held_out_minus_best, r.held_out_pooled.value, best->error.value, "study");
   for (const HeldOutFit& h : r.held_out)
     expect_paired(h.held_out_minus_best, h.held_out.value, h.best.value, h.family);
-  ASSERT_EQ(r.constants.size(), 3u);  // k, d0, d1
+  ASSERT_EQ(r.constants.size(), 6u);  // k, d0, d1; s, p, q (probed)
   for (const FittedConstant& c : r.constants) {
     for (const PooledError* e : {&c.in_sample, &c.at_published, &c.held_out})
       EXPECT_LE(e->interval.low, e->interval.high) << c.constant;
@@ -261,6 +270,68 @@ TEST_F(Fit, RefittingEstevez2019OnItsOwnTermRecoversItsConstant) {
     for (const FitVariant& v : r.variants)
       synthetic.push_back({v.id, v.data.tally, v.data.tally.profile(estevez2019_table(r.grid, k))});
     EXPECT_NEAR(fit_estevez2019_k(synthetic, r.grid) / k, 1.0, 2e-3) << k;
+  }
+}
+
+// shading-offset and the micro-shadowing methods refitted through the
+// re-trace's probes (study/fit_probes.h). At the study's own value the
+// probe's E is the E of the study's render of the method (the probe is
+// that render, to float rounding: relative 1e-6). With every truth replaced
+// by the method's own render at a value, the refit finds that value, at
+// E = 0, in sample and held out.
+TEST_F(Fit, ProbedConstantsAreTheirMethodsRendersAndRefitTheirValues) {
+  const std::string folder = run_evaluator_study(
+      "probes", {kSource + "/scenes/cylinder-grating.json", kSource + "/scenes/sphere-weave.json"},
+      {{{"pointer", "/height/amplitude"}, {"values", {0.01, 0.02}}},
+       {{"name", "shading"},
+        {"values",
+         {{{"id", "lambert"}, {"label", "Lambert"}, {"set", {{"/terminator/lobes", "diffuse"}}}},
+          {{"id", "ggx-all"},
+           {"label", "Lambert + GGX, factor on all lobes"},
+           {"set",
+            {{"/material/specular", {{"roughness", 0.3}, {"weight", 0.4}}},
+             {"/terminator/lobes", "all"}}}}}}}},
+      {"none", {{"id", "shading-offset"}, {"parameters", {{"s", 0.4}}}}, "microshadow-chan2018",
+       "microshadow-brinck2016"});
+  const auto constant_of = [](const FitResult& r, const std::string& method) {
+    for (const FittedConstant& c : r.constants)
+      if (c.method == method) return c;
+    ADD_FAILURE() << method << " not refitted";
+    return FittedConstant{};
+  };
+  const FitResult r = fit(folder);
+  ASSERT_EQ(r.variants.size(), 8u);
+  for (const auto& [method, published] :
+       {std::pair{"shading-offset", 0.4}, std::pair{"microshadow-chan2018", 2.0},
+        std::pair{"microshadow-brinck2016", 2.0}}) {
+    const FittedConstant c = constant_of(r, method);
+    EXPECT_EQ(c.published, published) << method;
+    EXPECT_GT(c.at_published.value, 0.0) << method;
+    EXPECT_LE(c.probe_minus_rendered, 1e-6 * c.at_published.value) << method;
+  }
+  // Each truth replaced by the method's render: the method at its value is
+  // the truth, E = 0 there and above 0 at the values around it.
+  const json report = json::parse(std::ifstream(folder + "/report.json"));
+  for (const auto& [label, method, value] :
+       {std::tuple{"shading-offset(s=0.4)", "shading-offset", 0.4},
+        std::tuple{"microshadow-chan2018", "microshadow-chan2018", 2.0}}) {
+    for (const json& v : report.at("variants")) {
+      std::string truth, render;
+      for (const json& x : v.at("renders")) {
+        if (x.at("renderer") != "evaluator" || !x.at("exr").is_string()) continue;
+        if (x.at("representation") == "displacement") truth = x.at("exr");
+        if (x.at("representation") == "bump" && x.at("method") == label) render = x.at("exr");
+      }
+      ASSERT_FALSE(truth.empty() || render.empty()) << v.at("id");
+      std::filesystem::copy_file(folder + "/" + render, folder + "/" + truth,
+                                 std::filesystem::copy_options::overwrite_existing);
+    }
+    const FittedConstant c = constant_of(fit(folder), method);
+    EXPECT_EQ(c.fitted, value) << method;
+    EXPECT_EQ(c.interval.low, value) << method;
+    EXPECT_EQ(c.interval.high, value) << method;
+    EXPECT_LE(c.in_sample.value, 1e-6) << method;
+    EXPECT_LE(c.held_out.value, 1e-6) << method;
   }
 }
 
