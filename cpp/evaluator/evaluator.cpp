@@ -704,10 +704,19 @@ class SampleShader {
     ShadingPoint point;
     SampleAngles angles;
   };
-  // `visibility`: compute the height field's visibility though no pass
-  // reads it (a sink wants it).
   Prepared prepare(const Ray& ray, const SurfaceHit& hit, const LightUniforms& u,
-                   Material* material, bool visibility = false) const;
+                   Material* material) const;
+  // The height field's ambient visibility at a hit seen as `facing` says
+  // (1 where there is none to shadow it: the truth, a flat surface).
+  double visibility(const SurfaceHit& hit, const FacingNormals& facing) const {
+    const SurfaceGeometry& g = hit.geometry;
+    const double amplitude = scene_.height.amplitude;
+    if (is_ground_truth_ || !displaced_shading_ || !g.displaceable || amplitude == 0.0) return 1.0;
+    // Seen from inside (an open cylinder), the height field is inverted.
+    return facing.backfacing
+               ? height_field_visibility(scene_.height.function, -amplitude, g.p, -g.n)
+               : height_field_visibility(scene_.height.function, amplitude, g.p, g.n);
+  }
   ShadowRay shadow_ray(const SurfaceHit& hit, const Prepared& p) const {
     return hit.on_prop ? ShadowRay{hit.shading_point}
                        : tracer_.shadow_ray(hit, p.facing, p.light.wi);
@@ -727,8 +736,7 @@ template <typename Tracer>
 typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray& ray,
                                                                       const SurfaceHit& hit,
                                                                       const LightUniforms& u,
-                                                                      Material* material,
-                                                                      bool visibility) const {
+                                                                      Material* material) const {
   const SurfaceGeometry& g = hit.geometry;
   const Vec3 wo = -ray.direction;
   Vec3 n = g.n;
@@ -755,12 +763,7 @@ typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray&
   ShadingPoint point = is_ground_truth_ && !hit.on_prop
                            ? ShadingPoint{ns, ns, ns, light.wi, wo}
                            : ShadingPoint{facing.ng, ni, ns, light.wi, wo};
-  // Seen from inside (an open cylinder), the height field is inverted.
-  const double amplitude = scene_.height.amplitude;
-  if ((needs_visibility_ || visibility) && !is_ground_truth_ && displaced_shading_ &&
-      g.displaceable && amplitude != 0.0)
-    point.visibility = height_field_visibility(scene_.height.function,
-                                               facing.backfacing ? -amplitude : amplitude, g.p, n);
+  if (needs_visibility_) point.visibility = visibility(hit, facing);
   // Within 1.2e-6 degrees: below what the float channels resolve.
   const SampleAngles angles{degrees(acos_approx(cos_light_angle(scene_.light, n, g.p, light.wi))),
                             degrees(acos_approx(dot(ns, n))), degrees(acos_approx(dot(n, wo)))};
@@ -772,7 +775,7 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Li
                                  Material* material, Pcg32* rng, PixelSums* sums,
                                  std::uint64_t* shadow_rays, const SampleSink* sink,
                                  int column) const {
-  const Prepared p = prepare(ray, hit, u, material, sink && sink->wants_visibility());
+  const Prepared p = prepare(ray, hit, u, material);
   int is_blocked = -1;  // the shadow ray, traced for the first pass that needs it
   double lit_value = 0.0;  // the one pass's, where the light reaches it (sink)
   shade_passes(*material, p.point, p.light, p.angles, rng, sums, [&](std::size_t k, double value) {
@@ -786,7 +789,15 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Li
     sums[k].radiance += value;
     lit_value = value;
   });
-  if (sink) sink->add(*material, p.point, p.light.irradiance, lit_value, lit_value > 0.0, column);
+  if (!sink) return;
+  // A sink's probes read the visibility only where the light arrives.
+  if (!needs_visibility_ && lit_value > 0.0 && sink->wants_visibility()) {
+    ShadingPoint point = p.point;
+    point.visibility = visibility(hit, p.facing);
+    sink->add(*material, point, p.light.irradiance, lit_value, true, column);
+    return;
+  }
+  sink->add(*material, p.point, p.light.irradiance, lit_value, lit_value > 0.0, column);
 }
 
 template <typename Tracer>
