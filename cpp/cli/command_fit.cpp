@@ -45,6 +45,27 @@ int emit_only(const FitArgs& a, const CommandContext& c) {
   return kExitOk;
 }
 
+// A line per refitted constant, and one per method for the errors of its
+// constants (fitted together).
+void print_constants(const FitResult& r, std::ostream& out) {
+  if (!r.constants.empty())
+    out << "  refitted constants (dimensionless; 95 % bootstrap intervals):\n";
+  for (std::size_t k = 0; k < r.constants.size(); ++k) {
+    const FittedConstant& c = r.constants[k];
+    out << fmt::format("    {:<24} {:<4} {:.4g} [{:.4g}, {:.4g}] against {} {:.4g}{}\n", c.method,
+                       c.constant.substr(0, c.constant.find(' ')), c.fitted, c.interval.low,
+                       c.interval.high, c.reference, c.published,
+                       c.at_bound.empty() ? "" : " (at its range's end)");
+    if (k + 1 < r.constants.size() && r.constants[k + 1].method == c.method) continue;
+    const PairedError& d = c.held_out_minus_published;
+    out << fmt::format(
+        "      E {:.2f} % held out by family against {:.2f} % at {}: {:.2f} [{:.2f}, {:.2f}] "
+        "percentage points{}\n",
+        100 * c.held_out.value, 100 * c.at_published.value, c.reference, 100 * d.difference.value,
+        100 * d.difference.interval.low, 100 * d.difference.interval.high, d.tie ? ", a tie" : "");
+  }
+}
+
 void print_summary(const FitResult& r, std::ostream& out) {
   const auto pct = [](const PooledError& e) {
     return fmt::format("{:.2f} % [{:.2f}, {:.2f}]", 100 * e.value, 100 * e.interval.low,
@@ -81,6 +102,7 @@ void print_summary(const FitResult& r, std::ostream& out) {
     out << fmt::format("  {:<26} {}   share of the achievable {:.0f} % [{:.0f}, {:.0f}]\n",
                        s.method, pct(s.error), 100 * s.share.value, 100 * s.share.interval.low,
                        100 * s.share.interval.high);
+  print_constants(r, out);
 }
 
 int fit_into(const FitArgs& a, const CommandContext& c) {

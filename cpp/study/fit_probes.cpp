@@ -84,11 +84,11 @@ std::vector<ProbedConstant> probed_constants(const std::set<std::string>& labels
        s_label.empty() ? "Cycles' default (raw bump)" : "the study's value", s,
        with_value(s_values, s)},
       {TerminatorMethod::kMicroshadowChan2018, label_of("microshadow-chan2018"),
-       "p in saturate(cos / sqrt(1 - V))^p (29 values in quarter octaves)", "published", 2.0,
-       quarter_octaves(-8, 20)},
+       "p in saturate(cos / sqrt(1 - V))^p (21 values in quarter octaves)", "published", 2.0,
+       quarter_octaves(0, 20)},
       {TerminatorMethod::kMicroshadowBrinck2016, label_of("microshadow-brinck2016"),
-       "q in saturate(cos + 2 V^q - 1) (29 values in quarter octaves)", "published", 2.0,
-       quarter_octaves(-8, 20)},
+       "q in saturate(cos + 2 V^q - 1) (21 values in quarter octaves)", "published", 2.0,
+       quarter_octaves(0, 20)},
   };
 }
 
