@@ -291,7 +291,9 @@ TEST_F(Fit, ProbedConstantsAreTheirMethodsRendersAndRefitTheirValues) {
            {"set",
             {{"/material/specular", {{"roughness", 0.3}, {"weight", 0.4}}},
              {"/terminator/lobes", "all"}}}}}}}},
-      {"none", {{"id", "shading-offset"}, {"parameters", {{"s", 0.4}}}}, "microshadow-chan2018",
+      {"none",
+       {{"id", "shading-offset"}, {"parameters", {{"s", 0.4}}}},
+       "microshadow-chan2018",
        "microshadow-brinck2016"});
   const auto constant_of = [](const FitResult& r, const std::string& method) {
     for (const FittedConstant& c : r.constants)
