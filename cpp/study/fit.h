@@ -144,7 +144,7 @@ struct MethodShare {
 // and d1) has an entry for each, fitted together: the errors are those of the set, the
 // interval each constant's own over the same resamples.
 struct FittedConstant {
-  std::string method, constant;  // constant: its symbol first, then where it enters
+  std::string method, constant;         // constant: its symbol first, then where it enters
   std::string reference = "published";  // what `published` is
   double published = 0.0, fitted = 0.0;
   Interval interval;                     // bootstrap over variants, refitted per resample
