@@ -1737,6 +1737,8 @@ Image render_tallied(const Scene& scene, const FactorGrid& grid, PixelTally* tal
   const std::size_t pixels = std::size_t(image.width) * image.height;
   TallyRequest request{&grid, t.lobes, std::vector<std::vector<std::pair<int, double>>>(pixels),
                        std::vector<double>(pixels, 0.0), probes};
+  if (probes && !probes->pixels.empty() && probes->pixels.size() != pixels)
+    throw std::invalid_argument("render_tallied: the probes' pixels are not the image's");
   if (probes) {
     probes->radiance.clear();
     for (const FactorProbe& p : probes->probes)

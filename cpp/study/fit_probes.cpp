@@ -85,10 +85,10 @@ std::vector<ProbedConstant> probed_constants(const std::set<std::string>& labels
        with_value(s_values, s)},
       {TerminatorMethod::kMicroshadowChan2018, label_of("microshadow-chan2018"),
        "p in saturate(cos / sqrt(1 - V))^p (21 values in quarter octaves)", "published", 2.0,
-       quarter_octaves(0, 20)},
+       with_value(quarter_octaves(0, 20), 2.0)},
       {TerminatorMethod::kMicroshadowBrinck2016, label_of("microshadow-brinck2016"),
        "q in saturate(cos + 2 V^q - 1) (21 values in quarter octaves)", "published", 2.0,
-       quarter_octaves(0, 20)},
+       with_value(quarter_octaves(0, 20), 2.0)},
   };
 }
 
