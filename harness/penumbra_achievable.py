@@ -138,6 +138,9 @@ def load_fit(path):
            'nested': [nested_of(c, e, p)
                       for e, p in (c.array(doc, '', 'nested_floors')
                                    if 'nested_floors' in doc else [])],
+           # absent before fit.json's contents 7: no image floors
+           'image': (image_floors_of(c, doc['image_floor'], '/image_floor')
+                     if 'image_floor' in doc else None),
            'pictures': None}
     # null: a grid other than light,deviation (no contour to draw)
     if doc.get('pictures') is not None:
@@ -150,6 +153,18 @@ def floor_of(c, e, p):
             'variants': c.get(e, p, 'variants', int, 'an integer'),
             'floor': c.interval(e, p, 'floor'),
             'none': c.interval(e, p, 'none')}
+
+
+def image_floors_of(c, e, p):
+    """The image RMSE's per-variant floors pooled, raw bump's image RMSE,
+    and each method's image RMSE and share of the floors' gain."""
+    if not isinstance(e, dict):
+        c.fail(p, 'an object')
+    return {'unit': c.get(e, p, 'unit', str, 'a string'),
+            'floor': c.interval(e, p, 'floor'),
+            'none': c.interval(e, p, 'none'),
+            'methods': [method_of(c, m, q)
+                        for m, q in c.array(e, p, 'methods')]}
 
 
 def nested_of(c, e, p):

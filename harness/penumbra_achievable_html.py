@@ -247,6 +247,41 @@ def nested_sentences(fit):
     return out
 
 
+def image_context(fit):
+    """The image RMSE's per-variant floors: a sentence and every method's
+    row; None for a fit.json written before them."""
+    im = fit['image']
+    if im is None:
+        return None
+    rows = [[m['method'] + (' †' if sees_more(fit, m['method']) else ''),
+             pct_cell(m['error']), frac_cell(m['share'])]
+            for m in im['methods']]
+    best = next((m for m in im['methods'] if not m['method'].startswith(
+        'fitted') and math.isfinite(m['error'][0])), None)
+    sentence = (
+        f'Image RMSE over the pixels fully covered in both: raw bump '
+        f'{pct(im["none"])} {PCT}; a factor of the '
+        f'{inputs_text(fit["inputs"])} fitted to each variant alone reaches '
+        f'{pct(im["floor"])}. That floor is in-sample by design: what lies '
+        'above it no factor of these inputs can remove on that image, '
+        'whatever its constants.')
+    if best is not None:
+        tied = [m['method'] for m in im['methods']
+                if m['group'] is not None and m['group'] == best['group']
+                and m['method'] != best['method']]
+        sentence += (
+            f' The lowest shipped method, {best["method"]}, reaches '
+            f'{pct(best["error"])}: {frac(best["share"])} of the floors\' '
+            'gain on raw bump, ' +
+            ('tied by share (paired over the same resamples) with ' +
+             ', '.join(tied) if tied else
+             'above every other method\'s share (paired over the same '
+             'resamples, no interval holds 0)') + '.')
+    return {'sentence': sentence,
+            'table': table(['method', f'image E ({PCT})',
+                            'share of the floors\' gain (fraction)'], rows)}
+
+
 def achievable_context(fit, figs, fit_file):
     """The section's context; fit None: the line saying how to get it."""
     if fit is None:
@@ -289,4 +324,5 @@ def achievable_context(fit, figs, fit_file):
             if figs.get('contour') else None,
             'held_out': held_out_table(fit) if fit['held_out'] else None,
             'comparison': comparison_sentence(fit),
-            'constants': constants_context(fit)}
+            'constants': constants_context(fit),
+            'image': image_context(fit)}

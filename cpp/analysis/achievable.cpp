@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <type_traits>
@@ -341,34 +342,145 @@ double tally_rmse(const TallyVariant& v, const std::vector<double>& g) {
   return compare_profiles(v.tally.profile(g), v.truth).rmse_terminator;
 }
 
+namespace {
+
+// The bounded minimum (FloorOptions) of the terms `add_rows(index, terms)`
+// adds, plus the prior, over every cell with a prior and over the cells
+// s->constrained marks without one: the others stay 1. Into s->g.
+template <typename AddRows>
+void solve_cells(const FactorGrid& grid, const FloorOptions& options, AddRows&& add_rows,
+                 FloorSolution* s) {
+  const int cells = grid.cells();
+  std::vector<int> index(static_cast<std::size_t>(cells), -1);
+  int n = 0;
+  for (int c = 0; c < cells; ++c)
+    if (options.smoothness > 0.0 || s->constrained[static_cast<std::size_t>(c)]) index[c] = n++;
+  Terms terms{{}, Eigen::VectorXd::Zero(n)};
+  add_rows(index, terms);
+  add_prior(grid, index, s->constrained, options, terms);
+  const Eigen::VectorXd x = sparse_solve(options, n) ? minimise(sparse(terms), options, *s)
+                                                     : minimise(dense(terms), options, *s);
+  s->g.assign(static_cast<std::size_t>(cells), 1.0);
+  for (int c = 0; c < cells; ++c)
+    if (index[c] >= 0) s->g[static_cast<std::size_t>(c)] = x[index[c]];
+}
+
+// The mean over pixel rows of the squared error, as Terms. A pixel's row
+// holds a few cells, but 10^4 rows of them would list 10^6 triplets: they
+// are summed into a dense h of the variables first.
+void add_pixel_rows(const PixelRows& rows, const std::vector<int>& index, Terms& q) {
+  const Eigen::Index n = q.f.size();
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
+  const double w = 1.0 / double(rows.rows());
+  std::vector<std::pair<int, double>> a;
+  for (std::size_t r = 0; r < rows.rows(); ++r) {
+    double y = rows.target[r];
+    a.clear();
+    for (std::uint32_t e = rows.offsets[r]; e < rows.offsets[r + 1]; ++e) {
+      const int i = index[static_cast<std::size_t>(rows.cells[e])];
+      if (i < 0)
+        y -= rows.light[e];  // a fixed cell: G = 1
+      else
+        a.push_back({i, rows.light[e]});
+    }
+    for (const auto& [i, ai] : a) {
+      q.f[i] += w * ai * y;
+      for (const auto& [j, aj] : a) h(i, j) += w * ai * aj;
+    }
+  }
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (h(i, j) != 0.0) q.h.emplace_back(int(i), int(j), h(i, j));
+}
+
+}  // namespace
+
 FloorSolution solve_floor(const FactorGrid& grid, const std::vector<TallyVariant>& variants,
                           const FloorOptions& options) {
-  const int cells = grid.cells();
   FloorSolution s;
-  s.constrained.assign(static_cast<std::size_t>(cells), 0);
+  s.constrained.assign(static_cast<std::size_t>(grid.cells()), 0);
   for (const TallyVariant& v : variants)
     for (std::size_t b : terminator_bins(v))
       for (const auto& [cell, light] : v.tally.scaled[b])
         if (light != 0.0) s.constrained[static_cast<std::size_t>(cell)] = 1;
-  // Without a prior, a cell no variant lights is not a variable: it stays 1.
-  std::vector<int> index(static_cast<std::size_t>(cells), -1);
-  int n = 0;
-  for (int c = 0; c < cells; ++c)
-    if (options.smoothness > 0.0 || s.constrained[static_cast<std::size_t>(c)]) index[c] = n++;
-  Terms terms{{}, Eigen::VectorXd::Zero(n)};
-  for (const TallyVariant& v : variants)
-    add_variant(v, index, 1.0 / double(variants.size()), terms);
-  add_prior(grid, index, s.constrained, options, terms);
-  const Eigen::VectorXd x = sparse_solve(options, n) ? minimise(sparse(terms), options, s)
-                                                     : minimise(dense(terms), options, s);
-  s.g.assign(static_cast<std::size_t>(cells), 1.0);
-  for (int c = 0; c < cells; ++c)
-    if (index[c] >= 0) s.g[static_cast<std::size_t>(c)] = x[index[c]];
+  solve_cells(
+      grid, options,
+      [&](const std::vector<int>& index, Terms& terms) {
+        for (const TallyVariant& v : variants)
+          add_variant(v, index, 1.0 / double(variants.size()), terms);
+      },
+      &s);
   for (const TallyVariant& v : variants) {
     s.variant_rmse.push_back(tally_rmse(v, s.g));
     if (std::isfinite(s.variant_rmse.back()))
       s.objective += s.variant_rmse.back() * s.variant_rmse.back() / double(variants.size());
   }
+  return s;
+}
+
+PixelRows pixel_rows(const Image& render, const Image& truth, const PixelTally& tally,
+                     double radiance_scale, double min_coverage) {
+  if (tally.width != render.width || tally.height != render.height || truth.width != render.width ||
+      truth.height != render.height)
+    throw std::invalid_argument("pixel_rows: the tally, the render and the truth differ in size");
+  const auto rgb = [](const Image& im) {
+    const std::array<int, 4> c{im.channel_index("R"), im.channel_index("G"), im.channel_index("B"),
+                               im.channel_index("A")};
+    if (*std::min_element(c.begin(), c.end()) < 0)
+      throw std::invalid_argument("pixel_rows: an image without R, G, B and A");
+    return c;
+  };
+  const std::array<int, 4> rc = rgb(render), tc = rgb(truth);
+  // As compare_images reads a pixel: (R + G + B) / 3 in float.
+  const auto value = [](const Image& im, const std::array<int, 4>& c, int x, int y) {
+    return (im.at(x, y, c[0]) + im.at(x, y, c[1]) + im.at(x, y, c[2])) / 3.0f;
+  };
+  PixelRows rows;
+  for (int y = 0; y < render.height; ++y)
+    for (int x = 0; x < render.width; ++x) {
+      const float ar = render.at(x, y, rc[3]), at = truth.at(x, y, tc[3]);
+      if (!(ar >= min_coverage) || !(at >= min_coverage)) continue;
+      const float vr = value(render, rc, x, y), vt = value(truth, tc, x, y);
+      if (!std::isfinite(vr) || !std::isfinite(vt)) continue;
+      const std::size_t p =
+          static_cast<std::size_t>(y) * std::size_t(render.width) + std::size_t(x);
+      rows.target.push_back((double(vt) - tally.rest[p]) / radiance_scale);
+      for (std::uint32_t e = tally.offsets[p]; e < tally.offsets[p + 1]; ++e) {
+        rows.cells.push_back(tally.cells[e]);
+        rows.light.push_back(tally.light[e] / radiance_scale);
+      }
+      rows.offsets.push_back(static_cast<std::uint32_t>(rows.cells.size()));
+    }
+  return rows;
+}
+
+double pixel_rmse(const PixelRows& rows, const std::vector<double>& g) {
+  if (rows.rows() == 0) return std::numeric_limits<double>::quiet_NaN();
+  double sum = 0.0;
+  for (std::size_t r = 0; r < rows.rows(); ++r) {
+    double d = -rows.target[r];
+    for (std::uint32_t e = rows.offsets[r]; e < rows.offsets[r + 1]; ++e)
+      d += rows.light[e] * g[static_cast<std::size_t>(rows.cells[e])];
+    sum += d * d;
+  }
+  return std::sqrt(sum / double(rows.rows()));
+}
+
+FloorSolution solve_image_floor(const FactorGrid& grid, const PixelRows& rows,
+                                const FloorOptions& options) {
+  FloorSolution s;
+  s.constrained.assign(static_cast<std::size_t>(grid.cells()), 0);
+  for (std::size_t e = 0; e < rows.cells.size(); ++e)
+    if (rows.light[e] != 0.0) s.constrained[static_cast<std::size_t>(rows.cells[e])] = 1;
+  if (rows.rows() > 0)
+    solve_cells(
+        grid, options,
+        [&](const std::vector<int>& index, Terms& terms) { add_pixel_rows(rows, index, terms); },
+        &s);
+  else
+    s.g.assign(static_cast<std::size_t>(grid.cells()), 1.0);
+  s.variant_rmse = {pixel_rmse(rows, s.g)};
+  s.objective = std::isfinite(s.variant_rmse[0]) ? s.variant_rmse[0] * s.variant_rmse[0] : 0.0;
   return s;
 }
 

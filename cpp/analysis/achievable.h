@@ -63,6 +63,28 @@ struct TallyVariant {
 // fraction of albedo*E/pi.
 double tally_rmse(const TallyVariant& v, const std::vector<double>& g);
 
+// Raw bump's light in one render by pixel, as the image metrics see it
+// (compare_images: pixels fully covered in the render and its truth, both
+// finite): row r's radiance under a factor G is sum_c light_rc G_c plus the
+// light no G scales, so its error against the truth is that sum minus
+// `target` (the truth less that light). Fractions of albedo*E/pi.
+struct PixelRows {
+  std::vector<double> target;
+  std::vector<std::uint32_t> offsets{0};  // row r's entries: [offsets[r], offsets[r + 1])
+  std::vector<int> cells;                 // ascending within a row, no repeats
+  std::vector<double> light;
+  std::size_t rows() const { return target.size(); }
+};
+
+// `render`'s tally (its size) against `truth`; `radiance_scale`: albedo*E/pi.
+// std::invalid_argument where the sizes or channels do not match.
+PixelRows pixel_rows(const Image& render, const Image& truth, const PixelTally& tally,
+                     double radiance_scale, double min_coverage = 0.999);
+
+// The image RMSE (ImageMetrics::rmse / radiance_scale) of G over the rows;
+// NaN with no row.
+double pixel_rmse(const PixelRows& rows, const std::vector<double>& g);
+
 struct FloorOptions {
   double g_min = 0.0, g_max = 2.0;
   // Weight of the squared second differences of G along each grid axis (a
@@ -84,11 +106,11 @@ struct FloorOptions {
 };
 
 struct FloorSolution {
-  std::vector<double> g;              // per grid cell; 1 where no variant has light
-  std::vector<char> constrained;      // cells some variant has light in
-  std::vector<double> variant_rmse;   // per variant, at g
-  double objective = 0.0;             // mean over variants of the squared RMSE at g (no prior)
-  double kkt_residual = 0.0;          // largest violation of optimality, objective units
+  std::vector<double> g;             // per grid cell; 1 where no variant has light
+  std::vector<char> constrained;     // cells some variant has light in
+  std::vector<double> variant_rmse;  // per variant, at g
+  double objective = 0.0;            // mean over variants of the squared RMSE at g (no prior)
+  double kkt_residual = 0.0;         // largest violation of optimality, objective units
   int iterations = 0;
 };
 
@@ -96,5 +118,14 @@ struct FloorSolution {
 // terminator RMSE (plus the prior), with g_min <= G <= g_max.
 FloorSolution solve_floor(const FactorGrid& grid, const std::vector<TallyVariant>& variants,
                           const FloorOptions& options = {});
+
+// The G on `grid` minimising one render's image RMSE (pixel_rmse), with
+// g_min <= G <= g_max: the per-variant floor of the image metric. Unlike
+// the profile, the image is not binned by an input, so one variant's floor
+// is not zero by construction: a pixel's samples mix light angles and
+// deviations, and what the bump gets wrong within a pixel no factor of the
+// point's inputs can undo. variant_rmse holds the one render's RMSE at G.
+FloorSolution solve_image_floor(const FactorGrid& grid, const PixelRows& rows,
+                                const FloorOptions& options = {});
 
 }  // namespace penumbra

@@ -66,6 +66,21 @@ void print_constants(const FitResult& r, std::ostream& out) {
   }
 }
 
+void print_image_floors(const ImageFloors& f, std::ostream& out) {
+  if (f.methods.empty() && !std::isfinite(f.none.value)) return;
+  out << fmt::format(
+      "  image RMSE, % of albedo*E/pi: raw bump {:.2f} [{:.2f}, {:.2f}]; each variant's own "
+      "floor {:.2f} [{:.2f}, {:.2f}]\n",
+      100 * f.none.value, 100 * f.none.interval.low, 100 * f.none.interval.high,
+      100 * f.floor.value, 100 * f.floor.interval.low, 100 * f.floor.interval.high);
+  for (const MethodShare& s : f.methods)
+    out << fmt::format(
+        "    {:<26} {:.2f} % [{:.2f}, {:.2f}]   share of the floors' gain {:.0f} % [{:.0f}, "
+        "{:.0f}]\n",
+        s.method, 100 * s.error.value, 100 * s.error.interval.low, 100 * s.error.interval.high,
+        100 * s.share.value, 100 * s.share.interval.low, 100 * s.share.interval.high);
+}
+
 void print_summary(const FitResult& r, std::ostream& out) {
   const auto pct = [](const PooledError& e) {
     return fmt::format("{:.2f} % [{:.2f}, {:.2f}]", 100 * e.value, 100 * e.interval.low,
@@ -102,6 +117,7 @@ void print_summary(const FitResult& r, std::ostream& out) {
     out << fmt::format("  {:<26} {}   share of the achievable {:.0f} % [{:.0f}, {:.0f}]\n",
                        s.method, pct(s.error), 100 * s.share.value, 100 * s.share.interval.low,
                        100 * s.share.interval.high);
+  print_image_floors(r.image, out);
   print_constants(r, out);
 }
 

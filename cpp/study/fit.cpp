@@ -72,14 +72,17 @@ constexpr double kConfidence = 0.95;
 // evaluator's displacement truth, as the study's report holds it.
 using MethodErrors = std::map<std::string, std::map<std::string, double>>;  // variant -> method
 
-MethodErrors method_errors(const json& report) {
+// `metric`: a JSON pointer into a comparison (the image RMSE's is in
+// W m^-2 sr^-1, not yet divided by albedo*E/pi).
+MethodErrors method_errors(const json& report, const json::json_pointer& metric =
+                                                   "/profile/rmse_terminator"_json_pointer) {
   MethodErrors errors;
   for (const json& c : report.at("comparisons")) {
     if (c.value("renderer", "") != "evaluator" ||
         c.value("reference", "") != "evaluator:displacement")
       continue;
-    const json& rmse = c.at("profile").at("rmse_terminator");
-    if (rmse.is_number()) errors[c.at("variant")][c.at("method")] = rmse.get<double>();
+    const json& value = c.at(metric);
+    if (value.is_number()) errors[c.at("variant")][c.at("method")] = value.get<double>();
   }
   return errors;
 }
@@ -110,8 +113,13 @@ bool same_pixels(const Image& a, const Image& b) {
 
 // One variant's tally: raw bump re-traced with the grid (its bits checked
 // against the cached render) and its truth's profile. nullopt: skipped.
-std::optional<FitVariant> load_variant(const std::filesystem::path& folder, const json& variant,
-                                       const FactorGrid& grid, FitResult* result) {
+// `grid_tables`: the shipped factors of the grid's inputs, tabulated on it
+// (FitVariant::image_on_grid); *rows: the variant's pixel rows, for its
+// image floor (solved later, several at once).
+std::optional<FitVariant> load_variant(
+    const std::filesystem::path& folder, const json& variant, const FactorGrid& grid,
+    const std::vector<std::pair<std::string, std::vector<double>>>& grid_tables, PixelRows* rows,
+    FitResult* result) {
   const std::vector<ProbedConstant>& probed = result->probed;
   const std::string bump = render_path(variant, "bump"),
                     truth = render_path(variant, "displacement");
@@ -138,9 +146,14 @@ std::optional<FitVariant> load_variant(const std::filesystem::path& folder, cons
   FitVariant v;
   v.id = variant.at("id").get<std::string>();
   v.family = variant.at("scene").get<std::string>();
-  v.data = {v.id, profile_tally(cached, tally, scale),
-            terminator_profile(read_image((folder / truth).string()), scale)};
+  const Image truth_image = read_image((folder / truth).string());
+  v.data = {v.id, profile_tally(cached, tally, scale), terminator_profile(truth_image, scale)};
   v.probe_rmse = probe_errors(probes, traced, scale, v.data.truth);
+  v.radiance_scale = scale;
+  *rows = pixel_rows(cached, truth_image, tally, scale);
+  v.image_none = pixel_rmse(*rows, std::vector<double>(std::size_t(grid.cells()), 1.0));
+  for (const auto& [method, table] : grid_tables)
+    v.image_on_grid[method] = pixel_rmse(*rows, table);
   return v;
 }
 
@@ -496,6 +509,33 @@ void say(const FitOptions& o, const std::string& line) {
   if (o.progress) o.progress(line);
 }
 
+int jobs_of(const FitOptions& o) {
+  return o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+// Each variant's image floor (FitVariant::image_floor), `jobs` at a time.
+// The active-set solve after the projected gradient's 5,000 steps cycles
+// from a rougher start (300 steps left a KKT residual of 5e-6 rather than
+// 2e-8 on the default study), so the steps stay and the solves share the
+// cores instead.
+void solve_image_floors(const FitOptions& o, const std::vector<PixelRows>& rows, FitResult* r) {
+  say(o, fmt::format("image RMSE: each of {} variants' own floor", rows.size()));
+  std::vector<std::string> failed(rows.size());
+  run_parallel(jobs_of(o), rows.size(), [&](std::size_t k) {
+    try {
+      const FloorSolution image = solve_image_floor(o.grid, rows[k]);
+      r->variants[k].image_floor = image.variant_rmse.front();
+      r->variants[k].image_kkt_residual = image.kkt_residual;
+    } catch (const std::exception& e) {
+      failed[k] = e.what();
+    }
+  });
+  for (std::size_t k = 0; k < failed.size(); ++k)
+    if (!failed[k].empty())
+      throw std::runtime_error(
+          fmt::format("the image floor of variant {}: {}", r->variants[k].id, failed[k]));
+}
+
 // The variants of the study that have an evaluator raw-bump render and
 // truth, tallied.
 void load_variants(const FitOptions& o, const json& report, FitResult* r) {
@@ -513,6 +553,10 @@ void load_variants(const FitOptions& o, const json& report, FitResult* r) {
       for (const auto& [label, _] : row) labels.insert(label);
     r->probed = probed_constants(labels);
   }
+  std::vector<std::pair<std::string, std::vector<double>>> grid_tables;
+  for (const GridMethod& m : kGridMethods)
+    if (on_grid(m, o.grid)) grid_tables.emplace_back(m.id, table_of(o.grid, m.factor));
+  std::vector<PixelRows> rows;  // per fitted variant
   std::size_t done = 0;
   for (const json& variant : variants) {
     if (unconverged.count(variant.at("id").get<std::string>())) {
@@ -520,9 +564,11 @@ void load_variants(const FitOptions& o, const json& report, FitResult* r) {
       ++done;
       continue;
     }
-    if (auto v = load_variant(folder, variant, o.grid, r))
+    PixelRows variant_rows;
+    if (auto v = load_variant(folder, variant, o.grid, grid_tables, &variant_rows, r)) {
       r->variants.push_back(std::move(*v));
-    else
+      rows.push_back(std::move(variant_rows));
+    } else
       ++r->skipped;
     if (++done % 12 == 0 || done == variants.size())
       say(o, fmt::format("tallied raw bump: {} of {} variants", done, variants.size()));
@@ -533,6 +579,7 @@ void load_variants(const FitOptions& o, const json& report, FitResult* r) {
                                  "truth to fit ({} left out: their truth did not converge; {} "
                                  "re-traced differ from the cache)",
                                  r->unconverged.size(), r->retraced_different));
+  solve_image_floors(o, rows, r);
   double outside = 0.0, total = 0.0;
   for (const FitVariant& v : r->variants)
     for (std::size_t b = 0; b < v.data.tally.count.size(); ++b) {
@@ -746,15 +793,16 @@ namespace {
 // The shares' tie groups (MethodShare::group), by paired differences of
 // shares over the same resamples as the shares' own intervals.
 void share_groups(const FitOptions& o, const std::vector<double>& none,
-                  const std::map<std::string, std::vector<double>>& methods, FitResult* r) {
-  const std::vector<double>& floor = r->study_floor.solution.variant_rmse;
-  const std::vector<std::size_t> index = all_of(r->variants.size());
+                  const std::vector<double>& floor,
+                  const std::map<std::string, std::vector<double>>& methods,
+                  std::vector<MethodShare>* shares) {
+  const std::vector<std::size_t> index = all_of(none.size());
   const auto share = [&](const std::string& m, const std::vector<std::size_t>& k) {
     const double e_none = pooled(none, k);
     return (e_none - pooled(methods.at(m), k)) / (e_none - pooled(floor, k));
   };
   std::vector<MethodShare*> order;
-  for (MethodShare& s : r->shares)
+  for (MethodShare& s : *shares)
     if (std::isfinite(s.share.value)) order.push_back(&s);
   std::stable_sort(order.begin(), order.end(), [](const MethodShare* a, const MethodShare* b) {
     return a->share.value != b->share.value ? a->share.value > b->share.value
@@ -779,6 +827,17 @@ void share_groups(const FitOptions& o, const std::vector<double>& none,
   }
 }
 
+// (E_none - E_method) / (E_none - E_floor) over `index`, the three paired
+// over the same resamples.
+PooledError share_of(const std::vector<double>& none, const std::vector<double>& method,
+                     const std::vector<double>& floor, const std::vector<std::size_t>& index,
+                     const FitOptions& o) {
+  return bootstrap(index, o.resamples, o.seed, [&](const std::vector<std::size_t>& k) {
+    const double e_none = pooled(none, k);
+    return (e_none - pooled(method, k)) / (e_none - pooled(floor, k));
+  });
+}
+
 // Each shipped method's pooled error and its share of the improvement the
 // study floor achieves over raw bump, paired over the same resamples.
 void fit_shares(const FitOptions& o, const std::vector<double>& none,
@@ -790,10 +849,7 @@ void fit_shares(const FitOptions& o, const std::vector<double>& none,
     MethodShare s;
     s.method = method;
     s.error = pooled_error(values, index, o);
-    s.share = bootstrap(index, o.resamples, o.seed, [&](const std::vector<std::size_t>& k) {
-      const double e_none = pooled(none, k);
-      return (e_none - pooled(values, k)) / (e_none - pooled(floor, k));
-    });
+    s.share = share_of(none, values, floor, index, o);
     for (const GridMethod& m : kGridMethods) {
       if (method != m.id || !on_grid(m, r->grid)) continue;
       s.on_grid_inputs = true;
@@ -805,7 +861,7 @@ void fit_shares(const FitOptions& o, const std::vector<double>& none,
   std::sort(r->shares.begin(), r->shares.end(), [](const MethodShare& a, const MethodShare& b) {
     return a.error.value < b.error.value;
   });
-  share_groups(o, none, methods, r);
+  share_groups(o, none, floor, methods, &r->shares);
 }
 
 // estevez2019's 1/8 refitted: on every variant, per bootstrap resample
@@ -999,6 +1055,83 @@ Deshmukh2020Constants fit_deshmukh2020(const std::vector<TallyVariant>& variants
   return Deshmukh2020Search(data, grid).fit(all_of(variants.size()));
 }
 
+namespace {
+
+// A metric of the study's report per fitted variant: raw bump's and every
+// other method's (NaN where the report has none for a variant).
+struct VariantValues {
+  std::vector<double> none;
+  std::map<std::string, std::vector<double>> methods;
+};
+
+// `per_scale`: divided by each variant's albedo*E/pi (the image RMSE).
+VariantValues variant_values(const MethodErrors& errors, const std::vector<FitVariant>& variants,
+                             bool per_scale) {
+  VariantValues out;
+  for (const FitVariant& v : variants) {
+    const auto row = errors.find(v.id);
+    if (row != errors.end())
+      for (const auto& [m, _] : row->second)
+        if (m != "none") out.methods[m];
+  }
+  const auto at = [&](const FitVariant& v, const std::string& m) {
+    const auto row = errors.find(v.id);
+    if (row == errors.end() || !row->second.count(m))
+      return std::numeric_limits<double>::quiet_NaN();
+    return row->second.at(m) / (per_scale ? v.radiance_scale : 1.0);
+  };
+  for (const FitVariant& v : variants) {
+    out.none.push_back(at(v, "none"));
+    for (auto& [m, values] : out.methods) values.push_back(at(v, m));
+  }
+  return out;
+}
+
+// The image RMSE's per-variant floors pooled, and each method's image error
+// and share of the floors' improvement on raw bump (ImageFloors). Raw
+// bump's E is the tally's, the floors' own data; `reported` checks it.
+void fit_image_floors(const FitOptions& o, const VariantValues& reported, FitResult* r) {
+  say(o, "image RMSE: per-variant floors and shares");
+  ImageFloors& f = r->image;
+  const std::vector<std::size_t> index = all_of(r->variants.size());
+  std::vector<double> none, floor;
+  f.none_minus_report = 0.0;
+  for (std::size_t k = 0; k < r->variants.size(); ++k) {
+    const FitVariant& v = r->variants[k];
+    none.push_back(v.image_none);
+    floor.push_back(v.image_floor);
+    f.kkt_residual = std::max(f.kkt_residual, v.image_kkt_residual);
+    if (std::isfinite(reported.none[k]))
+      f.none_minus_report =
+          std::max(f.none_minus_report, std::abs(v.image_none - reported.none[k]));
+  }
+  f.floor = pooled_error(floor, index, o);
+  f.none = pooled_error(none, index, o);
+  for (const auto& [method, values] : reported.methods) {
+    MethodShare s;
+    s.method = method;
+    s.error = pooled_error(values, index, o);
+    s.share = share_of(none, values, floor, index, o);
+    if (!r->variants.empty() && r->variants.front().image_on_grid.count(method)) {
+      std::vector<double> tabulated;
+      for (const FitVariant& v : r->variants) tabulated.push_back(v.image_on_grid.at(method));
+      s.on_grid_inputs = true;
+      s.grid_error = pooled(tabulated, index);
+      s.resolution_error = std::abs(s.grid_error - s.error.value);
+    }
+    f.methods.push_back(s);
+  }
+  std::stable_sort(f.methods.begin(), f.methods.end(),
+                   [](const MethodShare& a, const MethodShare& b) {
+                     // NaN (no image RMSE in the report) last.
+                     return std::isfinite(a.error.value) &&
+                            (!std::isfinite(b.error.value) || a.error.value < b.error.value);
+                   });
+  share_groups(o, none, floor, reported.methods, &f.methods);
+}
+
+}  // namespace
+
 FitResult fit_study(const FitOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   const std::filesystem::path report_path = std::filesystem::path(o.folder) / "report.json";
@@ -1011,44 +1144,25 @@ FitResult fit_study(const FitOptions& o) {
   r.grid = o.grid;
   if (o.smoothness.empty()) throw std::invalid_argument("fit_study: no candidate smoothness");
   r.smoothness_candidates = o.smoothness;
-  MethodErrors errors;
+  MethodErrors errors, image_errors;
   try {
     r.study = report.at("study").value("name", "");
     load_variants(o, report, &r);
     errors = method_errors(report);
+    image_errors = method_errors(report, "/image/rmse"_json_pointer);
   } catch (const json::exception& e) {
     throw InputError(report_path.string(), "", fmt::format("not a study's report: {}", e.what()));
   }
-  std::vector<double> none;
-  std::map<std::string, std::vector<double>> methods;
-  for (const FitVariant& v : r.variants) {
-    const auto row = errors.find(v.id);
-    const auto at = [&](const std::string& m) {
-      if (row == errors.end() || !row->second.count(m))
-        return std::numeric_limits<double>::quiet_NaN();
-      return row->second.at(m);
-    };
-    none.push_back(at("none"));
-    if (row != errors.end())
-      for (const auto& [m, _] : row->second)
-        if (m != "none") methods[m];
-  }
-  for (auto& [m, values] : methods)
-    for (const FitVariant& v : r.variants) {
-      const auto row = errors.find(v.id);
-      values.push_back(row != errors.end() && row->second.count(m)
-                           ? row->second.at(m)
-                           : std::numeric_limits<double>::quiet_NaN());
-    }
+  const VariantValues values = variant_values(errors, r.variants, false);
+  const std::vector<double>& none = values.none;
+  const std::map<std::string, std::vector<double>>& methods = values.methods;
   say(o, fmt::format("floor over the study's {} variants", r.variants.size()));
   r.study_floor = floor_over(r, "study", all_of(r.variants.size()), none, o);
   fit_nested_floors(o, none, &r);
   for (const auto& [family, index] : families(r.variants))
     r.family_floors.push_back(floor_over(r, family, index, none, o));
   fit_shares(o, none, methods, &r);
-  const int jobs =
-      o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  FloorSolves solves(r, jobs);
+  FloorSolves solves(r, jobs_of(o));
   fit_held_out(o, none, methods, solves, &r);
   std::set<std::string> all_families;
   for (const FitVariant& v : r.variants) all_families.insert(v.family);
@@ -1059,6 +1173,7 @@ FitResult fit_study(const FitOptions& o) {
   r.table = {r.grid,
              solve_floor(r.grid, data_of(r.variants, all_of(r.variants.size())), options).g};
   fit_constants(o, errors, &r);
+  fit_image_floors(o, variant_values(image_errors, r.variants, true), &r);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
@@ -1120,6 +1235,34 @@ json pictures_json(const FitResult& r) {
             {"chiang2019", rows(table_of(r.grid, chiang2019), nullptr)}}}};
 }
 
+json share_json(const MethodShare& s) {
+  json m{{"method", s.method},
+         {"error", interval_json(s.error)},
+         {"share", interval_json(s.share)},
+         {"group", s.group ? json(s.group) : json()},
+         {"leader", s.group ? json(s.leader) : json()},
+         {"versus_leader", s.group ? paired_json(s.versus_leader) : json()}};
+  if (s.on_grid_inputs)
+    m["on_grid"] = {{"error", s.grid_error}, {"resolution_error", s.resolution_error}};
+  return m;
+}
+
+json image_json(const ImageFloors& f) {
+  json j{{"unit",
+          "image RMSE (ImageMetrics::rmse over pixels fully covered in the render and the truth), "
+          "fraction of albedo*E/pi, pooled over variants as a root mean square; each variant's "
+          "floor is fitted to that variant alone; intervals: 95 % percentile bootstrap over "
+          "variants"},
+         {"floor", interval_json(f.floor)},
+         {"none", interval_json(f.none)},
+         {"none_minus_report",
+          std::isfinite(f.none_minus_report) ? json(f.none_minus_report) : json()},
+         {"kkt_residual", f.kkt_residual},
+         {"methods", json::array()}};
+  for (const MethodShare& s : f.methods) j["methods"].push_back(share_json(s));
+  return j;
+}
+
 json result_json(const FitResult& r) {
   json j{
       {"study", r.study},
@@ -1135,6 +1278,7 @@ json result_json(const FitResult& r) {
       {"retraced_different", r.retraced_different},
       {"outside_grid_share", r.outside_share},
       {"floor", floor_json(r.study_floor)},
+      {"image_floor", image_json(r.image)},
       {"pictures", pictures_json(r)},
       {"held_out_pooled", r.held_out.empty() ? json() : interval_json(r.held_out_pooled)},
       {"best_method", r.best_method.empty() ? json() : json(r.best_method)},
@@ -1168,17 +1312,7 @@ json result_json(const FitResult& r) {
          {"best", interval_json(h.best)},
          {"held_out_minus_best",
           h.best_method.empty() ? json() : paired_json(h.held_out_minus_best)}});
-  for (const MethodShare& s : r.shares) {
-    json m{{"method", s.method},
-           {"error", interval_json(s.error)},
-           {"share", interval_json(s.share)},
-           {"group", s.group ? json(s.group) : json()},
-           {"leader", s.group ? json(s.leader) : json()},
-           {"versus_leader", s.group ? paired_json(s.versus_leader) : json()}};
-    if (s.on_grid_inputs)
-      m["on_grid"] = {{"error", s.grid_error}, {"resolution_error", s.resolution_error}};
-    j["methods"].push_back(m);
-  }
+  for (const MethodShare& s : r.shares) j["methods"].push_back(share_json(s));
   for (const FittedConstant& c : r.constants)
     j["constants"].push_back(
         {{"method", c.method},
@@ -1224,6 +1358,14 @@ std::string result_csv(const FitResult& r) {
     row("error:" + s.method, "study", s.error, unit);
     row("share:" + s.method, "study", s.share, "fraction of the floor's improvement on raw bump");
   }
+  const std::string image_unit = "fraction of albedo*E/pi (pooled image RMSE)";
+  row("image_floor", "study", r.image.floor, image_unit + ", per-variant floors");
+  row("image_none", "study", r.image.none, image_unit);
+  for (const MethodShare& s : r.image.methods) {
+    row("image_error:" + s.method, "study", s.error, image_unit);
+    row("image_share:" + s.method, "study", s.share,
+        "fraction of the per-variant image floors' improvement on raw bump");
+  }
   // A method with several constants names each by its symbol (the first
   // word of `constant`): constant:deshmukh2020:d0.
   std::map<std::string, int> per_method;
@@ -1265,8 +1407,9 @@ void write_fit(const FitResult& r, const std::filesystem::path& out) {
 // 3: intervals on the constants' errors, paired differences, share groups;
 // 4: variants whose truth did not converge left out and named; 5: the
 // inputs, nested floors, chiang2019 on grids with a shading axis; 6: the
-// probed constants of shading-offset and the micro-shadowing methods).
-constexpr const char* kFitContents = "6";
+// probed constants of shading-offset and the micro-shadowing methods; 7:
+// the image RMSE's per-variant floors).
+constexpr const char* kFitContents = "7";
 
 std::string fit_inputs_digest(const std::filesystem::path& study) {
   std::uint64_t h = fnv1a(without_run_keys(read_file((study / "report.json").string())));

@@ -11,12 +11,15 @@
 //
 // Errors are the terminator-profile RMSE (analysis/metrics.h, fraction of
 // albedo*E/pi), pooled over variants as a root mean square, the quantity
-// the floor minimises: E = sqrt(mean over variants of RMSE^2).
+// the floor minimises: E = sqrt(mean over variants of RMSE^2). The image
+// RMSE's floors (ImageFloors) are per variant: the image is not binned by
+// an input, so a G fitted to one variant is not exact by construction.
 #pragma once
 
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -90,6 +93,15 @@ struct FitVariant {
   // Per probed constant (FitResult::probed), per value tried: the
   // terminator RMSE of the method with that value (study/fit_probes.h).
   std::vector<std::vector<double>> probe_rmse;
+  // The image RMSE (ImageMetrics::rmse / albedo*E/pi) through the tally's
+  // pixel rows (analysis/achievable.h, PixelRows): raw bump's (G = 1) and
+  // the variant's own floor (solve_image_floor on the fit's grid), and per
+  // shipped method whose factor is a function of the grid's inputs, its
+  // table's (never below the floor: it is one of the G the floor ranges over).
+  double image_none = std::nan(""), image_floor = std::nan("");
+  double image_kkt_residual = 0.0;  // of the variant's floor solve
+  std::map<std::string, double> image_on_grid;
+  double radiance_scale = 0.0;  // albedo*E/pi of the variant, W m^-2 sr^-1
 };
 
 struct FloorFit {
@@ -162,6 +174,20 @@ struct FittedConstant {
   double probe_minus_rendered = std::nan("");
 };
 
+// The image metric's per-variant floors (FitVariant::image_floor), pooled as
+// the profile's are: E = sqrt(mean over variants of RMSE^2).
+struct ImageFloors {
+  PooledError floor, none;  // none: raw bump through the tally
+  // The largest difference, over the variants, of raw bump's image RMSE
+  // through the tally from the study report's (its float rounding).
+  double none_minus_report = std::nan("");
+  double kkt_residual = 0.0;  // the largest of the variants' floor solves
+  // Each method's image RMSE, from the study's report, and its share of
+  // the floors' gain on raw bump; by error, lowest first. A share above 1
+  // only for a method that is not a factor of the grid's inputs.
+  std::vector<MethodShare> methods;
+};
+
 struct FitResult {
   std::string folder, study;
   FactorGrid grid;
@@ -185,6 +211,7 @@ struct FitResult {
   // The constants fitted through the re-trace's probes (light,deviation
   // fits only), in FitVariant::probe_rmse's order.
   std::vector<ProbedConstant> probed;
+  ImageFloors image;
   FactorTable table;  // fitted on every variant, smoothness chosen by leave-one-family-out
   double table_smoothness = 0.0;
   std::vector<double> smoothness_candidates;  // FitOptions::smoothness

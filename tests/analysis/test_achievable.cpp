@@ -1,6 +1,8 @@
 // The achievable floor on synthetic tallies whose answer is known: a truth
 // that is raw bump times a known G is recovered, G's bounds hold, and no
-// other table beats the floor on the variants it was fitted to.
+// other table beats the floor on the variants it was fitted to; the same
+// for the image RMSE's per-variant floor, over pixel rows that are exactly
+// the image metric's pixels.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -60,6 +62,19 @@ std::vector<double> known_g() {
   return {1.0, 0.9, 0.7, 0.8, 0.6, 0.4, 0.5, 0.3, 0.2, 0.1, 0.05, 0.0};
 }
 
+// 200 tables of small_grid() in the bounds [0, 2]: 100 at random, and 100
+// of `floor`'s cells nudged by up to 1e-3, where a floor that is not the
+// minimum would show first.
+std::vector<std::vector<double>> tables_near(const std::vector<double>& floor) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 2.0);
+  std::vector<std::vector<double>> tables(200, std::vector<double>(12));
+  for (std::size_t k = 0; k < tables.size(); ++k)
+    for (std::size_t c = 0; c < 12; ++c)
+      tables[k][c] = k < 100 ? u(rng) : std::clamp(floor[c] + 1e-3 * (u(rng) - 1.0), 0.0, 2.0);
+  return tables;
+}
+
 TEST(Floor, RecoversTheFactorThatMadeTheTruthAndReachesZero) {
   const FactorGrid grid = small_grid();
   std::vector<TallyVariant> variants;
@@ -85,14 +100,10 @@ TEST(Floor, BoundsHoldAndNoOtherTableBeatsTheFloor) {
   EXPECT_DOUBLE_EQ(f.g[11], 0.0);
   EXPECT_GT(f.objective, 0.0);
   EXPECT_LT(f.kkt_residual, 1e-10);
-  // 200 random tables in the bounds, and the floor's own cells nudged by
-  // 1e-3: none has a lower mean squared error.
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(0.0, 2.0);
-  for (int k = 0; k < 200; ++k) {
-    std::vector<double> g(12);
-    for (double& x : g)
-      x = k < 100 ? u(rng) : std::clamp(f.g[&x - g.data()] + 1e-3 * (u(rng) - 1.0), 0.0, 2.0);
+  // None of the other tables has a lower mean squared error.
+  const std::vector<std::vector<double>> others = tables_near(f.g);
+  for (std::size_t k = 0; k < others.size(); ++k) {
+    const std::vector<double>& g = others[k];
     double mse = 0.0;
     for (const TallyVariant& v : variants) mse += std::pow(tally_rmse(v, g), 2) / 4.0;
     EXPECT_GE(mse, f.objective * (1.0 - 1e-12)) << k;
@@ -152,6 +163,100 @@ TEST(Floor, SparseAndDenseSmoothedSolvesReachTheSameTable) {
   EXPECT_LT(largest, 1e-8);
   EXPECT_NEAR(a.objective, b.objective, 1e-10 * b.objective);
   EXPECT_LT(a.kkt_residual, 1e-9);
+}
+
+// A 24 x 24 render, its tally and its truth: each pixel lights 2 to 5
+// cells of small_grid() (a pixel's samples spread over nearby angles), with
+// light no G scales beside them; the truth is that light times `g_true`
+// plus `noise` (relative, uniform). A ring of pixels is partly covered in
+// the render or the truth and carries a wild truth: no metric may see it.
+struct SyntheticImage {
+  Image render, truth;
+  PixelTally tally;
+};
+
+SyntheticImage synthetic_image(const std::vector<double>& g_true, double noise, unsigned seed) {
+  constexpr int kSize = 24;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  SyntheticImage s;
+  for (Image* im : {&s.render, &s.truth}) {
+    im->width = im->height = kSize;
+    im->channels = rgba_channels();
+    im->pixels.assign(std::size_t(kSize * kSize * 4), 0.0f);
+  }
+  s.tally.width = s.tally.height = kSize;
+  s.tally.offsets.push_back(0);
+  for (int y = 0; y < kSize; ++y)
+    for (int x = 0; x < kSize; ++x) {
+      const double rest = 0.3 * u(rng);
+      double render = rest, truth = rest;
+      std::map<int, double> cells;
+      const int n = 2 + int(4 * u(rng));
+      for (int k = 0; k < n; ++k) cells[int(12 * u(rng)) % 12] += 2.0 * u(rng);
+      for (const auto& [c, light] : cells) {
+        s.tally.cells.push_back(c);
+        s.tally.light.push_back(light);
+        render += light;
+        truth += light * g_true[std::size_t(c)];
+      }
+      s.tally.rest.push_back(rest);
+      s.tally.offsets.push_back(std::uint32_t(s.tally.cells.size()));
+      truth *= 1.0 + noise * (u(rng) - 0.5);
+      const bool edge = x == 0 || y == 0 || x == kSize - 1 || y == kSize - 1;
+      if (edge) truth += 100.0;
+      for (int c = 0; c < 3; ++c) {
+        s.render.at(x, y, c) = float(render);
+        s.truth.at(x, y, c) = float(truth);
+      }
+      s.render.at(x, y, 3) = edge && x % 2 ? 0.5f : 1.0f;
+      s.truth.at(x, y, 3) = edge && !(x % 2) ? 0.9f : 1.0f;
+    }
+  return s;
+}
+
+// The rows are compare_images' pixels, and G = 1 gives its RMSE: the
+// truth's and the render's values go through float as in the images.
+TEST(ImageFloor, PixelRowsAreTheImageMetricsPixelsAndGOfOneIsItsRmse) {
+  const SyntheticImage s = synthetic_image(known_g(), 0.2, 7);
+  const double scale = 2.0;
+  const PixelRows rows = pixel_rows(s.render, s.truth, s.tally, scale);
+  const ImageMetrics m = compare_images(s.render, s.truth);
+  EXPECT_EQ(rows.rows(), m.pixels);
+  EXPECT_EQ(rows.rows(), 22u * 22u);
+  // The tally's light is double where the render's pixels are float: 1e-6
+  // relative is float's rounding of each pixel, with room.
+  EXPECT_NEAR(pixel_rmse(rows, std::vector<double>(12, 1.0)), m.rmse / scale, 1e-6 * m.rmse);
+  PixelTally small = s.tally;
+  small.width = 23;
+  EXPECT_THROW(pixel_rows(s.render, s.truth, small, scale), std::invalid_argument);
+}
+
+// A truth that is raw bump times a G inside the bounds: the floor finds G
+// and an error of 0, both to the float rounding of the truth's pixels.
+TEST(ImageFloor, RecoversTheFactorThatMadeTheTruthAndReachesZero) {
+  const SyntheticImage s = synthetic_image(known_g(), 0.0, 8);
+  const PixelRows rows = pixel_rows(s.render, s.truth, s.tally, 1.0);
+  const FloorSolution f = solve_image_floor(small_grid(), rows);
+  for (std::size_t c = 0; c < 12; ++c) EXPECT_NEAR(f.g[c], known_g()[c], 1e-5) << c;
+  EXPECT_LT(f.variant_rmse.front(), 1e-6);
+}
+
+// A noisy truth that wants G outside [0, 2] in two cells: the bounds hold,
+// and no table in them (random, or the floor's nudged) has a lower RMSE.
+TEST(ImageFloor, BoundsHoldAndNoOtherTableBeatsTheFloor) {
+  std::vector<double> g_true = known_g();
+  g_true[0] = 3.0, g_true[11] = -0.5;
+  const SyntheticImage s = synthetic_image(g_true, 0.3, 9);
+  const PixelRows rows = pixel_rows(s.render, s.truth, s.tally, 1.0);
+  const FloorSolution f = solve_image_floor(small_grid(), rows);
+  EXPECT_DOUBLE_EQ(f.g[0], 2.0);
+  EXPECT_DOUBLE_EQ(f.g[11], 0.0);
+  EXPECT_GT(f.variant_rmse.front(), 0.0);
+  EXPECT_LT(f.kkt_residual, 1e-10);
+  const std::vector<std::vector<double>> others = tables_near(f.g);
+  for (std::size_t k = 0; k < others.size(); ++k)
+    EXPECT_GE(pixel_rmse(rows, others[k]), f.variant_rmse.front() * (1.0 - 1e-12)) << k;
 }
 
 TEST(FactorGrid, CellsCentresAndTheOutside) {

@@ -148,7 +148,31 @@ def fit_doc(tie=True, with_pictures=True):
                  reference="the study's value", probe_minus_rendered=0.0)]}
     if with_pictures:
         doc['pictures'] = pictures()
+    if tie:  # the other document is one from before the image floors
+        doc['image_floor'] = image_floor()
     return doc
+
+
+def image_floor():
+    """fit.json's image_floor: mitsuba3 leads alone by share, estevez2019
+    and chiang2019 tie in group 2."""
+    def m(method, error, share, group, leader, versus):
+        return {'method': method, 'error': error, 'share': share,
+                'group': group, 'leader': leader, 'versus_leader': versus}
+    return {
+        'unit': 'image RMSE (ImageMetrics::rmse over pixels fully covered '
+                'in the render and the truth), fraction of albedo*E/pi',
+        'floor': iv(0.0564, 0.0430, 0.0679),
+        'none': iv(0.0985, 0.0759, 0.1196),
+        'none_minus_report': 1.1e-9, 'kkt_residual': 2e-8,
+        'methods': [
+            m('mitsuba3', iv(0.0824, 0.0652, 0.0972),
+              iv(0.38, 0.27, 0.50), 1, 'mitsuba3', paired(0, 0, 0)),
+            m('estevez2019', iv(0.0863, 0.0670, 0.1028),
+              iv(0.29, 0.22, 0.34), 2, 'estevez2019', paired(0, 0, 0)),
+            m('chiang2019', iv(0.0878, 0.0718, 0.1014),
+              iv(0.25, 0.06, 0.37), 2, 'estevez2019',
+              paired(-0.035, -0.194, 0.046))]}
 
 
 def write_fit(study, doc):

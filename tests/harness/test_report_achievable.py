@@ -12,6 +12,8 @@ Checks that
   - the numbers on the page are fit.json's, formatted (% of albedo·E/π
     with intervals, shares, k and deshmukh2020's d0, d1 as fractions, with
     whether each published constant lies inside its interval);
+  - the image RMSE's per-variant floors and each method's share of them
+    are fit.json's image_floor, and a fit.json without one says so;
   - the fitted table's column is the held-out error, the in-sample one only
     in its labelled column;
   - the tie sentence and the per-family verdicts follow the interval rule:
@@ -128,6 +130,23 @@ class Section(unittest.TestCase):
                       "outside the interval.", page)
         self.assertIn('shading-offset are refitted among the values their '
                       'rows name', page)
+
+    def test_image_floors_are_fit_json(self):
+        page, im = self.pages['tie'], self.doc['image_floor']
+        self.assertIn(f'raw bump {pct(im["none"])} % of albedo·E/π; a factor '
+                      'of the light angle and deviation fitted to each '
+                      f'variant alone reaches {pct(im["floor"])}.', page)
+        self.assertIn('The lowest shipped method, mitsuba3, reaches '
+                      f'{pct(im["methods"][0]["error"])}: 0.38 [0.27, 0.50] '
+                      'of the floors&#39; gain on raw bump, above every '
+                      'other method&#39;s share', page)
+        self.assertEqual(rows_of(page, 'achievable-image'), [
+            [m['method'] + (' †' if m['method'] == 'chiang2019' else ''),
+             pct(m['error']), '{:.2f} [{:.2f}, {:.2f}]'.format(*m['share'])]
+            for m in im['methods']])
+        self.assertIn('predates the image floors: run penumbra fit STUDY '
+                      'again', self.pages['apart'])
+        self.assertNotIn('id="achievable-image"', self.pages['apart'])
 
     def test_truths_left_out_are_named(self):
         self.assertIn('Left out of every fit: 2 variants whose ground truth '
