@@ -132,6 +132,11 @@ def load_fit(path):
                else c.paired(doc, '', 'held_out_minus_best')),
            'constants': [constant_of(c, e, p)
                          for e, p in c.array(doc, '', 'constants')],
+           # absent before fit.json's contents 8: no offset refitted
+           'offset_parameters': [offset_parameter_of(c, e, p)
+                                 for e, p in (
+                                     c.array(doc, '', 'offset_parameters')
+                                     if 'offset_parameters' in doc else [])],
            # absent before fit.json's contents 5: light,deviation, none nested
            'inputs': (c.get(doc, '', 'inputs', str, 'a string')
                       if 'inputs' in doc else 'light,deviation'),
@@ -212,6 +217,22 @@ def held_out_of(c, e, p):
                 None if e.get('held_out_minus_best', 0) is None
                 and not e.get('best_method')
                 else c.paired(e, p, 'held_out_minus_best'))}
+
+
+def offset_parameter_of(c, e, p):
+    """A low-poly offset's parameter refitted among the rendered values:
+    the fields a constant has (constant_of), its values with their errors
+    and the variants it was fitted on."""
+    out = constant_of(c, {**e, 'method': c.get(e, p, 'offset', str,
+                                               'a string'),
+                          'constant': c.get(e, p, 'parameter', str,
+                                            'a string')}, p)
+    out['variants'] = c.get(e, p, 'variants', int, 'an integer')
+    out['values'] = [
+        {'value': num(c.get(v, q, 'value', (int, float), 'a number')),
+         'error': c.interval(v, q, 'error')}
+        for v, q in c.array(e, p, 'values')]
+    return out
 
 
 def constant_of(c, e, p):

@@ -223,6 +223,44 @@ def constants_context(fit):
                             if probed else None)}
 
 
+def offsets_context(fit):
+    """The low-poly offsets' parameters refitted among their rendered
+    values: a sentence each, and a table of E at every value; None where
+    the fit refitted none (a study without a parameter rendered at two or
+    more values, or a fit.json from before them)."""
+    offsets = fit['offset_parameters']
+    if not offsets:
+        return None
+    sentences, rows = [], []
+    for o in offsets:
+        ref = reference_text(o)
+        held = o['held_out_minus_published']
+        edge = (f' It is the end of the rendered values ({o["at_bound"]}): '
+                'E may fall further beyond them.' if o['at_bound'] else '')
+        sentences.append(
+            f'{o["method"]}: {o["constant"]} refitted among '
+            f'{len(o["values"])} rendered values, over {o["variants"]} '
+            f'low-poly variants: {symbol(o)} = {frac(o["fitted"], 3)} '
+            f'(95 % bootstrap interval over variants) against {ref} '
+            f'{fmt(o["published"], digits=4)}. Chosen without each scene, '
+            f'E = {pct(o["error_held_out"])} {PCT} against '
+            f'{pct(o["error_published"])} at {ref}: '
+            f'{pct(held["difference"])} percentage points, paired, '
+            + ('a tie.' if held['tie'] else
+               ('the refitted value lower.' if held['difference'][0] < 0
+                else f'{ref} lower.')) + edge)
+        for v in o['values']:
+            marks = [m for m, hit in (('fitted', v['value'] == o['fitted'][0]),
+                                      (ref, v['value'] == o['published']))
+                     if hit]
+            rows.append([o['method'], {'text': fmt(v['value'], digits=4),
+                                       'cls': 'n'},
+                         pct_cell(v['error']), ', '.join(marks)])
+    return {'sentences': sentences,
+            'table': table(['offset', 'parameter value (its unit: see '
+                            'above)', f'image E ({PCT})', ''], rows)}
+
+
 def sees_more(fit, method):
     """Whether a method sees an input the floor's grid does not, so that
     the floor does not bound it."""
@@ -325,4 +363,5 @@ def achievable_context(fit, figs, fit_file):
             'held_out': held_out_table(fit) if fit['held_out'] else None,
             'comparison': comparison_sentence(fit),
             'constants': constants_context(fit),
+            'offsets': offsets_context(fit),
             'image': image_context(fit)}

@@ -66,6 +66,25 @@ void print_constants(const FitResult& r, std::ostream& out) {
   }
 }
 
+// A line per low-poly offset's refitted parameter and one for its errors.
+void print_offset_parameters(const FitResult& r, std::ostream& out) {
+  if (r.offset_parameters.empty()) return;
+  out << "  low-poly offsets' parameters, refitted among the rendered values (image RMSE against "
+         "the analytic surface, % of albedo*E/pi; 95 % bootstrap intervals):\n";
+  for (const FittedOffsetParameter& f : r.offset_parameters) {
+    const FittedConstant& c = f.fit;
+    const PairedError& d = c.held_out_minus_published;
+    out << fmt::format(
+        "    {:<24} {} {:.4g} [{:.4g}, {:.4g}] against {} {:.4g}{}; {} variants\n"
+        "      E {:.2f} % held out by scene against {:.2f} % at {}: {:.2f} [{:.2f}, {:.2f}] "
+        "percentage points{}\n",
+        c.method, c.constant, c.fitted, c.interval.low, c.interval.high, c.reference, c.published,
+        c.at_bound.empty() ? "" : " (at the values' end)", f.variants, 100 * c.held_out.value,
+        100 * c.at_published.value, c.reference, 100 * d.difference.value,
+        100 * d.difference.interval.low, 100 * d.difference.interval.high, d.tie ? ", a tie" : "");
+  }
+}
+
 void print_image_floors(const ImageFloors& f, std::ostream& out) {
   if (f.methods.empty() && !std::isfinite(f.none.value)) return;
   out << fmt::format(
@@ -119,6 +138,7 @@ void print_summary(const FitResult& r, std::ostream& out) {
                        100 * s.share.interval.high);
   print_image_floors(r.image, out);
   print_constants(r, out);
+  print_offset_parameters(r, out);
 }
 
 int fit_into(const FitArgs& a, const CommandContext& c) {

@@ -81,6 +81,28 @@ const OffsetMethodInfo& offset_method_info(OffsetMethod method) {
   return kOffsetMethods[0];
 }
 
+double* offset_parameter(OffsetSettings* settings) {
+  switch (settings->method) {
+    case OffsetMethod::kEpsilon:
+      return &settings->epsilon;
+    case OffsetMethod::kCyclesGeometryOffset:
+      return &settings->cutoff;
+    case OffsetMethod::kOspray:
+      return &settings->ulp;
+    case OffsetMethod::kPhong2008:
+      return &settings->alpha;
+    case OffsetMethod::kNone:
+    case OffsetMethod::kGist2020:
+    case OffsetMethod::kHanika2021:
+      return nullptr;
+  }
+  return nullptr;
+}
+
+const double* offset_parameter(const OffsetSettings& settings) {
+  return offset_parameter(const_cast<OffsetSettings*>(&settings));
+}
+
 std::optional<OffsetMethod> offset_method_from_id(std::string_view id) {
   for (const OffsetMethodInfo& info : kOffsetMethods)
     if (info.id == id) return info.method;

@@ -60,6 +60,12 @@ struct OffsetSettings {
   double alpha = 0.75;
 };
 
+// The member of `settings` that holds its method's one parameter (the
+// table's `parameters`, in the same units), nullptr for a method without
+// one: the one place that maps a parameter's name to its field.
+double* offset_parameter(OffsetSettings* settings);
+const double* offset_parameter(const OffsetSettings& settings);
+
 // The triangle under a hit. Vertex normals are unit length and oriented to
 // the shaded side (flipped with Ng when the triangle is seen from its back).
 // b[k] are the barycentric weights of v[k] (b0 + b1 + b2 = 1).

@@ -254,10 +254,7 @@ OffsetSettings read_offset(Reader r) {
         [&](double x) { return x >= parameter.min_value && x <= parameter.max_value; },
         fmt::format("in [{}, {}] ({})", parameter.min_value, parameter.max_value, parameter.unit)
             .c_str());
-    if (o.method == OffsetMethod::kEpsilon) o.epsilon = value;
-    if (o.method == OffsetMethod::kCyclesGeometryOffset) o.cutoff = value;
-    if (o.method == OffsetMethod::kOspray) o.ulp = value;
-    if (o.method == OffsetMethod::kPhong2008) o.alpha = value;
+    if (double* field = offset_parameter(&o)) *field = value;
   }
   r.finish();
   return o;

@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/metrics.h"
+#include "core/shadow_origin.h"
 #include "core/terminator.h"
 #include "evaluator/evaluator.h"
 #include "image/image_io.h"
@@ -111,6 +112,12 @@ bool same_pixels(const Image& a, const Image& b) {
   return true;
 }
 
+// The scene a cached render was made from: its penumbra:scene attribute.
+Scene scene_of(const std::string& path, const std::string& attribute) {
+  const std::string origin = path + " (penumbra:scene metadata)";
+  return scene_from_json(parse_json_text(attribute, origin), origin);
+}
+
 // One variant's tally: raw bump re-traced with the grid (its bits checked
 // against the cached render) and its truth's profile. nullopt: skipped.
 // `grid_tables`: the shipped factors of the grid's inputs, tabulated on it
@@ -130,9 +137,7 @@ std::optional<FitVariant> load_variant(
     return std::nullopt;
   std::map<std::string, std::string> attributes;
   const Image cached = read_image((folder / bump).string(), &attributes);
-  const std::string origin = (folder / bump).string() + " (penumbra:scene metadata)";
-  const Scene scene =
-      scene_from_json(parse_json_text(attributes["penumbra:scene"], origin), origin);
+  const Scene scene = scene_of((folder / bump).string(), attributes["penumbra:scene"]);
   if (scene.representation != Representation::kBump || scene.tessellation) return std::nullopt;
   PixelTally tally;
   TallyProbes probes = probes_for(probed, scene, cached);
@@ -939,66 +944,78 @@ void fit_deshmukh2020_constants(const FitOptions& o, FitResult* r) {
   }
 }
 
-// Of the values a probed constant tried, the index with the lowest pooled E
-// over `index` (the first of equals).
-std::size_t best_value(const FitResult& r, std::size_t constant,
-                       const std::vector<std::size_t>& index) {
-  const std::size_t values = r.probed[constant].values.size();
+// Of a constant's values, the index whose errors (error[k][i]: value k,
+// variant i) pool lowest over `index` (the first of equals).
+std::size_t lowest_value(const std::vector<std::vector<double>>& error,
+                         const std::vector<std::size_t>& index) {
   std::size_t best = 0;
   double best_e = std::numeric_limits<double>::infinity();
-  std::vector<double> rmse(r.variants.size());
-  for (std::size_t k = 0; k < values; ++k) {
-    for (std::size_t i : index) rmse[i] = r.variants[i].probe_rmse[constant][k];
-    const double e = pooled(rmse, index);
-    if (e < best_e) best_e = e, best = k;
-  }
+  for (std::size_t k = 0; k < error.size(); ++k)
+    if (const double e = pooled(error[k], index); e < best_e) best_e = e, best = k;
   return best;
 }
 
-// A probed constant refitted as estevez2019's k is, among the values it
-// tried (so to their step), each E that of a render with the value.
+// A constant refitted among `values` (ascending), each with its own error
+// per variant, as estevez2019's k is: the value with the lowest pooled E
+// over every variant, its interval over resamples of variants (refitted on
+// each), E at it, at values[published] and with the value chosen without
+// each family (family[i]: variant i's), paired with the published. Sets
+// every field of *c but its names and probe_minus_rendered.
+void fit_among_values(const FitOptions& o, const std::vector<double>& values, std::size_t published,
+                      const std::vector<std::vector<double>>& error,
+                      const std::vector<std::string>& family, FittedConstant* c) {
+  const std::vector<std::size_t> index = all_of(family.size());
+  const std::size_t best = lowest_value(error, index);
+  c->published = values[published];
+  c->fitted = values[best];
+  if (best == 0 || best + 1 == values.size())
+    c->at_bound = fmt::format("{} = {:g}", c->constant.substr(0, c->constant.find(' ')), c->fitted);
+  c->in_sample = pooled_error(error[best], index, o);
+  c->at_published = pooled_error(error[published], index, o);
+  c->interval =
+      bootstrap(index, std::min(o.resamples, 200), o.seed, [&](const std::vector<std::size_t>& k) {
+        return values[lowest_value(error, k)];
+      }).interval;
+  std::map<std::string, std::vector<std::size_t>> members;
+  for (std::size_t i = 0; i < family.size(); ++i) members[family[i]].push_back(i);
+  std::vector<double> held(family.size(), std::numeric_limits<double>::quiet_NaN());
+  for (const auto& [f, in_family] : members) {
+    std::vector<std::size_t> train;
+    for (std::size_t i = 0; i < family.size(); ++i)
+      if (family[i] != f) train.push_back(i);
+    const std::size_t k = lowest_value(error, train);
+    for (std::size_t i : in_family) held[i] = error[k][i];
+  }
+  c->held_out = pooled_error(held, index, o);
+  c->held_out_minus_published = paired_error(held, error[published], index, o);
+}
+
+// A probed constant refitted among the values it tried (so to their step),
+// each E that of a render with the value.
 void fit_probed_constant(const FitOptions& o, std::size_t constant, const MethodErrors& errors,
                          FitResult* r) {
   const ProbedConstant& p = r->probed[constant];
   say(o, fmt::format("fitting {}'s constant", method_info(p.method).id));
-  const std::vector<std::size_t> index = all_of(r->variants.size());
-  const auto rmse_at = [&](std::size_t k) {
-    std::vector<double> rmse;
-    for (const FitVariant& v : r->variants) rmse.push_back(v.probe_rmse[constant][k]);
-    return rmse;
-  };
+  std::vector<std::vector<double>> error(p.values.size());
+  std::vector<std::string> family;
+  for (const FitVariant& v : r->variants) {
+    family.push_back(v.family);
+    for (std::size_t k = 0; k < p.values.size(); ++k) error[k].push_back(v.probe_rmse[constant][k]);
+  }
   FittedConstant c;
   c.method = std::string(method_info(p.method).id);
   c.constant = p.constant;
   c.reference = p.reference;
-  c.published = p.published;
-  const std::size_t best = best_value(*r, constant, index);
-  c.fitted = p.values[best];
-  if (best == 0 || best + 1 == p.values.size())
-    c.at_bound = fmt::format("{} = {:g}", p.constant.substr(0, p.constant.find(' ')), c.fitted);
-  c.in_sample = pooled_error(rmse_at(best), index, o);
   const std::size_t at =
       std::size_t(std::find(p.values.begin(), p.values.end(), p.published) - p.values.begin());
-  const std::vector<double> published = rmse_at(at);
-  c.at_published = pooled_error(published, index, o);
-  c.interval =
-      bootstrap(index, std::min(o.resamples, 200), o.seed, [&](const std::vector<std::size_t>& k) {
-        return p.values[best_value(*r, constant, k)];
-      }).interval;
-  std::vector<double> held(r->variants.size(), std::numeric_limits<double>::quiet_NaN());
-  for (const auto& [family, members] : families(r->variants)) {
-    const std::size_t k = best_value(*r, constant, without(r->variants, {family}));
-    for (std::size_t i : members) held[i] = r->variants[i].probe_rmse[constant][k];
-  }
-  c.held_out = pooled_error(held, index, o);
-  c.held_out_minus_published = paired_error(held, published, index, o);
+  fit_among_values(o, p.values, at, error, family, &c);
   if (!p.label.empty()) {
     c.probe_minus_rendered = 0.0;
     for (std::size_t i = 0; i < r->variants.size(); ++i) {
       const auto row = errors.find(r->variants[i].id);
       if (row == errors.end() || !row->second.count(p.label)) continue;
       c.probe_minus_rendered =
-          std::max(c.probe_minus_rendered, std::abs(published[i] - row->second.at(p.label)));
+          std::max(c.probe_minus_rendered, std::abs(error[at][i] - row->second.at(p.label)));
     }
   }
   r->constants.push_back(c);
@@ -1130,6 +1147,138 @@ void fit_image_floors(const FitOptions& o, const VariantValues& reported, FitRes
   share_groups(o, none, floor, reported.methods, &f.methods);
 }
 
+// One evaluator render of the study's low-poly section: its offset and
+// its image RMSE against its variant's analytic render.
+struct OffsetRun {
+  std::size_t variant = 0;  // index into LowpolyRuns::family
+  OffsetSettings settings;
+  double error = 0.0;              // fraction of albedo*E/pi
+  double report_difference = 0.0;  // |recomputed - report.json's| RMSE, W m^-2 sr^-1
+};
+
+struct LowpolyRuns {
+  std::vector<std::string> family;  // per low-poly variant read: its scene
+  std::vector<OffsetRun> runs;      // those of offsets with a parameter
+};
+
+// Every evaluator render of report.json's low-poly section whose offset has
+// a parameter, read back from the cache (a render deleted from it is left
+// out) and compared with its variant's analytic render as the study
+// compares them (compare_images).
+LowpolyRuns lowpoly_runs(const std::filesystem::path& folder, const json& report) {
+  LowpolyRuns out;
+  if (!report.contains("lowpoly") || report.at("lowpoly").is_null()) return out;
+  const json& lowpoly = report.at("lowpoly");
+  std::map<std::pair<std::string, std::string>, double> reported;  // (variant, offset) -> RMSE
+  for (const json& c : lowpoly.at("comparisons"))
+    if (c.value("renderer", "") == "evaluator" &&
+        c.value("reference", "") == "evaluator:analytic" && c.at("image").at("rmse").is_number())
+      reported[{c.at("variant"), c.at("offset")}] = c.at("image").at("rmse").get<double>();
+  for (const json& v : lowpoly.at("variants")) {
+    std::string truth;
+    std::vector<std::pair<std::string, std::string>> renders;  // (offset label, cache path)
+    for (const json& r : v.at("renders")) {
+      if (r.value("renderer", "") != "evaluator" || !r.value("exr", json()).is_string() ||
+          !std::filesystem::exists(folder / r.at("exr").get<std::string>()))
+        continue;
+      const std::string exr = (folder / r.at("exr").get<std::string>()).string();
+      if (r.value("offset", "") == "analytic")
+        truth = exr;
+      else
+        renders.emplace_back(r.value("offset", ""), exr);
+    }
+    if (truth.empty()) continue;
+    const std::size_t variant = out.family.size();
+    out.family.push_back(v.at("scene").get<std::string>());
+    std::map<std::string, std::string> attributes;
+    const Image truth_image = read_image(truth, &attributes);
+    const double scale = radiance_scale(scene_of(truth, attributes["penumbra:scene"]));
+    for (const auto& [label, exr] : renders) {
+      const Scene scene = scene_of(exr, read_image_attribute(exr, "penumbra:scene"));
+      if (!offset_parameter(scene.offset)) continue;
+      const double rmse = compare_images(read_image(exr), truth_image).rmse;
+      const auto at = reported.find({v.at("id").get<std::string>(), label});
+      out.runs.push_back({variant, scene.offset, rmse / scale,
+                          at == reported.end() ? std::numeric_limits<double>::quiet_NaN()
+                                               : std::abs(rmse - at->second)});
+    }
+  }
+  return out;
+}
+
+// What a low-poly offset's parameter is fitted against: its source's value
+// where the shipped default is one (MethodParameter::default_value).
+std::string offset_reference(OffsetMethod method) {
+  switch (method) {
+    case OffsetMethod::kCyclesGeometryOffset:
+      return "Blender's default";
+    case OffsetMethod::kPhong2008:
+      return "published";
+    case OffsetMethod::kOspray:
+      return "OSPRay's";
+    case OffsetMethod::kEpsilon:
+    case OffsetMethod::kNone:
+    case OffsetMethod::kGist2020:
+    case OffsetMethod::kHanika2021:
+      break;
+  }
+  return "Penumbra's default";
+}
+
+// One offset's parameter fitted among its values (FittedOffsetParameter),
+// over the low-poly variants that rendered every value; nullopt where none did.
+std::optional<FittedOffsetParameter> fit_offset_parameter(
+    const FitOptions& o, OffsetMethod method,
+    const std::map<double, std::map<std::size_t, const OffsetRun*>>& by_value,
+    const std::vector<std::string>& families) {
+  std::vector<std::size_t> variants;
+  for (std::size_t i = 0; i < families.size(); ++i)
+    if (std::all_of(by_value.begin(), by_value.end(),
+                    [&](const auto& value) { return value.second.count(i) != 0; }))
+      variants.push_back(i);
+  if (variants.empty()) return std::nullopt;
+  FittedOffsetParameter f;
+  f.variants = variants.size();
+  std::vector<std::vector<double>> error;
+  for (const auto& [value, runs] : by_value) {
+    f.values.push_back(value);
+    error.emplace_back();
+    for (std::size_t i : variants) {
+      error.back().push_back(runs.at(i)->error);
+      if (std::isfinite(runs.at(i)->report_difference))
+        f.report_difference = std::max(f.report_difference, runs.at(i)->report_difference);
+    }
+    f.errors.push_back(pooled_error(error.back(), all_of(variants.size()), o));
+  }
+  std::vector<std::string> family;
+  for (std::size_t i : variants) family.push_back(families[i]);
+  const MethodParameter& parameter = offset_method_info(method).parameters.front();
+  f.fit.method = std::string(offset_method_info(method).id);
+  f.fit.constant = fmt::format("{} [{}]", parameter.name, parameter.unit);
+  const auto published = std::find(f.values.begin(), f.values.end(), parameter.default_value);
+  f.fit.reference =
+      published == f.values.end() ? "the study's lowest value" : offset_reference(method);
+  fit_among_values(o, f.values,
+                   published == f.values.end() ? 0 : std::size_t(published - f.values.begin()),
+                   error, family, &f.fit);
+  return f;
+}
+
+// Every low-poly offset the study rendered at two or more values of its
+// parameter, refitted among them.
+void fit_offset_parameters(const FitOptions& o, const LowpolyRuns& lowpoly, FitResult* r) {
+  std::map<OffsetMethod, std::map<double, std::map<std::size_t, const OffsetRun*>>> by_method;
+  for (const OffsetRun& run : lowpoly.runs)
+    by_method[run.settings.method][*offset_parameter(run.settings)][run.variant] = &run;
+  for (const auto& [method, by_value] : by_method) {
+    if (by_value.size() < 2) continue;
+    say(o, fmt::format("fitting {}'s parameter on the low-poly section",
+                       offset_method_info(method).id));
+    if (auto f = fit_offset_parameter(o, method, by_value, lowpoly.family))
+      r->offset_parameters.push_back(std::move(*f));
+  }
+}
+
 }  // namespace
 
 FitResult fit_study(const FitOptions& o) {
@@ -1145,11 +1294,13 @@ FitResult fit_study(const FitOptions& o) {
   if (o.smoothness.empty()) throw std::invalid_argument("fit_study: no candidate smoothness");
   r.smoothness_candidates = o.smoothness;
   MethodErrors errors, image_errors;
+  LowpolyRuns lowpoly;
   try {
     r.study = report.at("study").value("name", "");
     load_variants(o, report, &r);
     errors = method_errors(report);
     image_errors = method_errors(report, "/image/rmse"_json_pointer);
+    lowpoly = lowpoly_runs(o.folder, report);
   } catch (const json::exception& e) {
     throw InputError(report_path.string(), "", fmt::format("not a study's report: {}", e.what()));
   }
@@ -1174,6 +1325,7 @@ FitResult fit_study(const FitOptions& o) {
              solve_floor(r.grid, data_of(r.variants, all_of(r.variants.size())), options).g};
   fit_constants(o, errors, &r);
   fit_image_floors(o, variant_values(image_errors, r.variants, true), &r);
+  fit_offset_parameters(o, lowpoly, &r);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
@@ -1263,6 +1415,36 @@ json image_json(const ImageFloors& f) {
   return j;
 }
 
+// A refitted constant's value, errors and edge, as fit.json names them.
+json fitted_json(const FittedConstant& c) {
+  return {{"fitted", {c.fitted, c.interval.low, c.interval.high}},
+          {"error_fitted_in_sample", interval_json(c.in_sample)},
+          {"error_published", interval_json(c.at_published)},
+          {"error_fitted_held_out", interval_json(c.held_out)},
+          {"held_out_minus_published", paired_json(c.held_out_minus_published)},
+          {"at_bound", c.at_bound.empty() ? json() : json(c.at_bound)}};
+}
+
+json offset_parameter_json(const FittedOffsetParameter& f) {
+  const FittedConstant& c = f.fit;
+  json values = json::array();
+  for (std::size_t k = 0; k < f.values.size(); ++k)
+    values.push_back({{"value", f.values[k]}, {"error", interval_json(f.errors[k])}});
+  json j{{"offset", c.method},
+         {"parameter", c.constant},
+         {"unit",
+          "image RMSE of the evaluator's mesh render against the analytic surface (pixels fully "
+          "covered in both), fraction of albedo*E/pi, pooled over the low-poly variants as a root "
+          "mean square; intervals: 95 % percentile bootstrap over those variants"},
+         {"variants", f.variants},
+         {"reference", c.reference},
+         {"published", c.published},
+         {"values", values},
+         {"report_difference", f.report_difference}};
+  j.update(fitted_json(c));
+  return j;
+}
+
 json result_json(const FitResult& r) {
   json j{
       {"study", r.study},
@@ -1292,7 +1474,8 @@ json result_json(const FitResult& r) {
       {"nested_floors", json::array()},
       {"held_out", json::array()},
       {"methods", json::array()},
-      {"constants", json::array()}};
+      {"constants", json::array()},
+      {"offset_parameters", json::array()}};
   for (const FloorFit& f : r.family_floors) j["family_floors"].push_back(floor_json(f));
   for (const NestedFloor& n : r.nested) {
     json f = floor_json(n.floor);
@@ -1313,20 +1496,18 @@ json result_json(const FitResult& r) {
          {"held_out_minus_best",
           h.best_method.empty() ? json() : paired_json(h.held_out_minus_best)}});
   for (const MethodShare& s : r.shares) j["methods"].push_back(share_json(s));
-  for (const FittedConstant& c : r.constants)
-    j["constants"].push_back(
-        {{"method", c.method},
-         {"constant", c.constant},
-         {"reference", c.reference},
-         {"published", c.published},
-         {"fitted", {c.fitted, c.interval.low, c.interval.high}},
-         {"error_fitted_in_sample", interval_json(c.in_sample)},
-         {"error_published", interval_json(c.at_published)},
-         {"error_fitted_held_out", interval_json(c.held_out)},
-         {"held_out_minus_published", paired_json(c.held_out_minus_published)},
-         {"at_bound", c.at_bound.empty() ? json() : json(c.at_bound)},
-         {"probe_minus_rendered",
-          std::isfinite(c.probe_minus_rendered) ? json(c.probe_minus_rendered) : json()}});
+  for (const FittedConstant& c : r.constants) {
+    json e{{"method", c.method},
+           {"constant", c.constant},
+           {"reference", c.reference},
+           {"published", c.published},
+           {"probe_minus_rendered",
+            std::isfinite(c.probe_minus_rendered) ? json(c.probe_minus_rendered) : json()}};
+    e.update(fitted_json(c));
+    j["constants"].push_back(e);
+  }
+  for (const FittedOffsetParameter& f : r.offset_parameters)
+    j["offset_parameters"].push_back(offset_parameter_json(f));
   return j;
 }
 
@@ -1385,6 +1566,21 @@ std::string result_csv(const FitResult& r) {
     row("held_out_minus_published:" + c.method, "study", c.held_out_minus_published.difference,
         unit);
   }
+  const std::string lowpoly_unit =
+      "fraction of albedo*E/pi (pooled image RMSE of the low-poly renders against the analytic "
+      "surface)";
+  for (const FittedOffsetParameter& f : r.offset_parameters) {
+    const FittedConstant& c = f.fit;
+    row("offset_parameter:" + c.method, "lowpoly", {c.fitted, c.interval}, c.constant);
+    for (std::size_t k = 0; k < f.values.size(); ++k)
+      row(fmt::format("offset_error:{}={:g}", c.method, f.values[k]), "lowpoly", f.errors[k],
+          lowpoly_unit);
+    row("offset_error_published:" + c.method, "lowpoly", c.at_published, lowpoly_unit);
+    row("offset_error_in_sample:" + c.method, "lowpoly", c.in_sample, lowpoly_unit);
+    row("offset_error_held_out:" + c.method, "lowpoly", c.held_out, lowpoly_unit);
+    row("offset_held_out_minus_published:" + c.method, "lowpoly",
+        c.held_out_minus_published.difference, lowpoly_unit);
+  }
   return csv;
 }
 
@@ -1408,8 +1604,9 @@ void write_fit(const FitResult& r, const std::filesystem::path& out) {
 // 4: variants whose truth did not converge left out and named; 5: the
 // inputs, nested floors, chiang2019 on grids with a shading axis; 6: the
 // probed constants of shading-offset and the micro-shadowing methods; 7:
-// the image RMSE's per-variant floors).
-constexpr const char* kFitContents = "7";
+// the image RMSE's per-variant floors; 8: the low-poly offsets'
+// parameters).
+constexpr const char* kFitContents = "8";
 
 std::string fit_inputs_digest(const std::filesystem::path& study) {
   std::uint64_t h = fnv1a(without_run_keys(read_file((study / "report.json").string())));

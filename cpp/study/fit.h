@@ -174,6 +174,26 @@ struct FittedConstant {
   double probe_minus_rendered = std::nan("");
 };
 
+// A low-poly offset's parameter (`epsilon`'s distance, Cycles' cutoff,
+// phong2008's alpha, OSPRay's ulp) refitted among the values the study's
+// low-poly section rendered: the parameter moves the shadow ray's origin,
+// so raw bump's re-trace cannot probe it and each value is a render. The
+// error is the image RMSE (ImageMetrics::rmse / albedo*E/pi) of the
+// evaluator's mesh render against the analytic surface, recomputed from
+// the cache, pooled over the low-poly variants that rendered every value:
+// it counts both what a small offset leaves (the shadow line) and what a
+// large one loses (cast shadows). `fit`'s method is the offset's id, its
+// constant the parameter's name and unit; families are the low-poly scenes.
+struct FittedOffsetParameter {
+  FittedConstant fit;
+  std::vector<double> values;       // rendered, ascending
+  std::vector<PooledError> errors;  // E at each value over every variant
+  std::size_t variants = 0;
+  // The largest difference of a recomputed image RMSE from the study
+  // report's (W m^-2 sr^-1; rounding).
+  double report_difference = 0.0;
+};
+
 // The image metric's per-variant floors (FitVariant::image_floor), pooled as
 // the profile's are: E = sqrt(mean over variants of RMSE^2).
 struct ImageFloors {
@@ -212,6 +232,8 @@ struct FitResult {
   // fits only), in FitVariant::probe_rmse's order.
   std::vector<ProbedConstant> probed;
   ImageFloors image;
+  // Every low-poly offset rendered at two or more values of its parameter.
+  std::vector<FittedOffsetParameter> offset_parameters;
   FactorTable table;  // fitted on every variant, smoothness chosen by leave-one-family-out
   double table_smoothness = 0.0;
   std::vector<double> smoothness_candidates;  // FitOptions::smoothness

@@ -149,8 +149,35 @@ def fit_doc(tie=True, with_pictures=True):
     if with_pictures:
         doc['pictures'] = pictures()
     if tie:  # the other document is one from before the image floors
-        doc['image_floor'] = image_floor()
+        doc['image_floor'] = image_floor()  # and the offsets' parameters
+        doc['offset_parameters'] = offset_parameters()
     return doc
+
+
+def offset_parameters():
+    """fit.json's offset_parameters: epsilon's distance ties its default
+    held out; Cycles' cutoff refits to 0.3, its default lower held out."""
+    def values(pairs):
+        return [{'value': v, 'error': iv(e, round(e * 0.5, 4),
+                                         round(e * 1.5, 4))}
+                for v, e in pairs]
+    eps = constant('epsilon', 'distance [scene units]', 0.01,
+                   iv(0.03, 0.003, 0.03), (0.0237, 0.0243, 0.0237),
+                   paired(-0.0006, -0.0032, 0.0022))
+    eps.update(offset=eps.pop('method'), parameter=eps.pop('constant'),
+               reference="Penumbra's default", variants=24,
+               report_difference=0.0,
+               values=values([(0.001, 0.0273), (0.01, 0.0243),
+                              (0.03, 0.0237), (0.3, 0.0325)]))
+    cut = constant('cycles-geometry-offset',
+                   'cutoff [dimensionless (a cosine)]', 0.1,
+                   iv(0.3, 0.03, 0.3), (0.0217, 0.0218, 0.0220),
+                   paired(0.0002, 0.00001, 0.0003))
+    cut.update(offset=cut.pop('method'), parameter=cut.pop('constant'),
+               reference="Blender's default", variants=24,
+               report_difference=0.0,
+               values=values([(0.1, 0.0218), (0.3, 0.0217)]))
+    return [eps, cut]
 
 
 def image_floor():

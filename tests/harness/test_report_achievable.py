@@ -148,6 +148,29 @@ class Section(unittest.TestCase):
                       'again', self.pages['apart'])
         self.assertNotIn('id="achievable-image"', self.pages['apart'])
 
+    def test_offset_parameters_are_fit_json(self):
+        page, offsets = self.pages['tie'], self.doc['offset_parameters']
+        eps, cut = offsets
+        self.assertIn(
+            'epsilon: distance [scene units] refitted among 4 rendered '
+            'values, over 24 low-poly variants: distance = 0.030 [0.003, '
+            "0.030] (95 % bootstrap interval over variants) against Penumbra"
+            "&#39;s default 0.01. Chosen without each scene, E = "
+            f'{pct(eps["error_fitted_held_out"])} % of albedo·E/π against '
+            f'{pct(eps["error_published"])} at Penumbra&#39;s default: '
+            '-0.06 [-0.32, 0.22] percentage points, paired, a tie.', page)
+        self.assertIn('cycles-geometry-offset: cutoff', page)
+        self.assertIn('Blender&#39;s default lower.', page)
+        rows = rows_of(page, 'achievable-offsets')
+        self.assertEqual(rows, [
+            [o['offset'], '{:g}'.format(v['value']), pct(v['error']),
+             ', '.join(m for m, hit in (
+                 ('fitted', v['value'] == o['fitted'][0]),
+                 (o['reference'], v['value'] == o['published'])) if hit)
+             .replace("'", '&#39;')]
+            for o in offsets for v in o['values']])
+        self.assertNotIn('id="achievable-offsets"', self.pages['apart'])
+
     def test_truths_left_out_are_named(self):
         self.assertIn('Left out of every fit: 2 variants whose ground truth '
                       'did not converge (v007, v011).', self.pages['tie'])
