@@ -65,5 +65,12 @@ def ci_cell(value, ci, scale=100.0, digits=1):
     big = max(abs(t * scale) for t in [v] + ends if math.isfinite(t))
     if big > 0:
         digits = min(max(digits, 1 - math.floor(math.log10(big))), 5)
+    # An interval that excludes 0 must not show an end of 0.000: it would
+    # read as a tie.
+    if len(ends) == 2 and all(map(math.isfinite, ends)) and (
+            ends[0] > 0 or ends[1] < 0):
+        near = min(abs(t * scale) for t in ends)
+        while digits < 5 and round(near, digits) == 0:
+            digits += 1
     return {'text': f'{v * scale:.{digits}f} {interval_text(ci, scale, digits)}',
             'cls': 'n'}
