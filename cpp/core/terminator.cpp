@@ -479,6 +479,49 @@ double microshadow_brinck2016(double cos_theta, double visibility, double q) {
   return clamp01(cos_theta + 2.0 * std::pow(clamp01(visibility), q) - 1.0);
 }
 
+void shading_offsets(std::span<const double> s, const Vec3& ns, const Vec3& wi, double* out) {
+  const double cos_theta = std::min(dot(ns, wi), 1.0);
+  const double theta = cos_theta > 0.0 ? std::acos(cos_theta) : 0.0;
+  // The least double above pi/2: cos(f theta) <= 0 from it to f theta = pi
+  // (f <= 2, theta <= pi/2), so max(cos, 0) is 0 without the cosine.
+  constexpr double kAboveHalfPi = 1.5707963267948968;
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    const double f = shading_offset_frequency(s[k]);
+    if (f == 1.0)
+      out[k] = 1.0;
+    else if (!(cos_theta > 0.0) || f * theta >= kAboveHalfPi)
+      out[k] = 0.0;
+    else
+      out[k] = clamp01(std::max(std::cos(f * theta), 0.0) / cos_theta);
+  }
+}
+
+namespace {
+
+// x^e[k] for each k of an ascending list (see microshadow_chan2018_exponents).
+void powers(double x, std::span<const double> e, double* out) {
+  for (std::size_t k = 0; k < e.size(); ++k)
+    out[k] = k >= 4 && e[k] == 2.0 * e[k - 4] ? out[k - 4] * out[k - 4] : std::pow(x, e[k]);
+}
+
+}  // namespace
+
+void microshadow_chan2018_exponents(double cos_theta, double visibility, std::span<const double> p,
+                                    double* out) {
+  const double c = clamp01(cos_theta);
+  if (!(visibility < 1.0)) {
+    std::fill(out, out + p.size(), c > 0.0 ? 1.0 : 0.0);
+    return;
+  }
+  powers(clamp01(c / std::sqrt(1.0 - std::max(visibility, 0.0))), p, out);
+}
+
+void microshadow_brinck2016_exponents(double cos_theta, double visibility,
+                                      std::span<const double> q, double* out) {
+  powers(clamp01(visibility), q, out);
+  for (std::size_t k = 0; k < q.size(); ++k) out[k] = clamp01(cos_theta + 2.0 * out[k] - 1.0);
+}
+
 // The vectors come by reference, not in a ShadingVectors: shade() would
 // copy them out of a ShadingPoint its caller has just written, and those
 // wider loads stall on the narrower stores (a fifth of a bump render).

@@ -179,6 +179,18 @@ double microshadow_brinck2016(double cos_theta, double visibility);
 // the published ends: no occlusion at V = 1, all of it at V = 0.
 double microshadow_chan2018(double cos_theta, double visibility, double p);
 double microshadow_brinck2016(double cos_theta, double visibility, double q);
+// The same at every value of an ascending list, for `penumbra fit`'s probes
+// (out[k] at values[k]). shading_offsets gives shading_offset's bits: the
+// angle once, and no cosine once f theta passes pi/2, where every larger s
+// gives 0 too. The exponents' forms take x^(2a) as (x^a)^2 where the list
+// holds a four places earlier (its quarter octaves), a fifth of the pow
+// calls: at the published 2 the published factors' bits (x * x; glibc's
+// pow(x, 2) can differ from it by an ulp), elsewhere within 33 ulp of pow.
+void shading_offsets(std::span<const double> s, const Vec3& ns, const Vec3& wi, double* out);
+void microshadow_chan2018_exponents(double cos_theta, double visibility, std::span<const double> p,
+                                    double* out);
+void microshadow_brinck2016_exponents(double cos_theta, double visibility,
+                                      std::span<const double> q, double* out);
 // Mitsuba 3's eval_shadow_terminator against the unperturbed frame ni.
 double mitsuba3_conty(const Vec3& ni, const Vec3& ns, const Vec3& wi);
 // Cycles' UI mapping of the shading-offset slider s to a frequency.

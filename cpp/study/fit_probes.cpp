@@ -53,21 +53,15 @@ Lobes lobes_of(TerminatorMethod method, const Scene& scene) {
 // One method's factor at every value of its constant.
 void factors_at(TerminatorMethod method, const std::vector<double>& values, const ShadingPoint& p,
                 double* out) {
-  const double cos_theta = dot(p.ns, p.wi);
-  for (std::size_t k = 0; k < values.size(); ++k) {
-    switch (method) {
-      case TerminatorMethod::kShadingOffset:
-        out[k] = shading_offset(values[k], p.ns, p.wi);
-        break;
-      case TerminatorMethod::kMicroshadowChan2018:
-        out[k] = microshadow_chan2018(cos_theta, p.visibility, values[k]);
-        break;
-      case TerminatorMethod::kMicroshadowBrinck2016:
-        out[k] = microshadow_brinck2016(cos_theta, p.visibility, values[k]);
-        break;
-      default:
-        out[k] = 1.0;
-    }
+  switch (method) {
+    case TerminatorMethod::kShadingOffset:
+      return shading_offsets(values, p.ns, p.wi, out);
+    case TerminatorMethod::kMicroshadowChan2018:
+      return microshadow_chan2018_exponents(dot(p.ns, p.wi), p.visibility, values, out);
+    case TerminatorMethod::kMicroshadowBrinck2016:
+      return microshadow_brinck2016_exponents(dot(p.ns, p.wi), p.visibility, values, out);
+    default:
+      std::fill(out, out + values.size(), 1.0);
   }
 }
 

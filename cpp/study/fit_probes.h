@@ -39,9 +39,10 @@ struct ProbedConstant {
 //   microshadow-brinck2016  q in saturate(cos + 2 V^q - 1), published 2
 // the exponents at 2^(k/4) for k in [0, 20]: 1 to 32 in quarter octaves (a
 // large exponent cuts the light where the cosine falls below the
-// visibility's threshold; the default study wants them above 2). Each value
-// is a pow per sample: the lists keep the probes near a fifth of the fit's
-// time, and half octaves lost 0.8 points of Brinck's held-out E.
+// visibility's threshold; the default study wants them above 2). Every
+// fourth value is the square of one before it (core/terminator.h's list
+// forms), so a quarter-octave list costs five pows per sample, and half
+// octaves lost 0.8 points of Brinck's held-out E.
 std::vector<ProbedConstant> probed_constants(const std::set<std::string>& labels);
 
 // The probes of `constants` on `scene`: each factor on the lobes its method

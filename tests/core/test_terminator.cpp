@@ -292,6 +292,45 @@ TEST(ShadingOffset, MatchesCyclesFrequencyMapping) {
               std::cos(f * theta) / std::cos(theta), 1e-12);
 }
 
+// The list forms the fit's probes use are the single-value forms: the
+// shading offset to the bit at every s (its cut at pi/2 included), the
+// exponents at the published 2 to the bit of the published factors (x * x,
+// which glibc's pow(x, 2) misses by an ulp at times). Elsewhere a value is
+// a pow (1 ulp) squared up to four times, each squaring doubling the
+// relative error and adding half an ulp: under 32 ulp, and 33 against pow's
+// own, 3.7e-15 relative; Brinck's factor adds 2 V^q - 1 to the cosine, so
+// its error is absolute, under 2 x that.
+TEST(MicroShadowing, ListFormsAreTheSingleValueForms) {
+  std::vector<double> s, e;
+  for (int k = 0; k <= 40; ++k) s.push_back(k / 40.0);
+  for (int k = 0; k <= 20; ++k) e.push_back(std::exp2(k / 4.0));
+  std::vector<double> out(s.size());
+  Pcg32 rng(7);
+  for (int i = 0; i < 20000; ++i) {
+    const Vec3 ns = random_unit(rng), wi = random_unit(rng);
+    shading_offsets(s, ns, wi, out.data());
+    for (std::size_t k = 0; k < s.size(); ++k)
+      ASSERT_EQ(out[k], shading_offset(s[k], ns, wi)) << s[k] << " " << dot(ns, wi);
+    const double cos_theta = dot(ns, wi), v = rng.next_double();
+    for (const bool chan : {true, false}) {
+      if (chan)
+        microshadow_chan2018_exponents(cos_theta, v, e, out.data());
+      else
+        microshadow_brinck2016_exponents(cos_theta, v, e, out.data());
+      for (std::size_t k = 0; k < e.size(); ++k) {
+        const double single = chan ? microshadow_chan2018(cos_theta, v, e[k])
+                                   : microshadow_brinck2016(cos_theta, v, e[k]);
+        if (e[k] == 2.0) {
+          ASSERT_EQ(out[k], chan ? microshadow_chan2018(cos_theta, v)
+                                 : microshadow_brinck2016(cos_theta, v))
+              << chan << " " << cos_theta << " " << v;
+        }
+        ASSERT_NEAR(out[k], single, chan ? 4e-15 * single : 8e-15) << chan << " " << e[k];
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace penumbra
 
