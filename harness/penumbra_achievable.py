@@ -252,9 +252,14 @@ def constant_of(c, e, p):
             'fitted': c.interval(e, p, 'fitted'),
             'error_published': c.interval(e, p, 'error_published'),
             'error_in_sample': c.interval(e, p, 'error_fitted_in_sample'),
-            'error_held_out': c.interval(e, p, 'error_fitted_held_out'),
-            'held_out_minus_published': c.paired(e, p,
-                                                 'held_out_minus_published'),
+            # null where the variants are of one family: nothing to fit on
+            # once it is held out
+            'error_held_out': (c.interval(e, p, 'error_fitted_held_out')
+                               if e.get('error_fitted_held_out') is not None
+                               else None),
+            'held_out_minus_published': (
+                c.paired(e, p, 'held_out_minus_published')
+                if e.get('held_out_minus_published') is not None else None),
             # null or absent (a fit.json before it): inside the range
             'at_bound': (c.get(e, p, 'at_bound', str, 'a string or null')
                          if e.get('at_bound') is not None else None)}

@@ -61,6 +61,12 @@ def verdict(paired, first, second):
     return f'{first} lower' if paired['difference'][0] < 0 else f'{second} lower'
 
 
+def held_out_cell(iv):
+    """A held-out error, or why there is none (one family)."""
+    return (pct_cell(iv) if iv is not None
+            else {'text': 'none: one family', 'cls': 'n na'})
+
+
 def difference_cell(paired):
     """A paired difference in percentage points, with its interval."""
     return pct_cell(paired['difference']) if paired else pct_value(math.nan)
@@ -201,7 +207,7 @@ def constants_context(fit):
                          frac_cell(c['fitted'], digits),
                          'yes' if inside(c) else 'no',
                          pct_cell(c['error_published']),
-                         pct_cell(c['error_held_out']),
+                         held_out_cell(c['error_held_out']),
                          difference_cell(c['held_out_minus_published']),
                          verdict(c['held_out_minus_published'],
                                  'fitted', 'published'),
@@ -223,6 +229,23 @@ def constants_context(fit):
                             if probed else None)}
 
 
+def offset_held_out_text(o, ref):
+    """E with the parameter chosen without each scene against the
+    reference's, paired; or, with a single low-poly scene, that there is
+    nothing to hold out."""
+    held = o['held_out_minus_published']
+    if held is None:
+        return (f'E = {pct(o["error_published"])} {PCT} at {ref}; no '
+                'held-out error: the variants are of one scene, and a value '
+                'chosen without it has nothing to be chosen on.')
+    return (f'Chosen without each scene, E = {pct(o["error_held_out"])} '
+            f'{PCT} against {pct(o["error_published"])} at {ref}: '
+            f'{pct(held["difference"])} percentage points, paired, '
+            + ('a tie.' if held['tie'] else
+               ('the refitted value lower.' if held['difference'][0] < 0
+                else f'{ref} lower.')))
+
+
 def offsets_context(fit):
     """The low-poly offsets' parameters refitted among their rendered
     values: a sentence each, and a table of E at every value; None where
@@ -234,7 +257,6 @@ def offsets_context(fit):
     sentences, rows = [], []
     for o in offsets:
         ref = reference_text(o)
-        held = o['held_out_minus_published']
         edge = (f' It is the end of the rendered values ({o["at_bound"]}): '
                 'E may fall further beyond them.' if o['at_bound'] else '')
         sentences.append(
@@ -242,13 +264,8 @@ def offsets_context(fit):
             f'{len(o["values"])} rendered values, over {o["variants"]} '
             f'low-poly variants: {symbol(o)} = {frac(o["fitted"], 3)} '
             f'(95 % bootstrap interval over variants) against {ref} '
-            f'{fmt(o["published"], digits=4)}. Chosen without each scene, '
-            f'E = {pct(o["error_held_out"])} {PCT} against '
-            f'{pct(o["error_published"])} at {ref}: '
-            f'{pct(held["difference"])} percentage points, paired, '
-            + ('a tie.' if held['tie'] else
-               ('the refitted value lower.' if held['difference'][0] < 0
-                else f'{ref} lower.')) + edge)
+            f'{fmt(o["published"], digits=4)}. '
+            + offset_held_out_text(o, ref) + edge)
         for v in o['values']:
             marks = [m for m, hit in (('fitted', v['value'] == o['fitted'][0]),
                                       (ref, v['value'] == o['published']))

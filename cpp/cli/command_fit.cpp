@@ -45,6 +45,21 @@ int emit_only(const FitArgs& a, const CommandContext& c) {
   return kExitOk;
 }
 
+// A refitted constant's error held out by `unit` (family, scene) against its
+// published value, or why there is none.
+std::string held_out_line(const FittedConstant& c, const std::string& unit) {
+  if (!c.held_out_defined)
+    return fmt::format("E {:.2f} % at {}; no held-out error: the variants are of one {}",
+                       100 * c.at_published.value, c.reference, unit);
+  const PairedError& d = c.held_out_minus_published;
+  return fmt::format(
+      "E {:.2f} % held out by {} against {:.2f} % at {}: {:.2f} [{:.2f}, {:.2f}] percentage "
+      "points{}",
+      100 * c.held_out.value, unit, 100 * c.at_published.value, c.reference,
+      100 * d.difference.value, 100 * d.difference.interval.low, 100 * d.difference.interval.high,
+      d.tie ? ", a tie" : "");
+}
+
 // A line per refitted constant, and one per method for the errors of its
 // constants (fitted together).
 void print_constants(const FitResult& r, std::ostream& out) {
@@ -57,12 +72,7 @@ void print_constants(const FitResult& r, std::ostream& out) {
                        c.interval.high, c.reference, c.published,
                        c.at_bound.empty() ? "" : " (at its range's end)");
     if (k + 1 < r.constants.size() && r.constants[k + 1].method == c.method) continue;
-    const PairedError& d = c.held_out_minus_published;
-    out << fmt::format(
-        "      E {:.2f} % held out by family against {:.2f} % at {}: {:.2f} [{:.2f}, {:.2f}] "
-        "percentage points{}\n",
-        100 * c.held_out.value, 100 * c.at_published.value, c.reference, 100 * d.difference.value,
-        100 * d.difference.interval.low, 100 * d.difference.interval.high, d.tie ? ", a tie" : "");
+    out << "      " << held_out_line(c, "family") << "\n";
   }
 }
 
@@ -73,15 +83,10 @@ void print_offset_parameters(const FitResult& r, std::ostream& out) {
          "the analytic surface, % of albedo*E/pi; 95 % bootstrap intervals):\n";
   for (const FittedOffsetParameter& f : r.offset_parameters) {
     const FittedConstant& c = f.fit;
-    const PairedError& d = c.held_out_minus_published;
-    out << fmt::format(
-        "    {:<24} {} {:.4g} [{:.4g}, {:.4g}] against {} {:.4g}{}; {} variants\n"
-        "      E {:.2f} % held out by scene against {:.2f} % at {}: {:.2f} [{:.2f}, {:.2f}] "
-        "percentage points{}\n",
-        c.method, c.constant, c.fitted, c.interval.low, c.interval.high, c.reference, c.published,
-        c.at_bound.empty() ? "" : " (at the values' end)", f.variants, 100 * c.held_out.value,
-        100 * c.at_published.value, c.reference, 100 * d.difference.value,
-        100 * d.difference.interval.low, 100 * d.difference.interval.high, d.tie ? ", a tie" : "");
+    out << fmt::format("    {:<24} {} {:.4g} [{:.4g}, {:.4g}] against {} {:.4g}{}; {} variants\n",
+                       c.method, c.constant, c.fitted, c.interval.low, c.interval.high, c.reference,
+                       c.published, c.at_bound.empty() ? "" : " (at the values' end)", f.variants);
+    out << "      " << held_out_line(c, "scene") << "\n";
   }
 }
 

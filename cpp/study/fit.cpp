@@ -869,6 +869,16 @@ void fit_shares(const FitOptions& o, const std::vector<double>& none,
   share_groups(o, none, floor, methods, &r->shares);
 }
 
+// A constant's errors with its value chosen without each family (held[i]:
+// variant i's), pooled over every variant and paired with the published.
+void set_held_out(const FitOptions& o, const std::vector<double>& held,
+                  const std::vector<double>& published, FittedConstant* c) {
+  const std::vector<std::size_t> index = all_of(held.size());
+  c->held_out_defined = true;
+  c->held_out = pooled_error(held, index, o);
+  c->held_out_minus_published = paired_error(held, published, index, o);
+}
+
 // estevez2019's 1/8 refitted: on every variant, per bootstrap resample
 // (refitted each time; fewer resamples, each is a search), and per family
 // held out.
@@ -891,15 +901,17 @@ void fit_estevez2019_constant(const FitOptions& o, FitResult* r) {
   c.interval = bootstrap(index, resamples, o.seed, [&](const std::vector<std::size_t>& k) {
                  return fit_estevez2019_k(data_of(r->variants, k), r->grid);
                }).interval;
-  std::vector<double> held(r->variants.size(), std::numeric_limits<double>::quiet_NaN());
-  for (const auto& [family, members] : families(r->variants)) {
-    const double k =
-        fit_estevez2019_k(data_of(r->variants, without(r->variants, {family})), r->grid);
-    const std::vector<double> g = estevez2019_table(r->grid, k);
-    for (std::size_t i : members) held[i] = tally_rmse(r->variants[i].data, g);
+  const auto by_family = families(r->variants);
+  if (by_family.size() >= 2) {
+    std::vector<double> held(r->variants.size(), std::numeric_limits<double>::quiet_NaN());
+    for (const auto& [family, members] : by_family) {
+      const double k =
+          fit_estevez2019_k(data_of(r->variants, without(r->variants, {family})), r->grid);
+      const std::vector<double> g = estevez2019_table(r->grid, k);
+      for (std::size_t i : members) held[i] = tally_rmse(r->variants[i].data, g);
+    }
+    set_held_out(o, held, published, &c);
   }
-  c.held_out = pooled_error(held, index, o);
-  c.held_out_minus_published = paired_error(held, published, index, o);
   r->constants.push_back(c);
 }
 
@@ -917,20 +929,21 @@ void fit_deshmukh2020_constants(const FitOptions& o, FitResult* r) {
     return std::array<double, 2>{c.d0, c.d1};
   };
   const auto intervals = bootstrap_intervals<2>(index, std::min(o.resamples, 200), o.seed, pair_of);
-  std::vector<double> held(r->variants.size(), std::numeric_limits<double>::quiet_NaN());
-  for (const auto& [family, members] : families(r->variants)) {
-    const std::vector<double> g =
-        deshmukh2020_table(r->grid, search.fit(without(r->variants, {family})));
-    for (std::size_t i : members) held[i] = tally_rmse(r->variants[i].data, g);
-  }
   FittedConstant c;
   c.method = "deshmukh2020";
   c.in_sample = pooled_error(rmse_of(r->variants, deshmukh2020_table(r->grid, fitted)), index, o);
   const std::vector<double> at_published =
       rmse_of(r->variants, deshmukh2020_table(r->grid, published));
   c.at_published = pooled_error(at_published, index, o);
-  c.held_out = pooled_error(held, index, o);
-  c.held_out_minus_published = paired_error(held, at_published, index, o);
+  if (const auto by_family = families(r->variants); by_family.size() >= 2) {
+    std::vector<double> held(r->variants.size(), std::numeric_limits<double>::quiet_NaN());
+    for (const auto& [family, members] : by_family) {
+      const std::vector<double> g =
+          deshmukh2020_table(r->grid, search.fit(without(r->variants, {family})));
+      for (std::size_t i : members) held[i] = tally_rmse(r->variants[i].data, g);
+    }
+    set_held_out(o, held, at_published, &c);
+  }
   c.at_bound = search.bound_reached(fitted);
   // No comma: fit.csv writes this as its unit column.
   const char* lerp = " in d = d0 + (d1 - d0) cos(delta)";
@@ -978,6 +991,7 @@ void fit_among_values(const FitOptions& o, const std::vector<double>& values, st
       }).interval;
   std::map<std::string, std::vector<std::size_t>> members;
   for (std::size_t i = 0; i < family.size(); ++i) members[family[i]].push_back(i);
+  if (members.size() < 2) return;
   std::vector<double> held(family.size(), std::numeric_limits<double>::quiet_NaN());
   for (const auto& [f, in_family] : members) {
     std::vector<std::size_t> train;
@@ -986,8 +1000,7 @@ void fit_among_values(const FitOptions& o, const std::vector<double>& values, st
     const std::size_t k = lowest_value(error, train);
     for (std::size_t i : in_family) held[i] = error[k][i];
   }
-  c->held_out = pooled_error(held, index, o);
-  c->held_out_minus_published = paired_error(held, error[published], index, o);
+  set_held_out(o, held, error[published], c);
 }
 
 // A probed constant refitted among the values it tried (so to their step),
@@ -1420,8 +1433,9 @@ json fitted_json(const FittedConstant& c) {
   return {{"fitted", {c.fitted, c.interval.low, c.interval.high}},
           {"error_fitted_in_sample", interval_json(c.in_sample)},
           {"error_published", interval_json(c.at_published)},
-          {"error_fitted_held_out", interval_json(c.held_out)},
-          {"held_out_minus_published", paired_json(c.held_out_minus_published)},
+          {"error_fitted_held_out", c.held_out_defined ? interval_json(c.held_out) : json()},
+          {"held_out_minus_published",
+           c.held_out_defined ? paired_json(c.held_out_minus_published) : json()},
           {"at_bound", c.at_bound.empty() ? json() : json(c.at_bound)}};
 }
 
@@ -1562,6 +1576,7 @@ std::string result_csv(const FitResult& r) {
     if (!errors_written.insert(c.method).second) continue;
     row("constant_error_published:" + c.method, "study", c.at_published, unit);
     row("constant_error_in_sample:" + c.method, "study", c.in_sample, unit);
+    if (!c.held_out_defined) continue;
     row("constant_error_held_out:" + c.method, "study", c.held_out, unit);
     row("held_out_minus_published:" + c.method, "study", c.held_out_minus_published.difference,
         unit);
@@ -1577,6 +1592,7 @@ std::string result_csv(const FitResult& r) {
           lowpoly_unit);
     row("offset_error_published:" + c.method, "lowpoly", c.at_published, lowpoly_unit);
     row("offset_error_in_sample:" + c.method, "lowpoly", c.in_sample, lowpoly_unit);
+    if (!c.held_out_defined) continue;
     row("offset_error_held_out:" + c.method, "lowpoly", c.held_out, lowpoly_unit);
     row("offset_held_out_minus_published:" + c.method, "lowpoly",
         c.held_out_minus_published.difference, lowpoly_unit);

@@ -159,10 +159,14 @@ struct FittedConstant {
   std::string method, constant;         // constant: its symbol first, then where it enters
   std::string reference = "published";  // what `published` is
   double published = 0.0, fitted = 0.0;
-  Interval interval;                     // bootstrap over variants, refitted per resample
-  PooledError in_sample;                 // E at the fitted value, all variants
-  PooledError at_published;              // E at the published value, all variants
-  PooledError held_out;                  // E with the value fitted without each family, pooled
+  Interval interval;         // bootstrap over variants, refitted per resample
+  PooledError in_sample;     // E at the fitted value, all variants
+  PooledError at_published;  // E at the published value, all variants
+  // E with the value fitted without each family, pooled, and its paired difference from
+  // at_published; defined only where the variants span two or more families (a single
+  // family has nothing to fit on once it is held out).
+  bool held_out_defined = false;
+  PooledError held_out;
   PairedError held_out_minus_published;  // paired over all variants
   // Which edge of the search's range the fit on every variant reached
   // ("d at deviation 60 degrees = 1"), "" where none: E would fall further

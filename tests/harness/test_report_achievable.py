@@ -43,6 +43,12 @@ sys.dont_write_bytecode = True
 import fit_fixture as ff  # noqa: E402
 import report_fixture as fx  # noqa: E402
 from penumbra_achievable import load_fit, share_groups  # noqa: E402
+from penumbra_achievable_html import (constants_context,  # noqa: E402
+                                      offsets_context)
+
+
+def cell_text(cell):
+    return cell['text'] if isinstance(cell, dict) else str(cell)
 
 TMP = tempfile.mkdtemp(prefix='penumbra-report-achievable.')
 BASE = os.path.join(TMP, 'base')
@@ -170,6 +176,25 @@ class Section(unittest.TestCase):
              .replace("'", '&#39;')]
             for o in offsets for v in o['values']])
         self.assertNotIn('id="achievable-offsets"', self.pages['apart'])
+
+    def test_one_family_has_no_held_out_error(self):
+        # fit.json writes null where the variants are of one family (or,
+        # low-poly, one scene): the page says so instead of an error.
+        doc = copy.deepcopy(self.doc)
+        for entry in doc['constants'][:1] + doc['offset_parameters'][:1]:
+            entry['error_fitted_held_out'] = None
+            entry['held_out_minus_published'] = None
+        path = os.path.join(TMP, 'one-family.json')
+        with open(path, 'w') as f:
+            json.dump(doc, f)
+        fit = load_fit(path)
+        offsets = offsets_context(fit)
+        self.assertIn('no held-out error: the variants are of one scene',
+                      offsets['sentences'][0])
+        self.assertIn('Chosen without each scene', offsets['sentences'][1])
+        row = constants_context(fit)['table']['rows'][0]
+        self.assertEqual([cell_text(x) for x in row[5:8]],
+                         ['none: one family', 'n/a', 'n/a'])
 
     def test_truths_left_out_are_named(self):
         self.assertIn('Left out of every fit: 2 variants whose ground truth '

@@ -137,6 +137,7 @@ void expect_paired_differences(const FitResult& r) {
     expect_paired(h.held_out_minus_best, h.held_out.value, h.best.value, h.family);
   ASSERT_EQ(r.constants.size(), 6u);  // k, d0, d1; s, p, q (probed)
   for (const FittedConstant& c : r.constants) {
+    EXPECT_TRUE(c.held_out_defined) << c.constant;
     for (const PooledError* e : {&c.in_sample, &c.at_published, &c.held_out})
       EXPECT_LE(e->interval.low, e->interval.high) << c.constant;
     expect_paired(c.held_out_minus_published, c.held_out.value, c.at_published.value, c.constant);
@@ -500,6 +501,28 @@ TEST_F(Fit, OffsetParametersAreRefittedAmongTheirRendersAndHeldOutByScene) {
     EXPECT_FALSE(c.held_out_minus_published.tie);
     EXPECT_LT(c.held_out_minus_published.difference.interval.high, 0.0);
   }
+
+  // One family has nothing to fit on once it is held out: the main
+  // section's single scene gives the constants no held-out error, and
+  // fit.json writes null for it rather than the first value's error.
+  EXPECT_TRUE(f.fit.held_out_defined);
+  ASSERT_FALSE(r.constants.empty());
+  for (const FittedConstant& c : r.constants) EXPECT_FALSE(c.held_out_defined) << c.method;
+  for (const json& v : report.at("lowpoly").at("variants"))
+    if (v.at("scene") == "cylinder")
+      for (const json& render : v.at("renders"))
+        if (render.at("exr").is_string())
+          std::filesystem::remove(folder + "/" + render.at("exr").get<std::string>());
+  const FitResult one = fit(folder);
+  ASSERT_EQ(one.offset_parameters.size(), 1u);
+  EXPECT_EQ(one.offset_parameters[0].variants, 2u);
+  EXPECT_FALSE(one.offset_parameters[0].fit.held_out_defined);
+  write_fit(one, path("fit-one"));
+  const json written = json::parse(std::ifstream(path("fit-one/fit.json")));
+  const json& offset = written.at("offset_parameters").at(0);
+  EXPECT_TRUE(offset.at("error_fitted_held_out").is_null());
+  EXPECT_TRUE(offset.at("held_out_minus_published").is_null());
+  EXPECT_TRUE(written.at("constants").at(0).at("error_fitted_held_out").is_null());
 }
 
 // The fitted method in a study: its table named relative to the study file,
