@@ -61,6 +61,46 @@ LightDirectionSample sample_quad_light(const Vec3& corner, const Vec3& edge_u, c
   return {wi, d2 / (area * cos_light), d};
 }
 
+LightDirectionSample sphere_light_pdf(const Vec3& centre, double radius, const Vec3& p,
+                                      const Vec3& wi) {
+  const Vec3 to_centre = centre - p;
+  const double d2 = length_squared(to_centre);
+  const double r2 = radius * radius;
+  if (d2 <= r2) return {};
+  const double b = dot(wi, to_centre);
+  const double discriminant = r2 - (d2 - b * b);
+  if (!(b > 0.0) || discriminant < 0.0) return {};
+  const double cap = one_minus_cos_max(r2 / d2);
+  return {wi, 1.0 / (2.0 * kPi * cap), std::max(b - std::sqrt(discriminant), 0.0)};
+}
+
+LightDirectionSample quad_light_pdf(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
+                                    const Vec3& p, const Vec3& wi) {
+  const Vec3 normal_area = cross(edge_u, edge_v);
+  const double area2 = length_squared(normal_area);
+  const double facing = -dot(normal_area, wi);  // area cos theta_l
+  if (!(area2 > 0.0) || !(facing > 0.0)) return {};
+  const double t = -dot(normal_area, corner - p) / facing;
+  if (!(t > 0.0)) return {};
+  // x - corner = a edge_u + b edge_v: a and b by the cross products with
+  // the other edge, projected on the normal.
+  const Vec3 x = p + wi * t - corner;
+  const double a = dot(cross(x, edge_v), normal_area) / area2;
+  const double b = dot(cross(edge_u, x), normal_area) / area2;
+  if (a < 0.0 || a > 1.0 || b < 0.0 || b > 1.0) return {};
+  return {wi, t * t / facing, t};
+}
+
+Vec3 sample_cosine_direction(const Vec3& n, double u1, double u2) {
+  const double r = std::sqrt(u1), phi = 2.0 * kPi * u2;
+  const double z = std::sqrt(std::max(0.0, 1.0 - u1));
+  return normalize(Frame::from_z(n).to_world({r * std::cos(phi), r * std::sin(phi), z}));
+}
+
+double cosine_direction_pdf(const Vec3& n, const Vec3& wi) {
+  return std::max(0.0, dot(n, wi)) / kPi;
+}
+
 Vec3 polygon_light_vector(const Vec3* vertices, int count, const Vec3& p, double radiance) {
   Vec3 sum;
   for (int i = 0; i < count; ++i) {

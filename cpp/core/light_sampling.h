@@ -38,6 +38,26 @@ double sphere_solid_angle(const Vec3& centre, double radius, const Vec3& p);
 LightDirectionSample sample_quad_light(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
                                        const Vec3& p, double u1, double u2);
 
+// The density sample_sphere_light draws the unit direction wi with at p,
+// and the distance along wi to the sphere: pdf 0 where wi misses it (the
+// cone it subtends is exactly the directions that hit it) or p is inside.
+// For multiple importance sampling, where another strategy drew wi.
+LightDirectionSample sphere_light_pdf(const Vec3& centre, double radius, const Vec3& p,
+                                      const Vec3& wi);
+
+// The density sample_quad_light draws the unit direction wi with at p
+// (d^2 / (area cos theta_l) at the point wi hits), and its distance: pdf 0
+// where wi misses the parallelogram or reaches it from behind.
+LightDirectionSample quad_light_pdf(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
+                                    const Vec3& p, const Vec3& wi);
+
+// A cosine-weighted direction about the unit normal n, (u1, u2) in [0,1)^2
+// (Malley's method: a uniform point of the unit disk lifted onto the
+// hemisphere; pbrt-v4 section A.5.3), and its density cos / pi per
+// steradian (0 below the plane of n).
+Vec3 sample_cosine_direction(const Vec3& n, double u1, double u2);
+double cosine_direction_pdf(const Vec3& n, const Vec3& wi);
+
 // The irradiance (W/m^2) at p on a plane of unit normal n from a convex
 // planar polygon of uniform radiance L, wholly above that plane and facing
 // p (Lambert 1760; the contour-integral form, e.g. Arvo 1995 eq. 2):

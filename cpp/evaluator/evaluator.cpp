@@ -46,10 +46,67 @@ struct LightUniforms {
   double u1 = 0.5, u2 = 0.5;
 };
 
+// A direction from the light's own sampler: the point of an area light
+// that `u` picks; delta lights ignore u.
+LightDirectionSample light_direction(const Light& light, const Vec3& p, double u1, double u2,
+                                     double* radiance) {
+  switch (light.type) {
+    case LightType::kEnvironment: {
+      const LightDirectionSample s = light.environment->sample(u1, u2, radiance);
+      *radiance *= light.scale;
+      return s;
+    }
+    case LightType::kSphere:
+      *radiance = light.radiance;
+      return sample_sphere_light(light.position, light.radius, p, u1, u2);
+    case LightType::kQuad:
+      *radiance = light.radiance;
+      return sample_quad_light(light.corner, light.edge_u, light.edge_v, p, u1, u2);
+    case LightType::kDistant:
+    case LightType::kPoint:
+      break;
+  }
+  *radiance = 0.0;
+  return {};
+}
+
+// The light's sampler's density at wi (another strategy drew it), with the
+// distance to the emitter and its radiance there; pdf 0 where wi misses it.
+LightDirectionSample light_density(const Light& light, const Vec3& p, const Vec3& wi,
+                                   double* radiance) {
+  *radiance = 0.0;
+  switch (light.type) {
+    case LightType::kEnvironment:
+      *radiance = light.environment->radiance(wi) * light.scale;
+      return {wi, light.environment->pdf(wi), std::numeric_limits<double>::infinity()};
+    case LightType::kSphere:
+      *radiance = light.radiance;
+      return sphere_light_pdf(light.position, light.radius, p, wi);
+    case LightType::kQuad:
+      *radiance = light.radiance;
+      return quad_light_pdf(light.corner, light.edge_u, light.edge_v, p, wi);
+    case LightType::kDistant:
+    case LightType::kPoint:
+      break;
+  }
+  return {};
+}
+
+// The share of an area light's samples its own sampler draws under
+// LightSampling::kMis; the rest are cosine-weighted about the normal.
+constexpr double kMisLightShare = 0.5;
+
 // `u` picks the point of an area light; delta lights ignore it. The
 // sample's irradiance is radiance / pdf (core/light_sampling.h); a sample
-// that reaches no emitter has irradiance 0.
-LightSample sample_light(const Light& light, const Vec3& p, const LightUniforms& u) {
+// that reaches no emitter has irradiance 0. Under LightSampling::kMis the
+// strategy is drawn per sample from u1 (the light's sampler below
+// kMisLightShare, else cosine-weighted directions about n, the unit normal
+// facing the viewer), and the sample's pdf is the two strategies' mixture:
+// Veach's one-sample model with the balance heuristic (Veach 1997, section
+// 9.2.4), the weighting that model is optimal with. Its sample costs one
+// shadow ray, as a light sample does.
+LightSample sample_light(const Light& light, const Vec3& p, const LightUniforms& u,
+                         const Vec3& n = {}) {
   switch (light.type) {
     case LightType::kDistant:
       return {light.direction, light.irradiance, std::numeric_limits<double>::infinity()};
@@ -59,22 +116,31 @@ LightSample sample_light(const Light& light, const Vec3& p, const LightUniforms&
       const double d = std::sqrt(d2);
       return {to_light / d, light.intensity / d2, d};
     }
-    case LightType::kEnvironment: {
-      double radiance = 0.0;
-      const LightDirectionSample s = light.environment->sample(u.u1, u.u2, &radiance);
-      if (!(s.pdf > 0.0)) return {Vec3{0, 0, 1}, 0.0, 0.0};
-      return {s.wi, radiance * light.scale / s.pdf, s.distance};
-    }
+    case LightType::kEnvironment:
     case LightType::kSphere:
     case LightType::kQuad:
       break;
   }
-  const LightDirectionSample s =
-      light.type == LightType::kSphere
-          ? sample_sphere_light(light.position, light.radius, p, u.u1, u.u2)
-          : sample_quad_light(light.corner, light.edge_u, light.edge_v, p, u.u1, u.u2);
-  if (!(s.pdf > 0.0)) return {Vec3{0, 0, 1}, 0.0, 0.0};
-  return {s.wi, light.radiance / s.pdf, s.distance};
+  double radiance = 0.0;
+  if (light.sampling == LightSampling::kLight) {
+    const LightDirectionSample s = light_direction(light, p, u.u1, u.u2, &radiance);
+    if (!(s.pdf > 0.0)) return {Vec3{0, 0, 1}, 0.0, 0.0};
+    return {s.wi, radiance / s.pdf, s.distance};
+  }
+  constexpr double c = kMisLightShare;
+  LightDirectionSample s;
+  double pdf_cosine = 0.0;
+  if (u.u1 < c) {
+    s = light_direction(light, p, u.u1 / c, u.u2, &radiance);
+    if (!(s.pdf > 0.0)) return {Vec3{0, 0, 1}, 0.0, 0.0};
+    pdf_cosine = cosine_direction_pdf(n, s.wi);
+  } else {
+    const Vec3 wi = sample_cosine_direction(n, (u.u1 - c) / (1.0 - c), u.u2);
+    pdf_cosine = cosine_direction_pdf(n, wi);
+    s = light_density(light, p, wi, &radiance);
+    if (!(s.pdf > 0.0) || !(pdf_cosine > 0.0)) return {Vec3{0, 0, 1}, 0.0, 0.0};
+  }
+  return {s.wi, radiance / (c * s.pdf + (1.0 - c) * pdf_cosine), s.distance};
 }
 
 // Whether the scene's samples nest (core/sample_pattern.h): a jittered
@@ -757,7 +823,7 @@ typename SampleShader<Tracer>::Prepared SampleShader<Tracer>::prepare(const Ray&
     facing.backfacing = true;
   }
   const Vec3& ns = facing.ns;
-  const LightSample light = sample_light(scene_.light, hit.shading_point, u);
+  const LightSample light = sample_light(scene_.light, hit.shading_point, u, facing.ng);
   // On the displaced surface the true normal is Ns itself; on the
   // analytic base Ng and Ni coincide with the base normal.
   ShadingPoint point = is_ground_truth_ && !hit.on_prop
@@ -776,7 +842,7 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Li
                                  std::uint64_t* shadow_rays, const SampleSink* sink,
                                  int column) const {
   const Prepared p = prepare(ray, hit, u, material);
-  int is_blocked = -1;  // the shadow ray, traced for the first pass that needs it
+  int is_blocked = -1;     // the shadow ray, traced for the first pass that needs it
   double lit_value = 0.0;  // the one pass's, where the light reaches it (sink)
   shade_passes(*material, p.point, p.light, p.angles, rng, sums, [&](std::size_t k, double value) {
     if (is_blocked < 0) {

@@ -76,6 +76,15 @@ inline constexpr EnumName<LightType> kLightTypeNames[] = {{"distant", LightType:
                                                           {"quad", LightType::kQuad},
                                                           {"environment", LightType::kEnvironment}};
 
+// How an area light's directions are drawn per camera sample: by the
+// light's own sampler alone, or by one-sample multiple importance sampling
+// that also draws cosine-weighted directions about the surface normal
+// (evaluator.md, "Area and environment lights", says where each lowers the
+// variance and which is the default).
+enum class LightSampling { kLight, kMis };
+inline constexpr EnumName<LightSampling> kLightSamplingNames[] = {{"light", LightSampling::kLight},
+                                                                  {"mis", LightSampling::kMis}};
+
 struct Light {
   LightType type = LightType::kDistant;
   Vec3 direction{-1, 0, 0};  // distant: unit vector towards the light
@@ -99,6 +108,8 @@ struct Light {
   std::string map_digest;
   double rotation_deg = 0.0;
   double scale = 1.0;
+  // sphere, quad and environment (the delta lights have one direction).
+  LightSampling sampling = LightSampling::kLight;
 };
 
 // Lights sampled per camera sample (all but the delta lights).

@@ -208,6 +208,8 @@ Light read_light(Reader r) {
       read_environment(r, &l);
       break;
   }
+  if (is_area_light(l))
+    l.sampling = r.choice<LightSampling>("sampling", kLightSamplingNames, l.sampling);
   r.finish();
   return l;
 }

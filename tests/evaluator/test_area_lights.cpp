@@ -38,10 +38,16 @@ const char* const kQuad =
 const char* const kSphere =
     R"(/light={"type": "sphere", "position": [-1.2, 0.5, -1.5], "radius": 0.4, "radiance": 3})";
 
+// A /light=... setting with "sampling" added (evaluator.md: area and
+// environment lights).
+std::string sampled(const std::string& light, const char* sampling) {
+  return light.substr(0, light.rfind('}')) + R"(, "sampling": ")" + sampling + "\"}";
+}
+
 // A smooth Lambertian 2 x 2 plane at z = 0 facing the camera, 40 x 40
 // pixels at stratum centres (no jitter), so that the estimator's
 // expectation is the mean of E over known points.
-Scene plane_scene(const char* light, int spp) {
+Scene plane_scene(const std::string& light, int spp) {
   return sphere_grating_with(
       {R"(/shape={"type": "plane", "axis": [0, 0, -1], "width": 2, "height": 2})",
        "/representation=smooth", "/camera/width=40", "/camera/height=40", "/camera/jitter=false",
@@ -136,14 +142,14 @@ double variance(const std::vector<double>& x) {
 // standard errors (and 0.2 %). Four times the samples cut the variance to
 // at most 1/4 of it, as independent samples would (the strata do better),
 // and to more than nothing (the estimator is not the closed form itself).
-void expect_unbiased_and_converging(const char* light) {
+void expect_unbiased_and_converging(const std::string& light, double bound = 2e-3) {
   const std::vector<double> e16 = relative_errors(plane_scene(light, 16));
   const std::vector<double> e64 = relative_errors(plane_scene(light, 64));
   ASSERT_GT(e16.size(), 900u);
   for (const auto* e : {&e16, &e64}) {
     const double standard_error = std::sqrt(variance(*e) / double(e->size()));
     EXPECT_LT(std::abs(mean(*e)), 4.0 * standard_error + 1e-6) << light;
-    EXPECT_LT(std::abs(mean(*e)), 2e-3) << light;
+    EXPECT_LT(std::abs(mean(*e)), bound) << light;
   }
   const double ratio = variance(e64) / variance(e16);
   EXPECT_LT(ratio, 0.3) << light;  // 1/4, and the variance estimate's ~5 % at 1000 pixels
@@ -156,6 +162,92 @@ TEST(AreaLight, QuadOnAPlaneMatchesLambertsPolygonFormula) {
 
 TEST(AreaLight, SphereOnAPlaneMatchesItsClosedForm) {
   expect_unbiased_and_converging(kSphere);
+}
+
+// Multiple importance sampling with cosine-weighted directions has the
+// light sampler's expectation: the same closed forms, within 4 standard
+// errors. Half its samples are cosine-weighted, and most of those miss the
+// small sphere: its variance there is ~30 times the light sampler's
+// (MisLowersTheVarianceOnlyWhereTheLightSamplerIsPoor), its standard error
+// ~5 times, so the absolute bound is 5 times the light sampler's.
+TEST(AreaLight, MisMatchesTheSameClosedForms) {
+  expect_unbiased_and_converging(sampled(kQuad, "mis"));
+  expect_unbiased_and_converging(sampled(kSphere, "mis"), 1e-2);
+}
+
+// The densities MIS weighs a direction by are the samplers' own: at a
+// sampled direction, the same pdf and distance (to rounding); a direction
+// that misses (away from the light, or just outside a sphere's cone) has
+// none. Cosine-weighted directions integrate cos to its closed form.
+TEST(AreaLight, DensitiesAtADirectionAreTheSamplersOwn) {
+  const Light quad = plane_scene(kQuad, 1).light, sphere = plane_scene(kSphere, 1).light;
+  for (const Vec3 p : {Vec3{0, 0, 0}, Vec3{-0.9, 0.9, 0}, Vec3{0.9, -0.9, 0.3}})
+    for (int k = 0; k < 64; ++k) {
+      const double u1 = (k % 8 + 0.37) / 8, u2 = (k / 8 + 0.61) / 8;
+      const LightDirectionSample q =
+          sample_quad_light(quad.corner, quad.edge_u, quad.edge_v, p, u1, u2);
+      const LightDirectionSample qd =
+          quad_light_pdf(quad.corner, quad.edge_u, quad.edge_v, p, q.wi);
+      ASSERT_GT(q.pdf, 0.0);
+      EXPECT_NEAR(qd.pdf, q.pdf, 1e-9 * q.pdf);
+      EXPECT_NEAR(qd.distance, q.distance, 1e-9 * q.distance);
+      EXPECT_EQ(quad_light_pdf(quad.corner, quad.edge_u, quad.edge_v, p, -q.wi).pdf, 0.0);
+      const LightDirectionSample s = sample_sphere_light(sphere.position, sphere.radius, p, u1, u2);
+      const LightDirectionSample sd = sphere_light_pdf(sphere.position, sphere.radius, p, s.wi);
+      ASSERT_GT(s.pdf, 0.0);
+      EXPECT_NEAR(sd.pdf, s.pdf, 1e-9 * s.pdf);
+      EXPECT_NEAR(sd.distance, s.distance, 1e-9 * s.distance);
+      EXPECT_EQ(sphere_light_pdf(sphere.position, sphere.radius, p, -s.wi).pdf, 0.0);
+    }
+  // Tangent to the sphere, then turned 1e-6 rad further out: a miss.
+  const Vec3 p{0, 0, 0}, axis = normalize(sphere.position - p);
+  const double sin_max = sphere.radius / length(sphere.position - p);
+  const Frame f = Frame::from_z(axis);
+  const double outside = std::asin(sin_max) + 1e-6, inside = std::asin(sin_max) - 1e-6;
+  EXPECT_EQ(sphere_light_pdf(sphere.position, sphere.radius, p,
+                             f.to_world({std::sin(outside), 0, std::cos(outside)}))
+                .pdf,
+            0.0);
+  EXPECT_GT(sphere_light_pdf(sphere.position, sphere.radius, p,
+                             f.to_world({std::sin(inside), 0, std::cos(inside)}))
+                .pdf,
+            0.0);
+  // Over 256 x 256 strata: the mean of pi cos(n, w) is 2/3 pi (the integral
+  // of cos^2 over the hemisphere), to the strata's O(1/N^2) ~ 1e-5.
+  const Vec3 n = normalize(Vec3{0.3, -0.5, 0.8});
+  double sum = 0.0;
+  const int m = 256;
+  for (int a = 0; a < m; ++a)
+    for (int b = 0; b < m; ++b) {
+      const Vec3 w = sample_cosine_direction(n, (a + 0.5) / m, (b + 0.5) / m);
+      ASSERT_GE(dot(n, w), 0.0);
+      EXPECT_NEAR(cosine_direction_pdf(n, w), dot(n, w) / kPi, 1e-15);
+      sum += kPi * dot(n, w);
+    }
+  EXPECT_NEAR(sum / (m * m), 2.0 * kPi / 3.0, 1e-4);
+}
+
+// Where MIS lowers the variance and where it raises it, at the same
+// samples (and shadow rays) per pixel: a large quad 0.3 above the plane,
+// whose sampling by area gives the near points' 1/d^2 to few samples, is
+// where cosine-weighted directions help; a small, distant sphere (the
+// plane tests' light), whose cone sampling is already nearly the
+// integrand, is where they waste half the samples. The measured ratios
+// are about 1/40 and 28; the test asks for 1/2 and 3/2, well outside the
+// ~10 % a variance estimate over ~1000 pixels carries.
+TEST(AreaLight, MisLowersTheVarianceOnlyWhereTheLightSamplerIsPoor) {
+  const std::string close_quad =
+      R"(/light={"type": "quad", "corner": [-1.5, -1.5, -0.3], "edge_u": [3, 0, 0],
+                 "edge_v": [0, 3, 0], "radiance": 1})";
+  const auto ratio = [](const std::string& light) {
+    return variance(relative_errors(plane_scene(sampled(light, "mis"), 16))) /
+           variance(relative_errors(plane_scene(sampled(light, "light"), 16)));
+  };
+  const double quad_ratio = ratio(close_quad), sphere_ratio = ratio(kSphere);
+  std::printf("[ mis      ] variance ratio MIS / light: close quad %.3f, small sphere %.3f\n",
+              quad_ratio, sphere_ratio);
+  EXPECT_LT(quad_ratio, 0.5);
+  EXPECT_GT(sphere_ratio, 1.5);
 }
 
 // A sphere of radius r and radiance I / (pi r^2) tends to a point light of
@@ -356,14 +448,16 @@ TEST_F(Environment, SmoothSphereIsTheMapsCosineConvolution) {
   const Image map = test_map(false);
   write_exr(map, path("map.exr"));
   const double rotation = radians(30.0);
-  const std::vector<double> e =
-      sphere_errors(map, environment("map.exr", 30.0, 2.0), rotation, 2.0);
-  ASSERT_GT(e.size(), 600u);
-  const double standard_error = std::sqrt(variance(e) / double(e.size()));
-  EXPECT_LT(std::abs(mean(e)), 4.0 * standard_error);
-  EXPECT_LT(std::abs(mean(e)), 1e-2);
-  std::printf("[ env      ] mean relative error %.5f, standard error %.5f, %zu pixels\n", mean(e),
-              standard_error, e.size());
+  for (const char* sampling : {"light", "mis"}) {
+    const std::vector<double> e =
+        sphere_errors(map, sampled(environment("map.exr", 30.0, 2.0), sampling), rotation, 2.0);
+    ASSERT_GT(e.size(), 600u);
+    const double standard_error = std::sqrt(variance(e) / double(e.size()));
+    EXPECT_LT(std::abs(mean(e)), 4.0 * standard_error) << sampling;
+    EXPECT_LT(std::abs(mean(e)), 1e-2) << sampling;
+    std::printf("[ env      ] %s: mean relative error %.5f, standard error %.5f, %zu pixels\n",
+                sampling, mean(e), standard_error, e.size());
+  }
   // The same render against the map read 90 degrees further round: far off.
   const std::vector<double> wrong =
       sphere_errors(map, environment("map.exr", 30.0, 2.0), radians(120.0), 2.0);
@@ -396,6 +490,13 @@ TEST_F(Environment, WhiteFurnaceGivesTheAlbedoAndNoMethodMore) {
   const std::vector<double> smooth = pixels({"/representation=smooth"});
   const double albedo = 0.8;
   EXPECT_NEAR(mean(smooth), albedo, 4.0 * std::sqrt(variance(smooth) / double(smooth.size())));
+  // Under MIS, the same albedo; and a uniform map is where cosine-weighted
+  // directions help: the map's sampler spends half its samples below the
+  // horizon. Measured: about a quarter of the variance; asked: below 2/3.
+  const std::vector<double> mis = pixels({"/representation=smooth", sampled(light, "mis")});
+  EXPECT_NEAR(mean(mis), albedo, 4.0 * std::sqrt(variance(mis) / double(mis.size())));
+  EXPECT_LT(variance(mis), 2.0 / 3.0 * variance(smooth));
+  std::printf("[ furnace  ] variance ratio MIS / light %.3f\n", variance(mis) / variance(smooth));
   for (const char* method : {"none", "chiang2019", "estevez2019", "mitsuba3", "cycles45"}) {
     const std::vector<double> bump =
         pixels({"/height/amplitude=0.03", "/terminator/method=\"" + std::string(method) + "\""});

@@ -171,6 +171,17 @@ TEST(Scene, BadInputIsRejectedWithFilePointerAndExpectation) {
              {"type", "sphere"}, {"position", {-3, 0, 0}}, {"radius", 0.5}, {"power", -1}};
        },
        "/light/power", "in [0, 1e9] (W)"},
+      {"unknown sampling",
+       [](json& j) {
+         j["light"] = {{"type", "sphere"},
+                       {"position", {-3, 0, 0}},
+                       {"radius", 0.5},
+                       {"power", 1},
+                       {"sampling", "bsdf"}};
+       },
+       "/light/sampling", "expected one of \"light\", \"mis\""},
+      {"sampling of a delta light", [](json& j) { j["light"]["sampling"] = "mis"; },
+       "/light/sampling", "unknown key"},
       {"not an object", [](json& j) { j["camera"] = 3; }, "/camera", "expected an object"},
       {"too fine a tessellation",
        [](json& j) {
