@@ -1,5 +1,7 @@
 // `penumbra fit`: what is achievable on a finished study (study/fit.h).
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <stdexcept>
 
@@ -52,12 +54,18 @@ std::string held_out_line(const FittedConstant& c, const std::string& unit) {
     return fmt::format("E {:.2f} % at {}; no held-out error: the variants are of one {}",
                        100 * c.at_published.value, c.reference, unit);
   const PairedError& d = c.held_out_minus_published;
+  // An interval that excludes 0 must not print an end of 0.00 (it would read
+  // as a tie): more decimals, up to 5, until its nearer end shows.
+  const double low = 100 * d.difference.interval.low, high = 100 * d.difference.interval.high;
+  int digits = 2;
+  while (!d.tie && digits < 5 &&
+         std::min(std::abs(low), std::abs(high)) < 0.5 * std::pow(10.0, -digits))
+    ++digits;
   return fmt::format(
-      "E {:.2f} % held out by {} against {:.2f} % at {}: {:.2f} [{:.2f}, {:.2f}] percentage "
+      "E {:.2f} % held out by {} against {:.2f} % at {}: {:.{}f} [{:.{}f}, {:.{}f}] percentage "
       "points{}",
       100 * c.held_out.value, unit, 100 * c.at_published.value, c.reference,
-      100 * d.difference.value, 100 * d.difference.interval.low, 100 * d.difference.interval.high,
-      d.tie ? ", a tie" : "");
+      100 * d.difference.value, digits, low, digits, high, digits, d.tie ? ", a tie" : "");
 }
 
 // A line per refitted constant, and one per method for the errors of its

@@ -14,7 +14,92 @@ double one_minus_cos_max(double sin2_max) {
   return sin2_max / (1.0 + cos_max);
 }
 
+// The spherical rectangle a rectangle subtends at p, in the rectangle's
+// frame (x along edge_u, y along edge_v, z towards p's far side so that
+// z0 < 0), as Urena et al. 2013 set it up (their section 3).
+struct SphericalRectangle {
+  Vec3 x, y, z;
+  double x0 = 0, y0 = 0, z0 = 0, x1 = 0, y1 = 0;
+  double b0 = 0, b1 = 0, k = 0, solid_angle = 0;
+};
+
+bool is_rectangle(const Vec3& edge_u, const Vec3& edge_v) {
+  return std::abs(dot(edge_u, edge_v)) <= 1e-9 * length(edge_u) * length(edge_v);
+}
+
+SphericalRectangle spherical_rectangle(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
+                                       const Vec3& p) {
+  SphericalRectangle r;
+  const double exl = length(edge_u), eyl = length(edge_v);
+  r.x = edge_u / exl, r.y = edge_v / eyl, r.z = cross(r.x, r.y);
+  const Vec3 d = corner - p;
+  r.z0 = dot(d, r.z);
+  if (r.z0 > 0.0) r.z = -r.z, r.z0 = -r.z0;
+  r.x0 = dot(d, r.x), r.y0 = dot(d, r.y);
+  r.x1 = r.x0 + exl, r.y1 = r.y0 + eyl;
+  if (!(r.z0 < 0.0)) return r;  // on the plane: nothing subtended
+  const Vec3 v00{r.x0, r.y0, r.z0}, v01{r.x0, r.y1, r.z0}, v10{r.x1, r.y0, r.z0},
+      v11{r.x1, r.y1, r.z0};
+  const Vec3 n0 = normalize(cross(v00, v10)), n1 = normalize(cross(v10, v11));
+  const Vec3 n2 = normalize(cross(v11, v01)), n3 = normalize(cross(v01, v00));
+  const auto angle = [](const Vec3& a, const Vec3& b) {
+    return std::acos(std::clamp(-dot(a, b), -1.0, 1.0));
+  };
+  const double g0 = angle(n0, n1), g1 = angle(n1, n2), g2 = angle(n2, n3), g3 = angle(n3, n0);
+  r.b0 = n0.z, r.b1 = n2.z;
+  r.k = 2.0 * kPi - g2 - g3;
+  r.solid_angle = std::max(0.0, g0 + g1 - r.k);
+  return r;
+}
+
+// Whether the emitting side (edge_u x edge_v) faces p.
+bool faces(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v, const Vec3& p) {
+  return dot(cross(edge_u, edge_v), p - corner) > 0.0;
+}
+
 }  // namespace
+
+double rectangle_solid_angle(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
+                             const Vec3& p) {
+  return spherical_rectangle(corner, edge_u, edge_v, p).solid_angle;
+}
+
+LightDirectionSample sample_rectangle_light(const Vec3& corner, const Vec3& edge_u,
+                                            const Vec3& edge_v, const Vec3& p, double u1,
+                                            double u2) {
+  if (!is_rectangle(edge_u, edge_v)) return sample_quad_light(corner, edge_u, edge_v, p, u1, u2);
+  if (!faces(corner, edge_u, edge_v, p)) return {};
+  const SphericalRectangle r = spherical_rectangle(corner, edge_u, edge_v, p);
+  if (!(r.solid_angle >= kMinSphericalRectangle))
+    return sample_quad_light(corner, edge_u, edge_v, p, u1, u2);
+  // u1 picks the x of the point by the area to its left (their eq. 7-9),
+  // u2 its y uniformly in the sine of the elevation along that line (eq. 10-12).
+  const double au = u1 * r.solid_angle + r.k;
+  const double fu = (std::cos(au) * r.b0 - r.b1) / std::sin(au);
+  const double cu =
+      std::clamp(std::copysign(1.0, fu) / std::sqrt(fu * fu + r.b0 * r.b0), -1.0, 1.0);
+  const double xu =
+      std::clamp(-(cu * r.z0) / std::sqrt(std::max(1e-300, 1.0 - cu * cu)), r.x0, r.x1);
+  const double dd = std::sqrt(xu * xu + r.z0 * r.z0);
+  const double h0 = r.y0 / std::sqrt(dd * dd + r.y0 * r.y0);
+  const double h1 = r.y1 / std::sqrt(dd * dd + r.y1 * r.y1);
+  const double hv = h0 + u2 * (h1 - h0), hv2 = hv * hv;
+  const double yv =
+      hv2 < 1.0 - 1e-12 ? std::clamp(hv * dd / std::sqrt(1.0 - hv2), r.y0, r.y1) : r.y1;
+  const Vec3 to_point = r.x * xu + r.y * yv + r.z * r.z0;
+  const double distance = length(to_point);
+  if (!(distance > 0.0)) return {};
+  return {to_point / distance, 1.0 / r.solid_angle, distance};
+}
+
+LightDirectionSample rectangle_light_pdf(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
+                                         const Vec3& p, const Vec3& wi) {
+  const LightDirectionSample hit = quad_light_pdf(corner, edge_u, edge_v, p, wi);
+  if (!(hit.pdf > 0.0) || !is_rectangle(edge_u, edge_v)) return hit;
+  const double solid_angle = rectangle_solid_angle(corner, edge_u, edge_v, p);
+  if (!(solid_angle >= kMinSphericalRectangle)) return hit;
+  return {wi, 1.0 / solid_angle, hit.distance};
+}
 
 double sphere_solid_angle(const Vec3& centre, double radius, const Vec3& p) {
   const double d2 = length_squared(centre - p);

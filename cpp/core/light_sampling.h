@@ -51,6 +51,27 @@ LightDirectionSample sphere_light_pdf(const Vec3& centre, double radius, const V
 LightDirectionSample quad_light_pdf(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
                                     const Vec3& p, const Vec3& wi);
 
+// A quad light as the evaluator samples it: where its edges are orthogonal
+// (a rectangle, to 1e-9 of |edge_u| |edge_v|) and it subtends at least
+// kMinSphericalRectangle sr at p, uniformly in solid angle by the
+// area-preserving map of the spherical rectangle (Urena, Fajardo and King
+// 2013, "An Area-Preserving Parametrization for Spherical Rectangles", EGSR;
+// as pbrt-v4's SampleSphericalRectangle): pdf = 1 / solid angle. Elsewhere,
+// and for a parallelogram, by area as sample_quad_light. One-sided: behind
+// the emitting side, pdf 0.
+inline constexpr double kMinSphericalRectangle = 3e-4;  // sr; below, the angles cancel
+LightDirectionSample sample_rectangle_light(const Vec3& corner, const Vec3& edge_u,
+                                            const Vec3& edge_v, const Vec3& p, double u1,
+                                            double u2);
+// Its density at the unit direction wi, and the distance there; 0 where wi
+// misses the quad or reaches it from behind.
+LightDirectionSample rectangle_light_pdf(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
+                                         const Vec3& p, const Vec3& wi);
+// The solid angle (sr) a rectangle subtends at p, from its spherical
+// rectangle's angles (Girard's theorem); 0 on its plane.
+double rectangle_solid_angle(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
+                             const Vec3& p);
+
 // A cosine-weighted direction about the unit normal n, (u1, u2) in [0,1)^2
 // (Malley's method: a uniform point of the unit disk lifted onto the
 // hemisphere; pbrt-v4 section A.5.3), and its density cos / pi per

@@ -61,7 +61,7 @@ LightDirectionSample light_direction(const Light& light, const Vec3& p, double u
       return sample_sphere_light(light.position, light.radius, p, u1, u2);
     case LightType::kQuad:
       *radiance = light.radiance;
-      return sample_quad_light(light.corner, light.edge_u, light.edge_v, p, u1, u2);
+      return sample_rectangle_light(light.corner, light.edge_u, light.edge_v, p, u1, u2);
     case LightType::kDistant:
     case LightType::kPoint:
       break;
@@ -84,7 +84,7 @@ LightDirectionSample light_density(const Light& light, const Vec3& p, const Vec3
       return sphere_light_pdf(light.position, light.radius, p, wi);
     case LightType::kQuad:
       *radiance = light.radiance;
-      return quad_light_pdf(light.corner, light.edge_u, light.edge_v, p, wi);
+      return rectangle_light_pdf(light.corner, light.edge_u, light.edge_v, p, wi);
     case LightType::kDistant:
     case LightType::kPoint:
       break;
