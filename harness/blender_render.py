@@ -111,6 +111,17 @@ UNIT = ("num", 0.0, 1.0)
 CAMERA = {"projection": ("enum", "orthographic", "perspective"),
           "matrix_world": ("matrix",), "width": ("int", 1, 65536),
           "height": ("int", 1, 65536)}
+LIGHTS = {
+    "sun": {"type": ("enum", "sun"), "direction": ("unit",),
+            "strength": ("num", 0.0, None)},
+    "sphere": {"type": ("enum", "sphere"), "center": ("vec", 3),
+               "radius": POSITIVE, "radiance": ("num", 0.0, None)},
+    "quad": {"type": ("enum", "quad"),
+             "vertices": ("list", 4, ("vec", 3)), "normal": ("unit",),
+             "radiance": ("num", 0.0, None)},
+    "environment": {"type": ("enum", "environment"), "file": ("file",),
+                    "rotation_deg": ("num", -360.0, 360.0),
+                    "strength": ("num", 0.0, None)}}
 SCHEMA = {
     "format": ("enum", "penumbra-blender-job"),
     "version": ("int", 2, 2),
@@ -119,17 +130,9 @@ SCHEMA = {
                              **{"sensor_width?": POSITIVE}),
         "perspective": dict(CAMERA, sensor_width=POSITIVE, lens=POSITIVE)}),
     "render": {"samples": ("int", 1, 1 << 24), "seed": ("int", 0, INT32)},
-    "light": ("switch", "type", {
-        "sun": {"type": ("enum", "sun"), "direction": ("unit",),
-                "strength": ("num", 0.0, None)},
-        "sphere": {"type": ("enum", "sphere"), "center": ("vec", 3),
-                   "radius": POSITIVE, "radiance": ("num", 0.0, None)},
-        "quad": {"type": ("enum", "quad"),
-                 "vertices": ("list", 4, ("vec", 3)), "normal": ("unit",),
-                 "radiance": ("num", 0.0, None)},
-        "environment": {"type": ("enum", "environment"), "file": ("file",),
-                        "rotation_deg": ("num", -360.0, 360.0),
-                        "strength": ("num", 0.0, None)}}),
+    "light": ("switch", "type", dict(
+        LIGHTS, group={"type": ("enum", "group"),
+                       "lights": ("list", 8, ("switch", "type", LIGHTS))})),
     "mesh": {"positions": ("file",), "normals": ("file",),
              "triangles": ("file",), "vertex_count": ("int", 3, INT32),
              "triangle_count": ("int", 1, INT32 // 3),
@@ -726,11 +729,14 @@ def build_environment(world, lj, folder):
 
 
 def build_light(lj, world, folder):
-    """The job's light; None for an environment (it is the world)."""
+    """The job's lights as objects to link: none for an environment (it is
+    the world), one per light of a group."""
+    if lj["type"] == "group":
+        return [o for m in lj["lights"] for o in build_light(m, world, folder)]
     if lj["type"] == "environment":
         build_environment(world, lj, folder)
-        return None
-    return build_sun(lj) if lj["type"] == "sun" else build_area_light(lj)
+        return []
+    return [build_sun(lj) if lj["type"] == "sun" else build_area_light(lj)]
 
 
 def build_scene(job, folder, threads, keep=None, keep_material=False):
@@ -802,13 +808,12 @@ def build_scene(job, folder, threads, keep=None, keep_material=False):
     co.matrix_world = Matrix(cam["matrix_world"])
     scene.camera = co
 
-    lo = build_light(job["light"], scene.world, folder)
+    lights = build_light(job["light"], scene.world, folder)
     ob = build_mesh(job, folder) if keep is None else keep
     if not (keep is not None and keep_material):
         build_material(job, ob, folder)
-    for o in (co, lo) if keep is not None else (co, lo, ob):
-        if o is not None:
-            scene.collection.objects.link(o)
+    for o in [co, *lights] + ([] if keep is not None else [ob]):
+        scene.collection.objects.link(o)
     return ob
 
 

@@ -109,6 +109,11 @@ double light_irradiance(const Light& light, const Vec3& at) {
       return light.environment
                  ? light.scale * light.environment->irradiance(light.environment->mean_direction())
                  : 0.0;
+    case LightType::kGroup: {
+      double sum = 0.0;
+      for (const Light& m : light.members) sum += light_irradiance(m, at);
+      return sum;
+    }
   }
   return light.irradiance;
 }

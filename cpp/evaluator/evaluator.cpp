@@ -64,6 +64,7 @@ LightDirectionSample light_direction(const Light& light, const Vec3& p, double u
       return sample_rectangle_light(light.corner, light.edge_u, light.edge_v, p, u1, u2);
     case LightType::kDistant:
     case LightType::kPoint:
+    case LightType::kGroup:  // sample_light draws a member
       break;
   }
   *radiance = 0.0;
@@ -87,6 +88,7 @@ LightDirectionSample light_density(const Light& light, const Vec3& p, const Vec3
       return rectangle_light_pdf(light.corner, light.edge_u, light.edge_v, p, wi);
     case LightType::kDistant:
     case LightType::kPoint:
+    case LightType::kGroup:  // sample_light draws a member
       break;
   }
   return {};
@@ -108,6 +110,19 @@ constexpr double kMisLightShare = 0.5;
 LightSample sample_light(const Light& light, const Vec3& p, const LightUniforms& u,
                          const Vec3& n = {}) {
   switch (light.type) {
+    case LightType::kGroup: {
+      // One light per sample: u1 picks it by member_cdf and is stretched
+      // back over [0, 1) within its share, for the light's own sampling.
+      const std::vector<double>& cdf = light.member_cdf;
+      const std::size_t k =
+          std::size_t(std::upper_bound(cdf.begin() + 1, cdf.end() - 1, u.u1) - (cdf.begin() + 1));
+      const double share = cdf[k + 1] - cdf[k];
+      const LightUniforms within{std::clamp((u.u1 - cdf[k]) / share, 0.0, std::nextafter(1.0, 0.0)),
+                                 u.u2};
+      LightSample s = sample_light(light.members[k], p, within, n);
+      s.irradiance /= share;
+      return s;
+    }
     case LightType::kDistant:
       return {light.direction, light.irradiance, std::numeric_limits<double>::infinity()};
     case LightType::kPoint: {

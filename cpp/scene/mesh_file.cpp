@@ -46,7 +46,7 @@ namespace fs = std::filesystem;
 
 // Positions, normals and UVs in double before they are welded and stored.
 struct RawMesh {
-  std::vector<Vec3> positions, normals;  // normals empty: the file had none
+  std::vector<Vec3> positions, normals;    // normals empty: the file had none
   std::vector<std::array<double, 2>> uvs;  // empty: some mesh of the file has none
   std::vector<unsigned> triangles;
 };

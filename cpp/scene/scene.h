@@ -68,13 +68,13 @@ struct Camera {
 // Delta lights (distant, point), area lights (sphere, quad) of uniform
 // radiance and a captured environment at infinity, which the evaluator
 // samples per camera sample (core/light_sampling.h, core/environment.h);
-// the camera sees none of them (the background stays black).
-enum class LightType { kDistant, kPoint, kSphere, kQuad, kEnvironment };
-inline constexpr EnumName<LightType> kLightTypeNames[] = {{"distant", LightType::kDistant},
-                                                          {"point", LightType::kPoint},
-                                                          {"sphere", LightType::kSphere},
-                                                          {"quad", LightType::kQuad},
-                                                          {"environment", LightType::kEnvironment}};
+// the camera sees none of them (the background stays black). A group is
+// several of them in one scene, one drawn per camera sample.
+enum class LightType { kDistant, kPoint, kSphere, kQuad, kEnvironment, kGroup };
+inline constexpr EnumName<LightType> kLightTypeNames[] = {
+    {"distant", LightType::kDistant},         {"point", LightType::kPoint},
+    {"sphere", LightType::kSphere},           {"quad", LightType::kQuad},
+    {"environment", LightType::kEnvironment}, {"group", LightType::kGroup}};
 
 // How an area light's directions are drawn per camera sample: by the
 // light's own sampler alone, or by one-sample multiple importance sampling
@@ -110,13 +110,22 @@ struct Light {
   double scale = 1.0;
   // sphere, quad and environment (the delta lights have one direction).
   LightSampling sampling = LightSampling::kLight;
+  // group: its lights (2 to 8, none a group, at most one environment), and
+  // the cumulative probabilities a camera sample draws each with
+  // (member_cdf[i + 1] - member_cdf[i]: mostly in proportion to the
+  // irradiance each gives the shape's centre; set_member_weights).
+  std::vector<Light> members;
+  std::vector<double> member_cdf;
 };
 
-// Lights sampled per camera sample (all but the delta lights).
+// Lights sampled per camera sample (all but the delta lights; a group
+// draws one of its lights per sample).
 inline bool is_area_light(const Light& light) {
   return light.type == LightType::kSphere || light.type == LightType::kQuad ||
-         light.type == LightType::kEnvironment;
+         light.type == LightType::kEnvironment || light.type == LightType::kGroup;
 }
+
+inline Vec3 light_vector(const Light& light, const Vec3& at);
 
 // Where the light is seen from `at`, for the angles a study states per
 // variant: towards a distant light, or towards a point light's position, a
@@ -133,8 +142,13 @@ inline Vec3 light_axis(const Light& light, const Vec3& at) {
       return light.corner + (light.edge_u + light.edge_v) * 0.5 - at;
     case LightType::kEnvironment:
       return light.environment ? light.environment->mean_direction() : Vec3{0, 1, 0};
+    case LightType::kGroup:
+      break;
   }
-  return light.direction;
+  // A group: where its light comes from on balance, its light vector.
+  Vec3 sum;
+  for (const Light& m : light.members) sum += light_vector(m, at);
+  return length_squared(sum) > 0.0 ? sum : Vec3{0, 1, 0};
 }
 
 // Gershun's light vector at `at` (W/m^2): the integral of L w dw over the
@@ -171,8 +185,42 @@ inline Vec3 light_vector(const Light& light, const Vec3& at) {
     }
     case LightType::kEnvironment:
       return light.environment ? light.environment->light_vector() * light.scale : Vec3{};
+    case LightType::kGroup: {
+      Vec3 sum;
+      for (const Light& m : light.members) sum += light_vector(m, at);
+      return sum;
+    }
   }
   return {};
+}
+
+// What a group weighs its lights by: the irradiance each gives a plane at
+// `at` facing it (shadows aside), W/m^2; an environment's on its mean
+// direction (a uniform map's light vector is zero, its irradiance is not).
+inline double light_strength(const Light& light, const Vec3& at) {
+  if (light.type == LightType::kEnvironment)
+    return light.environment
+               ? light.scale * light.environment->irradiance(light.environment->mean_direction())
+               : 0.0;
+  return length(light_vector(light, at));
+}
+
+// A group's member_cdf from its lights' strengths at `at` (the shape's
+// centre); equal where none has any.
+inline void set_member_weights(Light* group, const Vec3& at) {
+  // A tenth of the samples spread evenly: a light dim at the centre (a quad
+  // whose plane it lies behind) may still light the shape elsewhere, and
+  // a light never drawn would be a bias, not noise.
+  constexpr double kEven = 0.1;
+  std::vector<double> w;
+  double total = 0.0;
+  for (const Light& m : group->members) total += w.emplace_back(light_strength(m, at));
+  const double n = double(w.size());
+  group->member_cdf.assign(1, 0.0);
+  for (const double wi : w)
+    group->member_cdf.push_back(group->member_cdf.back() +
+                                (total > 0.0 ? (1.0 - kEven) * wi / total + kEven / n : 1.0 / n));
+  group->member_cdf.back() = 1.0;
 }
 
 enum class Representation {

@@ -183,10 +183,45 @@ void read_environment(Reader& r, Light* l) {
   }
 }
 
+Light read_light(Reader r);
+
+// A group's lights: 2 to 8, none a group, at most one environment (a
+// renderer's world holds one) and an environment beside delta lights only.
+// Lights do not shadow one another in the evaluator; in Cycles a sphere or
+// quad is a mesh that its BSDF rays stop at, which hides the environment
+// behind it (a quad beside Blender's forest: 0.7 % darker than the sum of
+// their renders at 1,024 samples, 13 standard errors).
+void read_group(Reader& r, Light* l) {
+  const json& list = r.at("lights");
+  if (!list.is_array() || list.size() < 2 || list.size() > 8)
+    r.fail("lights", "expected an array of 2 to 8 lights, got " + Reader::describe(list));
+  int environments = 0, areas = 0;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    Reader item = r.item("lights", i);
+    // By the type's name, before a map is read.
+    const json* name = list[i].is_object() && list[i].contains("type") ? &list[i]["type"] : nullptr;
+    const std::string type = name && name->is_string() ? name->get<std::string>() : "";
+    if (type == "group")
+      item.fail("type", "expected a light that is not a group (groups do not nest)");
+    environments += type == "environment";
+    areas += type == "sphere" || type == "quad";
+    if (environments > 1) item.fail("type", "expected at most one environment in a group");
+    if (environments > 0 && areas > 0)
+      item.fail("type",
+                "expected an environment beside distant and point lights only: a sphere or quad "
+                "light would hide the environment behind it in Cycles, which the evaluator does "
+                "not model");
+    l->members.push_back(read_light(item));
+  }
+}
+
 Light read_light(Reader r) {
   Light l;
   l.type = r.choice<LightType>("type", kLightTypeNames);
   switch (l.type) {
+    case LightType::kGroup:
+      read_group(r, &l);
+      break;
     case LightType::kDistant:
       l.direction = direction(r, "direction");
       l.irradiance = r.number("irradiance", radiant_range, "in [0, 1e9] (W/m^2)");
@@ -208,7 +243,7 @@ Light read_light(Reader r) {
       read_environment(r, &l);
       break;
   }
-  if (is_area_light(l))
+  if (is_area_light(l) && l.type != LightType::kGroup)
     l.sampling = r.choice<LightSampling>("sampling", kLightSamplingNames, l.sampling);
   r.finish();
   return l;
@@ -785,6 +820,7 @@ Scene scene_from_json(const json& document, const std::string& origin) {
   s.camera = read_camera(r.object("camera"));
   s.light = read_light(r.object("light"));
   s.shape = read_shape(r.object("shape"), &s.tessellation);
+  if (s.light.type == LightType::kGroup) set_member_weights(&s.light, s.shape.center);
   if (r.has("material")) s.material = read_material(r.object("material"));
   if (r.has("height")) s.height = read_height(r.object("height"), s.shape);
   s.representation =

@@ -147,6 +147,9 @@ nlohmann::json keyed_scene(const Job& job) {
   nlohmann::json keyed = job.scene_json();
   if (scene.height.map) keyed["height"]["file"] = "content:" + scene.height.map->digest;
   if (scene.light.environment) keyed["light"]["map"] = "content:" + scene.light.map_digest;
+  for (std::size_t i = 0; i < scene.light.members.size(); ++i)
+    if (scene.light.members[i].environment)
+      keyed["light"]["lights"][i]["map"] = "content:" + scene.light.members[i].map_digest;
   if (scene.shape.mesh) keyed["shape"]["file"] = "content:" + scene.shape.mesh->digest;
   if (table) keyed["terminator"]["parameters"]["table"] = "content:" + factor_table_digest(*table);
   // A user method by its definition: editing the function renders again.

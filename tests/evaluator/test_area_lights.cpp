@@ -88,6 +88,11 @@ TEST(AreaLight, PolygonIrradianceEqualsQuadrature) {
 // Irradiance at a point of the plane z = 0 (normal -z) from the test's lights.
 double plane_irradiance(const Light& light, const Vec3& p) {
   const Vec3 n{0, 0, -1};
+  if (light.type == LightType::kGroup) {
+    double sum = 0.0;
+    for (const Light& m : light.members) sum += plane_irradiance(m, p);
+    return sum;
+  }
   if (light.type == LightType::kSphere) {
     // A sphere wholly above the plane's horizon: pi L sin^2 theta_max cos alpha.
     const Vec3 d = light.position - p;
@@ -162,6 +167,23 @@ TEST(AreaLight, QuadOnAPlaneMatchesLambertsPolygonFormula) {
 
 TEST(AreaLight, SphereOnAPlaneMatchesItsClosedForm) {
   expect_unbiased_and_converging(kSphere);
+}
+
+// Several lights in one scene: a group draws one light per camera sample
+// by its weights and divides by the chance it drew it, so its expectation
+// is the sum of its lights' closed forms; the same tolerances as one light.
+// The weights are mostly the lights' irradiance at the shape's centre, with
+// a tenth of the samples spread evenly (set_member_weights).
+TEST(AreaLight, GroupOnAPlaneMatchesTheSumOfItsLightsClosedForms) {
+  const std::string quad = std::string(kQuad).substr(7), sphere = std::string(kSphere).substr(7);
+  const std::string group = R"(/light={"type": "group", "lights": [)" + quad + ", " + sphere + "]}";
+  expect_unbiased_and_converging(group);
+  const Light g = plane_scene(group, 1).light;
+  ASSERT_EQ(g.members.size(), 2u);
+  const Vec3 centre{0, 0, 0};
+  const double wq = light_strength(g.members[0], centre), ws = light_strength(g.members[1], centre);
+  EXPECT_NEAR(g.member_cdf[1], 0.9 * wq / (wq + ws) + 0.05, 1e-15);
+  EXPECT_EQ(g.member_cdf[2], 1.0);
 }
 
 // Multiple importance sampling with cosine-weighted directions has the

@@ -182,6 +182,42 @@ TEST(Scene, BadInputIsRejectedWithFilePointerAndExpectation) {
        "/light/sampling", "expected one of \"light\", \"mis\""},
       {"sampling of a delta light", [](json& j) { j["light"]["sampling"] = "mis"; },
        "/light/sampling", "unknown key"},
+      {"group of one",
+       [](json& j) {
+         j["light"] = {{"type", "group"}, {"lights", {j["light"]}}};
+       },
+       "/light/lights", "expected an array of 2 to 8 lights"},
+      {"nested group",
+       [](json& j) {
+         const json inner = {{"type", "group"}, {"lights", {j["light"], j["light"]}}};
+         j["light"] = {{"type", "group"}, {"lights", {j["light"], inner}}};
+       },
+       "/light/lights/1/type", "groups do not nest"},
+      {"bad light in a group",
+       [](json& j) {
+         json bad = j["light"];
+         bad["irradiance"] = -1;
+         j["light"] = {{"type", "group"}, {"lights", {j["light"], bad}}};
+       },
+       "/light/lights/1/irradiance", "in [0, 1e9]"},
+      {"environment beside a quad in a group",
+       [](json& j) {
+         j["light"] = {{"type", "group"},
+                       {"lights",
+                        {{{"type", "quad"},
+                          {"corner", {-3, 0, 0}},
+                          {"edge_u", {0, 1, 0}},
+                          {"edge_v", {0, 0, 1}},
+                          {"radiance", 1}},
+                         {{"type", "environment"}, {"map", "no-such-map.exr"}}}}};
+       },
+       "/light/lights/1/type", "an environment beside distant and point lights only"},
+      {"sampling of a group",
+       [](json& j) {
+         j["light"] = {
+             {"type", "group"}, {"lights", {j["light"], j["light"]}}, {"sampling", "mis"}};
+       },
+       "/light/sampling", "unknown key"},
       {"not an object", [](json& j) { j["camera"] = 3; }, "/camera", "expected an object"},
       {"too fine a tessellation",
        [](json& j) {

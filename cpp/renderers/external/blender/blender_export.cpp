@@ -1,5 +1,6 @@
 // The Blender exporter: the scene as a job for harness/blender_render.py and a
 // mesh. In Blender's part of the cache key (code_digest.h).
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -80,7 +81,9 @@ void check_blender_scene(const Scene& scene) {
     throw ExportError(
         "Cycles applies chiang2019 to diffuse lobes only: set /terminator/lobes to "
         "\"diffuse\"");
-  if (scene.light.type == LightType::kPoint)
+  const auto is_point = [](const Light& l) { return l.type == LightType::kPoint; };
+  if (is_point(scene.light) ||
+      std::any_of(scene.light.members.begin(), scene.light.members.end(), is_point))
     throw ExportError(
         "Blender export supports distant, sphere, quad and environment lights; a point light "
         "carries Blender's own power convention, which the evaluator does not model");
@@ -271,6 +274,11 @@ json light_json(const Light& light) {
               {"file", kBlenderEnvironmentFile},
               {"rotation_deg", light.rotation_deg},
               {"strength", light.scale}};
+    case LightType::kGroup: {
+      json lights = json::array();
+      for (const Light& m : light.members) lights.push_back(light_json(m));
+      return {{"type", "group"}, {"lights", lights}};
+    }
     case LightType::kPoint:
       break;
   }
@@ -333,6 +341,8 @@ BlenderExport export_blender(const Scene& scene) {
         {"extension", scene.height.map->edge == MapEdge::kWrap ? "REPEAT" : "EXTEND"}};
   }
   if (scene.light.environment) out.environment = environment_image(*scene.light.environment);
+  for (const Light& m : scene.light.members)
+    if (m.environment) out.environment = environment_image(*m.environment);
   out.job_json = job.dump(2) + "\n";
   return out;
 }

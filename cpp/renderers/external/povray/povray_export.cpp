@@ -134,6 +134,10 @@ void check_povray_scene(const Scene& scene) {
     throw ExportError(
         "POV-Ray export supports distant lights only: its area_light is a grid of point "
         "lights that emit equally in every direction, not a Lambertian sphere or quad");
+  if (scene.light.type == LightType::kGroup)
+    throw ExportError(
+        "POV-Ray export supports one distant light only: its lights cannot express the group's "
+        "area lights or environment, and the studies compare it under the sun");
   if (scene.light.type == LightType::kEnvironment)
     throw ExportError(
         "POV-Ray export supports distant lights only: an environment lights a POV-Ray scene "

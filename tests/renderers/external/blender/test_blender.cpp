@@ -377,8 +377,10 @@ TEST_F(Renderers, BlenderDisplacementNormalsAttributeShadesAsCustomNormals) {
 // The exporter refuses what the fixed Blender script would refuse, with the
 // same limit: read from the script, not restated here.
 // Cycles renders the evaluator's area and environment lights: the smooth
-// calibration sphere under a sphere light, a quad light, and Blender's own
-// forest environment (its sun included), 48 x 48 at 64 samples in both.
+// calibration sphere under a sphere light, a quad light, Blender's own
+// forest environment (its sun included), a group of a distant light, a
+// sphere and a quad, and a group of the sun and the forest, 48 x 48 at 64
+// samples in both.
 // Per covered pixel d = Cycles - evaluator; the mean of d over ~1,400
 // pixels must be within 4 of its standard errors plus 0.5 % of the mean
 // radiance (the emitting sphere's 256-gon outline and float texels: below
@@ -390,7 +392,19 @@ TEST_F(Renderers, CyclesMatchesTheEvaluatorUnderAreaAndEnvironmentLights) {
       {"quad", R"({"type": "quad", "corner": [-3, -1, -3], "edge_u": [0, 2, 0],
                   "edge_v": [1, 0, 2], "radiance": 3})"},
       {"environment", R"({"type": "environment", "map": "blender:studiolights/world/forest.exr",
-                         "rotation_deg": 40, "scale": 1.5})"}};
+                         "rotation_deg": 40, "scale": 1.5})"},
+      // Three at once, each at a third of its strength, apart as seen from
+      // the sphere: one drawn per camera sample in the evaluator, every
+      // one a light in Cycles; and the sun beside the environment.
+      {"group", R"({"type": "group", "lights": [
+          {"type": "distant", "direction": [-1, 0.3, -0.2], "irradiance": 1},
+          {"type": "sphere", "position": [-1.5, 2.5, -2], "radius": 0.6, "power": 100},
+          {"type": "quad", "corner": [-3, -1, -3], "edge_u": [0, 2, 0], "edge_v": [1, 0, 2],
+           "radiance": 1}]})"},
+      {"group with an environment", R"({"type": "group", "lights": [
+          {"type": "distant", "direction": [-1, 0.3, -0.2], "irradiance": 1},
+          {"type": "environment", "map": "blender:studiolights/world/forest.exr",
+           "rotation_deg": 40, "scale": 0.5}]})"}};
   for (const auto& [name, light] : lights) {
     json doc = calibration_scene("sphere");
     doc["camera"]["width"] = doc["camera"]["height"] = 48;
