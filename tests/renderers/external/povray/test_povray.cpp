@@ -12,6 +12,7 @@
 #include "analysis/metrics.h"
 #include "renderers/external/povray/povray.h"
 #include "renderers/renderers_test.h"
+#include "small_sphere.h"
 
 namespace penumbra::renderer_test {
 namespace {
@@ -207,6 +208,19 @@ TEST_F(Renderers, PovrayRendersAMeshShapeAndItsTruthLikeTheEvaluator) {
     ADD_FAILURE() << "bump on a mesh shape was exported";
   } catch (const ExportError& e) {
     EXPECT_NE(std::string(e.what()).find("mesh shape"), std::string::npos) << e.what();
+  }
+}
+
+// A group of lights, even of distant ones, is refused with the reason.
+TEST(PovrayExport, RefusesAGroupOfLights) {
+  const Scene scene = sphere_grating_with({R"(/light={"type": "group", "lights": [
+            {"type": "distant", "direction": [-1, 0, 0], "irradiance": 1},
+            {"type": "distant", "direction": [0, 1, 0], "irradiance": 1}]})"});
+  try {
+    export_povray(scene);
+    ADD_FAILURE() << "a group of lights was exported";
+  } catch (const ExportError& e) {
+    EXPECT_NE(std::string(e.what()).find("one distant light only"), std::string::npos) << e.what();
   }
 }
 
