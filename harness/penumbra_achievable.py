@@ -235,6 +235,11 @@ def offset_parameter_of(c, e, p):
     return out
 
 
+def is_null(e, key):
+    """Whether e holds key, as null."""
+    return key in e and e[key] is None
+
+
 def constant_of(c, e, p):
     def number(k):
         return num(c.get(e, p, k, (int, float), 'a number'))
@@ -252,14 +257,13 @@ def constant_of(c, e, p):
             'fitted': c.interval(e, p, 'fitted'),
             'error_published': c.interval(e, p, 'error_published'),
             'error_in_sample': c.interval(e, p, 'error_fitted_in_sample'),
-            # null where the variants are of one family: nothing to fit on
-            # once it is held out
-            'error_held_out': (c.interval(e, p, 'error_fitted_held_out')
-                               if e.get('error_fitted_held_out') is not None
-                               else None),
+            # null (present) where the variants are of one family: nothing
+            # to fit on once it is held out; absent is an old fit.json
+            'error_held_out': (None if is_null(e, 'error_fitted_held_out')
+                               else c.interval(e, p, 'error_fitted_held_out')),
             'held_out_minus_published': (
-                c.paired(e, p, 'held_out_minus_published')
-                if e.get('held_out_minus_published') is not None else None),
+                None if is_null(e, 'held_out_minus_published')
+                else c.paired(e, p, 'held_out_minus_published')),
             # null or absent (a fit.json before it): inside the range
             'at_bound': (c.get(e, p, 'at_bound', str, 'a string or null')
                          if e.get('at_bound') is not None else None)}
