@@ -38,25 +38,49 @@ struct Terms {
   Eigen::VectorXd f;
 };
 
-void add_variant(const TallyVariant& v, const std::vector<int>& index, double weight, Terms& q) {
+// The profile bins as rows of a weighted least-squares problem: row r's
+// squared residual is weighted by w[r], its coefficients (row, variable,
+// value) are in `a`. Their normal equations are summed once (add_gram)
+// rather than as each row's outer product: under an area light or an
+// environment one bin spreads over hundreds of cells, and the outer
+// products of the lighting study's 10^3 bins listed 10^8 triplets.
+struct WeightedRows {
+  std::vector<Eigen::Triplet<double>> a;
+  std::vector<double> w;
+};
+
+void add_variant(const TallyVariant& v, const std::vector<int>& index, double weight,
+                 WeightedRows& rows, Terms& q) {
   const std::vector<std::size_t> bins = terminator_bins(v);
   if (bins.empty()) return;
   const double w = weight / double(bins.size());
   for (std::size_t b : bins) {
     const double n = double(v.tally.count[b]);
+    const int row = static_cast<int>(rows.w.size());
     double y = v.truth.value[b] - v.tally.rest[b] / n;
-    std::vector<std::pair<int, double>> a;
+    const std::size_t first = rows.a.size();
     for (const auto& [cell, light] : v.tally.scaled[b]) {
       if (index[static_cast<std::size_t>(cell)] < 0)
         y -= light / n;  // a fixed cell: G = 1
       else
-        a.push_back({index[static_cast<std::size_t>(cell)], light / n});
+        rows.a.emplace_back(row, index[static_cast<std::size_t>(cell)], light / n);
     }
-    for (const auto& [i, ai] : a) {
-      q.f[i] += w * ai * y;
-      for (const auto& [j, aj] : a) q.h.emplace_back(i, j, w * ai * aj);
-    }
+    for (std::size_t e = first; e < rows.a.size(); ++e)
+      q.f[rows.a[e].col()] += w * rows.a[e].value() * y;
+    rows.w.push_back(w);
   }
+}
+
+// h += A' diag(w) A, one triplet per nonzero of the sum.
+void add_gram(const WeightedRows& rows, Terms& q) {
+  const Eigen::Index n = q.f.size();
+  Eigen::SparseMatrix<double> a(static_cast<Eigen::Index>(rows.w.size()), n);
+  a.setFromTriplets(rows.a.begin(), rows.a.end());
+  const Eigen::Map<const Eigen::VectorXd> w(rows.w.data(), Eigen::Index(rows.w.size()));
+  const Eigen::SparseMatrix<double> h = a.transpose() * w.asDiagonal() * a;
+  for (Eigen::Index col = 0; col < h.outerSize(); ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(h, col); it; ++it)
+      q.h.emplace_back(int(it.row()), int(it.col()), it.value());
 }
 
 // Squared second differences along each axis and (G - 1)^2, each a mean
@@ -406,8 +430,10 @@ FloorSolution solve_floor(const FactorGrid& grid, const std::vector<TallyVariant
   solve_cells(
       grid, options,
       [&](const std::vector<int>& index, Terms& terms) {
+        WeightedRows rows;
         for (const TallyVariant& v : variants)
-          add_variant(v, index, 1.0 / double(variants.size()), terms);
+          add_variant(v, index, 1.0 / double(variants.size()), rows, terms);
+        add_gram(rows, terms);
       },
       &s);
   for (const TallyVariant& v : variants) {
