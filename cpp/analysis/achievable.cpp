@@ -188,9 +188,9 @@ Eigen::VectorXd projected_gradient(const Quadratic<Matrix>& q, const FloorOption
 // The free cells' normal equations solved, the others held at x. Dense:
 // Eigen's LDLT, whose pivoting also solves the semidefinite systems of a
 // floor without a prior (fewer lit bins than cells). Sparse: a simplicial
-// LDLT, for the prior's definite systems.
+// LDLT without a prior, conjugate gradients with one.
 Eigen::VectorXd solve_free(const Quadratic<Eigen::MatrixXd>& q, const Eigen::VectorXd& x,
-                           const std::vector<Eigen::Index>& free) {
+                           const std::vector<Eigen::Index>& free, const FloorOptions&) {
   const Eigen::Index m = static_cast<Eigen::Index>(free.size());
   Eigen::MatrixXd hff(m, m);
   Eigen::VectorXd rhs(m);
@@ -201,8 +201,13 @@ Eigen::VectorXd solve_free(const Quadratic<Eigen::MatrixXd>& q, const Eigen::Vec
   return hff.ldlt().solve(rhs);
 }
 
+// The sparse solve's relative residual and its most iterations.
+constexpr double kSparseTolerance = 1e-10;
+constexpr int kSparseIterations = 200;
+
 Eigen::VectorXd solve_free(const Quadratic<Eigen::SparseMatrix<double>>& q,
-                           const Eigen::VectorXd& x, const std::vector<Eigen::Index>& free) {
+                           const Eigen::VectorXd& x, const std::vector<Eigen::Index>& free,
+                           const FloorOptions& o) {
   const Eigen::Index m = static_cast<Eigen::Index>(free.size());
   std::vector<Eigen::Index> position(static_cast<std::size_t>(x.size()), -1);
   Eigen::VectorXd held = x;
@@ -213,14 +218,41 @@ Eigen::VectorXd solve_free(const Quadratic<Eigen::SparseMatrix<double>>& q,
       if (position[std::size_t(it.row())] >= 0 && position[std::size_t(it.col())] >= 0)
         terms.emplace_back(position[std::size_t(it.row())], position[std::size_t(it.col())],
                            it.value());
+  // Without a prior the free cells' system can be semidefinite (cells
+  // that the same pixels always light together): a proximal term
+  // delta |x_f - x|^2, delta a 1e-9 of the mean diagonal, makes it definite
+  // and leaves x where the data do not decide, moving the objective by
+  // delta times the step's squared length.
+  double delta = 0.0;
+  if (o.smoothness <= 0.0) {
+    for (const auto& t : terms)
+      if (t.row() == t.col()) delta += t.value();
+    delta *= 1e-9 / double(std::max<Eigen::Index>(1, m));
+    for (Eigen::Index a = 0; a < m; ++a) terms.emplace_back(a, a, delta);
+  }
   Eigen::SparseMatrix<double> hff(m, m);
   hff.setFromTriplets(terms.begin(), terms.end());
   const Eigen::VectorXd pushed = q.h * held;
   Eigen::VectorXd rhs(m);
-  for (Eigen::Index a = 0; a < m; ++a) rhs[a] = q.f[free[a]] - pushed[free[a]];
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(hff);
-  if (ldlt.info() != Eigen::Success) return x(free);  // not definite: leave x as it is
-  return ldlt.solve(rhs);
+  for (Eigen::Index a = 0; a < m; ++a) rhs[a] = q.f[free[a]] - pushed[free[a]] + delta * x[free[a]];
+  if (o.smoothness <= 0.0) {
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(hff);
+    if (ldlt.info() != Eigen::Success) return x(free);  // not definite: leave x as it is
+    return ldlt.solve(rhs);
+  }
+  // With a prior every cell is a variable, coupled to its neighbours along
+  // each axis: a complete factor of a grid with a third input fills in, so
+  // conjugate gradients from x, preconditioned by an incomplete Cholesky
+  // factor. The lit cells of a floor without one couple more sparsely and
+  // factor faster than they iterate.
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper,
+                           Eigen::IncompleteCholesky<double>>
+      cg;
+  cg.setTolerance(kSparseTolerance);
+  cg.setMaxIterations(kSparseIterations);
+  cg.compute(hff);
+  if (cg.info() != Eigen::Success) return x(free);  // no preconditioner: leave x as it is
+  return cg.solveWithGuess(rhs, Eigen::VectorXd(x(free)));
 }
 
 constexpr int kSparseActiveSetRounds = 8;
@@ -249,7 +281,7 @@ Eigen::VectorXd active_set(const Quadratic<Matrix>& q, Eigen::VectorXd x, const 
       if (!low && !high) free.push_back(i);
     }
     if (free.empty()) break;
-    const Eigen::VectorXd solved = solve_free(q, x, free);
+    const Eigen::VectorXd solved = solve_free(q, x, free, o);
     const Eigen::VectorXd before = x;
     for (std::size_t a = 0; a < free.size(); ++a) x[free[a]] = solved[Eigen::Index(a)];
     x = clamp(x, o);
@@ -261,7 +293,7 @@ Eigen::VectorXd active_set(const Quadratic<Matrix>& q, Eigen::VectorXd x, const 
 }
 
 bool sparse_solve(const FloorOptions& options, int variables) {
-  return options.smoothness > 0.0 && variables > options.dense_variables;
+  return variables > options.dense_variables;
 }
 
 // The bounded minimum of q (FloorSolution's iterations, KKT residual).
@@ -389,32 +421,27 @@ void solve_cells(const FactorGrid& grid, const FloorOptions& options, AddRows&& 
     if (index[c] >= 0) s->g[static_cast<std::size_t>(c)] = x[index[c]];
 }
 
-// The mean over pixel rows of the squared error, as Terms. A pixel's row
-// holds a few cells, but 10^4 rows of them would list 10^6 triplets: they
-// are summed into a dense h of the variables first.
+// The mean over pixel rows of the squared error, as Terms: each covered
+// pixel a row of equal weight, summed once as the profile bins are.
 void add_pixel_rows(const PixelRows& rows, const std::vector<int>& index, Terms& q) {
-  const Eigen::Index n = q.f.size();
-  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
+  WeightedRows weighted;
   const double w = 1.0 / double(rows.rows());
-  std::vector<std::pair<int, double>> a;
   for (std::size_t r = 0; r < rows.rows(); ++r) {
+    const int row = static_cast<int>(r);
     double y = rows.target[r];
-    a.clear();
+    const std::size_t first = weighted.a.size();
     for (std::uint32_t e = rows.offsets[r]; e < rows.offsets[r + 1]; ++e) {
       const int i = index[static_cast<std::size_t>(rows.cells[e])];
       if (i < 0)
         y -= rows.light[e];  // a fixed cell: G = 1
       else
-        a.push_back({i, rows.light[e]});
+        weighted.a.emplace_back(row, i, rows.light[e]);
     }
-    for (const auto& [i, ai] : a) {
-      q.f[i] += w * ai * y;
-      for (const auto& [j, aj] : a) h(i, j) += w * ai * aj;
-    }
+    for (std::size_t e = first; e < weighted.a.size(); ++e)
+      q.f[weighted.a[e].col()] += w * weighted.a[e].value() * y;
+    weighted.w.push_back(w);
   }
-  for (Eigen::Index j = 0; j < n; ++j)
-    for (Eigen::Index i = 0; i < n; ++i)
-      if (h(i, j) != 0.0) q.h.emplace_back(int(i), int(j), h(i, j));
+  add_gram(weighted, q);
 }
 
 }  // namespace

@@ -94,14 +94,14 @@ struct FloorOptions {
   double smoothness = 0.0;
   double ridge = 1e-9;
   int max_iterations = 5000;
-  // Above this many variables a smoothed solve (smoothness > 0, every cell
-  // a variable) works on a sparse h: profile bins couple only cells of
-  // neighbouring light angles and the prior only neighbours, so a grid
-  // with a third input keeps h about 1 % full, where a dense factorisation
-  // of its thousands of cells takes a minute. Up to it, and for every solve
-  // without a prior (the lit cells alone, whose system can be
-  // semidefinite), h is dense. Both reach the same minimum within the
-  // solver's tolerance (tested).
+  // Above this many variables the solve works on a sparse h: profile bins
+  // couple only cells of neighbouring light angles, a pixel only the cells
+  // its samples reach, and the prior only neighbours, so a grid with a
+  // third input keeps h about 1 % full, where a dense factorisation of its
+  // thousands of cells takes a minute. A sparse solve without a prior (the
+  // lit cells alone, whose system can be semidefinite) adds a vanishing
+  // proximal term to each factorisation. Up to this many, h is dense. Both
+  // reach the same minimum within the solver's tolerance (tested).
   int dense_variables = 1024;
 };
 

@@ -20,6 +20,7 @@ namespace {
 struct FitArgs {
   std::string folder, output;
   std::string inputs = kFitInputSets[0];
+  std::vector<std::string> steps;  // AXIS=DEGREES (with_steps)
   int resamples = 2000;
   std::vector<double> smoothness = FitOptions().smoothness;
   std::vector<std::string> emit;  // languages (factor_emit.h)
@@ -160,7 +161,11 @@ int fit_into(const FitArgs& a, const CommandContext& c) {
   options.folder = a.folder;
   options.resamples = a.resamples;
   options.smoothness = a.smoothness;
-  options.grid = fit_grid(a.inputs);
+  try {
+    options.grid = with_steps(fit_grid(a.inputs), a.steps);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--step: ") + e.what());
+  }
   options.jobs = c.parallelism.threads();
   const auto start = std::chrono::steady_clock::now();
   options.progress = [&c, start](const std::string& line) {
@@ -223,6 +228,11 @@ Command add_fit_command(CLI::App& app, SharedOptions&) {
           },
           "SET"))
       ->capture_default_str();
+  cmd->add_option("--step", a->steps,
+                  "resize the cells of an axis of the input set's grid, AXIS=DEGREES "
+                  "(comma-separated; for example shading=6,view=15); the step must divide the "
+                  "axis' range")
+      ->delimiter(',');
   cmd->add_option("--emit", a->emit,
                   "also write the fitted table as a function a renderer can paste: "
                   "OUT/fitted.c, .glsl or .osl (repeatable)")

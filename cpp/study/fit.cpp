@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <exception>
 #include <fstream>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <random>
 #include <set>
@@ -56,6 +58,38 @@ FactorGrid fit_grid(const std::string& inputs) {
       "expected light,deviation, light,deviation,shading or "
       "light,deviation,shading,view as the inputs, got " +
       inputs);
+}
+
+FactorGrid with_steps(FactorGrid grid, const std::vector<std::string>& steps) {
+  for (const std::string& step : steps) {
+    const std::size_t eq = step.find('=');
+    const std::string name = step.substr(0, eq);
+    FactorAxis* axis = nullptr;
+    for (FactorAxis& a : grid.axes)
+      if (name == name_of<FactorInput>(kFactorInputNames, a.input)) axis = &a;
+    if (eq == std::string::npos || !axis)
+      throw std::invalid_argument(
+          fmt::format("expected AXIS=DEGREES with AXIS one of the grid's inputs ({}), got {}",
+                      grid_inputs(grid), step));
+    double degrees = 0.0;
+    try {
+      std::size_t used = 0;
+      degrees = std::stod(step.substr(eq + 1), &used);
+      if (used != step.size() - eq - 1) degrees = 0.0;
+    } catch (const std::exception&) {
+    }
+    const double range = axis->max_deg - axis->min_deg, cells = range / degrees;
+    if (!(degrees > 0.0) || std::abs(cells - std::round(cells)) > 1e-9 * cells)
+      throw std::invalid_argument(
+          fmt::format("expected {}'s step in degrees dividing its range [{:g}, {:g}), got {}", name,
+                      axis->min_deg, axis->max_deg, step.substr(eq + 1)));
+    axis->step_deg = degrees;
+  }
+  // Each variant's tally and the smoothed solves grow with the cells.
+  if (grid.cells() > kMaxFitCells)
+    throw std::invalid_argument(
+        fmt::format("expected at most {} cells in the grid, got {}", kMaxFitCells, grid.cells()));
+  return grid;
 }
 
 std::string grid_inputs(const FactorGrid& grid) {
@@ -647,7 +681,7 @@ void fit_nested_floors(const FitOptions& o, const std::vector<double>& none, Fit
 class FloorSolves {
  public:
   using Key = std::pair<std::vector<std::size_t>, double>;
-  FloorSolves(const FitResult& r, int jobs) : r_(r), jobs_(jobs) {}
+  FloorSolves(const FitResult& r, const FitOptions& o) : r_(r), o_(o), jobs_(jobs_of(o)) {}
 
   // Solves the keys not solved yet, `jobs` at a time.
   void solve(const std::vector<Key>& wanted) {
@@ -657,6 +691,8 @@ class FloorSolves {
         missing.push_back(k);
     std::vector<FloorSolution> out(missing.size());
     std::vector<std::exception_ptr> failed(missing.size());
+    std::atomic<std::size_t> done{0};
+    std::mutex say_one;
     run_parallel(jobs_, missing.size(), [&](std::size_t i) {
       try {
         FloorOptions options;
@@ -664,6 +700,12 @@ class FloorSolves {
         out[i] = solve_floor(r_.grid, data_of(r_.variants, missing[i].first), options);
       } catch (...) {
         failed[i] = std::current_exception();
+      }
+      // A fine grid's tables take minutes: a line each tenth of them.
+      const std::size_t n = ++done;
+      if (n * 10 / missing.size() != (n - 1) * 10 / missing.size()) {
+        const std::lock_guard<std::mutex> lock(say_one);
+        say(o_, fmt::format("  {} of {} smoothed tables solved", n, missing.size()));
       }
     });
     for (const std::exception_ptr& e : failed)
@@ -682,6 +724,7 @@ class FloorSolves {
 
  private:
   const FitResult& r_;
+  const FitOptions& o_;
   int jobs_;
   std::map<Key, FloorSolution> solved_;
 };
@@ -1326,7 +1369,7 @@ FitResult fit_study(const FitOptions& o) {
   for (const auto& [family, index] : families(r.variants))
     r.family_floors.push_back(floor_over(r, family, index, none, o));
   fit_shares(o, none, methods, &r);
-  FloorSolves solves(r, jobs_of(o));
+  FloorSolves solves(r, o);
   fit_held_out(o, none, methods, solves, &r);
   std::set<std::string> all_families;
   for (const FitVariant& v : r.variants) all_families.insert(v.family);

@@ -44,8 +44,8 @@ FactorGrid default_fit_grid();
 //   light,deviation               default_fit_grid()
 //   light,deviation,shading       light [20, 120) in 4-degree cells, deviation
 //                                 [0, 60) in 6, shading [0, 180) in 12
-//   light,deviation,shading,view  as above with light in 5-degree cells and
-//                                 view [0, 90) in 30
+//   light,deviation,shading,view  light in 5-degree cells, deviation in 10,
+//                                 shading in 15 and view [0, 90) in 45
 // The added axes are coarser so that the cells some variant can light stay
 // near the default grid's count (a point's shading angle lies within its
 // deviation of its light angle, so a third of the shading cells can be lit
@@ -56,6 +56,12 @@ inline constexpr const char* kFitInputSets[] = {"light,deviation", "light,deviat
                                                 "light,deviation,shading,view"};
 // The grid of one of kFitInputSets; std::invalid_argument for another set.
 FactorGrid fit_grid(const std::string& inputs);
+// `grid` with some axes' cells resized: each of `steps` is "AXIS=DEGREES"
+// (`fit --step shading=6`), AXIS one of the grid's inputs, DEGREES dividing
+// its range. std::invalid_argument naming what was expected otherwise.
+// At most kMaxFitCells cells in all.
+FactorGrid with_steps(FactorGrid grid, const std::vector<std::string>& steps);
+inline constexpr int kMaxFitCells = 100000;
 // The inputs of a grid, comma-separated in axis order ("light,deviation").
 std::string grid_inputs(const FactorGrid& grid);
 

@@ -259,6 +259,35 @@ TEST(ImageFloor, BoundsHoldAndNoOtherTableBeatsTheFloor) {
     EXPECT_GE(pixel_rmse(rows, others[k]), f.variant_rmse.front() * (1.0 - 1e-12)) << k;
 }
 
+// The sparse path of a floor without a prior, on a semidefinite problem:
+// cells 4 and 5 are always lit together in the same ratio, so only their
+// weighted sum is determined. The dense solve (LDLT with pivoting) and the
+// sparse one (a proximal term) reach the same RMSE, and the determined
+// combination, to the solvers' tolerance.
+TEST(ImageFloor, SparseAndDenseSolvesReachTheSameFloorOnASemidefiniteProblem) {
+  SyntheticImage s = synthetic_image(known_g(), 0.3, 10);
+  PixelTally t = s.tally;
+  t.offsets = {0}, t.cells.clear(), t.light.clear();
+  for (std::size_t p = 0; p + 1 < s.tally.offsets.size(); ++p) {
+    std::map<int, double> cells;
+    for (std::uint32_t e = s.tally.offsets[p]; e < s.tally.offsets[p + 1]; ++e)
+      cells[s.tally.cells[e] == 5 ? 6 : s.tally.cells[e]] += s.tally.light[e];
+    if (cells.count(4)) cells[4] *= 0.5, cells[5] = cells[4];
+    for (const auto& [c, light] : cells) t.cells.push_back(c), t.light.push_back(light);
+    t.offsets.push_back(std::uint32_t(t.cells.size()));
+  }
+  s.tally = t;
+  const PixelRows rows = pixel_rows(s.render, s.truth, s.tally, 1.0);
+  FloorOptions sparse;
+  sparse.dense_variables = 4;
+  const FloorSolution a = solve_image_floor(small_grid(), rows, sparse),
+                      b = solve_image_floor(small_grid(), rows);
+  EXPECT_GT(a.variant_rmse.front(), 0.0);
+  EXPECT_NEAR(a.variant_rmse.front(), b.variant_rmse.front(), 1e-9 * b.variant_rmse.front());
+  EXPECT_NEAR(a.g[4] + a.g[5], b.g[4] + b.g[5], 1e-6);
+  EXPECT_LT(a.kkt_residual, 1e-8);
+}
+
 TEST(FactorGrid, CellsCentresAndTheOutside) {
   const FactorGrid grid = small_grid();
   FactorInputs in;

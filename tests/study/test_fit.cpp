@@ -288,6 +288,23 @@ TEST(FitGrid, EachInputSetHasItsGridAndNoOtherSetIsTaken) {
   EXPECT_THROW(fit_grid("light,shading"), std::invalid_argument);
 }
 
+TEST(FitGrid, StepsResizeTheNamedAxesAndRefuseWhatDoesNotDivideTheirRange) {
+  const FactorGrid g = with_steps(fit_grid("light,deviation,shading"), {"shading=6", "light=2"});
+  EXPECT_EQ(g.axes[0].step_deg, 2.0);
+  EXPECT_EQ(g.axes[1].step_deg, fit_grid("light,deviation,shading").axes[1].step_deg);
+  EXPECT_EQ(g.axes[2].step_deg, 6.0);
+  EXPECT_EQ(g.cells(), 50 * 10 * 30);
+  for (const std::vector<std::string>& bad :
+       std::vector<std::vector<std::string>>{{"view=15"},       // not an axis of this set
+                                             {"shading"},       // no degrees
+                                             {"shading=7"},     // 180 / 7 is not whole
+                                             {"shading=-6"},    // not positive
+                                             {"shading=6deg"},  // not a number
+                                             {"light=0.25", "shading=1"}})  // 720,000 cells
+    EXPECT_THROW(with_steps(fit_grid("light,deviation,shading"), bad), std::invalid_argument)
+        << bad[0];
+}
+
 TEST_F(Fit, RefittingEstevez2019OnItsOwnTermRecoversItsConstant) {
   const FitResult r = fit(run_small_study("study"));
   for (const double k : {1.0 / 8.0, 0.3}) {
