@@ -99,9 +99,11 @@ struct FloorOptions {
   // its samples reach, and the prior only neighbours, so a grid with a
   // third input keeps h about 1 % full, where a dense factorisation of its
   // thousands of cells takes a minute. A sparse solve without a prior (the
-  // lit cells alone, whose system can be semidefinite) adds a vanishing
-  // proximal term to each factorisation. Up to this many, h is dense. Both
-  // reach the same minimum within the solver's tolerance (tested).
+  // lit cells alone, whose system can be semidefinite) factors with a
+  // vanishing proximal term; one with a prior iterates conjugate gradients,
+  // since a complete factor of its every cell fills in. Up to this many, h
+  // is dense. Both reach the same minimum within the solver's tolerance
+  // (tested).
   int dense_variables = 1024;
 };
 
