@@ -492,9 +492,9 @@ class SampleSink {
   virtual ~SampleSink() = default;
   virtual void add(const Material& m, const ShadingPoint& p, double irradiance, double value,
                    bool lit, int column) const = 0;
-  // Whether the sample's ShadingPoint should carry the height field's
-  // visibility though no pass reads it.
-  virtual bool wants_visibility() const { return false; }
+  // Whether a sample of pixel `column` of the row should carry the height
+  // field's visibility though no pass reads it.
+  virtual bool wants_visibility(int /*column*/) const { return false; }
 };
 
 // Where a tallied render (render_tallied) puts one pixel's unblocked light:
@@ -526,9 +526,10 @@ class TallySink final : public SampleSink {
     *rest_ += value - light;
     if (probing_) add_probes(m, p, irradiance, value);
   }
-  bool wants_visibility() const override { return probing_ && visibility_; }
+  bool wants_visibility(int /*column*/) const override { return probing_ && visibility_; }
   // Whether the probes are tried on the pixel whose samples come next.
   void probe_pixel(bool probe) { probing_ = probes_ && probe; }
+  bool probes_visibility() const { return visibility_; }
 
  private:
   // A factor method's sample is raw bump's with the light of its lobes
@@ -872,7 +873,7 @@ void SampleShader<Tracer>::shade(const Ray& ray, const SurfaceHit& hit, const Li
   });
   if (!sink) return;
   // A sink's probes read the visibility only where the light arrives.
-  if (!needs_visibility_ && lit_value > 0.0 && sink->wants_visibility()) {
+  if (!needs_visibility_ && lit_value > 0.0 && sink->wants_visibility(column)) {
     ShadingPoint point = p.point;
     point.visibility = visibility(hit, p.facing);
     sink->add(*material, point, p.light.irradiance, lit_value, true, column);
@@ -932,9 +933,14 @@ void SampleShader<Tracer>::shade_packed(const HitPacket& hits, const RayPacket& 
   const LightSample light = sample_light(scene_.light, p, {});  // a delta light (traces_packets)
   ShadingPoint point{n, n, ns, light.wi, wo};
   const double amplitude = scene_.height.amplitude;
-  if (needs_visibility_ && displaced_shading_ && amplitude != 0.0)
-    point.visibility =
-        height_field_visibility(scene_.height.function, backfacing ? -amplitude : amplitude, p, n);
+  // As visibility() for the hit (n is already turned, as -g.n there).
+  const auto field_visibility = [&] {
+    return displaced_shading_ && amplitude != 0.0
+               ? height_field_visibility(scene_.height.function,
+                                         backfacing ? -amplitude : amplitude, p, n)
+               : 1.0;
+  };
+  if (needs_visibility_) point.visibility = field_visibility();
   const SampleAngles angles{hits.theta[k], hits.deviation[k], hits.view[k]};
   bool counted = false;  // the packet traced the shadow ray; count it once, as shade() does
   double lit_value = 0.0;
@@ -942,7 +948,15 @@ void SampleShader<Tracer>::shade_packed(const HitPacket& hits, const RayPacket& 
     if (!counted) ++*shadow_rays, counted = true;
     if (hits.blocked[k] == 0.0) sums[pass].radiance += value, lit_value = value;
   });
-  if (sink) sink->add(material, point, light.irradiance, lit_value, lit_value > 0.0, column);
+  if (!sink) return;
+  // As shade(): a sink's probes read the visibility only where the light arrives.
+  if (!needs_visibility_ && lit_value > 0.0 && sink->wants_visibility(column)) {
+    ShadingPoint probed = point;
+    probed.visibility = field_visibility();
+    sink->add(material, probed, light.irradiance, lit_value, true, column);
+    return;
+  }
+  sink->add(material, point, light.irradiance, lit_value, lit_value > 0.0, column);
 }
 
 // Whether render_image traces its camera rays in packets (core/ray_packet.h):
@@ -1248,6 +1262,60 @@ struct TallyRequest {
   }
 };
 
+// The tally of one row rendered through packets (PacketRows). Its pixels'
+// samples arrive one pixel after the other, each pixel's in the scalar
+// path's order, so a pixel is stored when a later pixel's first sample
+// arrives (or the row ends): the same sums as the scalar path's.
+class RowTallySink final : public SampleSink {
+ public:
+  struct Buffers {  // a thread's: the current pixel's tally
+    std::vector<std::pair<int, double>>* entries;
+    double* rest;
+    std::vector<double>* probe_sums;
+  };
+  RowTallySink(TallySink* sink, TallyRequest* tally, Buffers buffers, std::uint64_t first_pixel,
+               int width, double inv_spp)
+      : sink_(sink),
+        tally_(tally),
+        buffers_(buffers),
+        first_pixel_(first_pixel),
+        width_(width),
+        inv_spp_(inv_spp) {}
+  void add(const Material& m, const ShadingPoint& p, double irradiance, double value, bool lit,
+           int column) const override {
+    advance(column);
+    sink_->add(m, p, irradiance, value, lit, column);
+  }
+  bool wants_visibility(int column) const override {
+    return sink_->probes_visibility() && tally_->probes_pixel(first_pixel_ + std::uint64_t(column));
+  }
+  // Stores the pixels that are left (after the row's last sample).
+  void finish() const { advance(width_); }
+
+ private:
+  // Stores pixels [column_, column) and starts pixel `column`.
+  void advance(int column) const {
+    while (column_ < column) {
+      if (column_ >= 0)
+        tally_->store(first_pixel_ + std::uint64_t(column_), *buffers_.entries, *buffers_.rest,
+                      *buffers_.probe_sums, inv_spp_);
+      if (++column_ == width_) break;
+      buffers_.entries->clear();
+      *buffers_.rest = 0.0;
+      std::fill(buffers_.probe_sums->begin(), buffers_.probe_sums->end(), 0.0);
+      sink_->probe_pixel(tally_->probes_pixel(first_pixel_ + std::uint64_t(column_)));
+    }
+  }
+
+  TallySink* sink_;
+  TallyRequest* tally_;
+  Buffers buffers_;
+  std::uint64_t first_pixel_;
+  int width_;
+  double inv_spp_;
+  mutable int column_ = -1;  // the pixel whose samples come in; -1: none yet
+};
+
 // A user method's pass while it renders (render_user_passes): the samples
 // of rows [first_row, first_row + rows.size()), a SampleRecords per row.
 struct RecordRequest {
@@ -1286,9 +1354,9 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
   if ((options.resume || options.sums) && (sinks || !std::is_same_v<Tracer, MeshTracer>))
     throw std::invalid_argument("render: only displacement truths resume or keep their sums");
   const PixelSumsIo sums_io(camera, options, pass_count);
-  // A user method's recording goes through packets too (PacketRows): its
-  // samples come in the scalar path's order.
-  const bool packets = !tally && traces_packets(scene, shader, passes, options);
+  // A user method's recording and a tally go through packets too
+  // (PacketRows): their samples come in the scalar path's order.
+  const bool packets = traces_packets(scene, shader, passes, options);
   const PacketSetup setup = packet_setup(scene, tracer);
 
   std::atomic<int> rows_done{0};
@@ -1317,7 +1385,12 @@ void render_image(const Scene& scene, const Tracer& tracer, const RenderOptions&
             recorded->rest.assign(std::size_t(width), 0.0);
             record_sink.emplace(*record->pass, record->vectors, recorded);
           }
-          if (packet_rows) {
+          if (packet_rows && tally_sink) {
+            const RowTallySink row(&*tally_sink, tally, {&entries, &rest, &probe_sums},
+                                   std::uint64_t(j) * width, width, inv_spp);
+            packet_rows->render_row(j, &local_shadow_rays, &row);
+            row.finish();
+          } else if (packet_rows) {
             packet_rows->render_row(j, &local_shadow_rays, record_sink ? &*record_sink : nullptr);
           } else {
             const SampleSink* sink = tally_sink    ? static_cast<const SampleSink*>(&*tally_sink)

@@ -120,9 +120,10 @@ std::vector<Image> render_lightings(const std::vector<Scene>& scenes,
 // tallied per pixel by the cell of `grid` each sample's angles fall in
 // (core/factor_table.h, PixelTally): what any factor table on that grid
 // would make of each pixel, for the achievable floor (analysis/
-// achievable.h). Traces on the scalar path (no packets), which gives the
-// same bits. std::invalid_argument unless scene.terminator is `none` with
-// no normal adjustment on a bump or smooth render.
+// achievable.h). Traces in packets where render() would (options.packets
+// false forces the scalar path); both give the same image and tally to the
+// bit. std::invalid_argument unless scene.terminator is `none` with no
+// normal adjustment on a bump or smooth render.
 //
 // With `probes`, each of its families of factors is also tried on every
 // sample as it is tallied (FactorProbe): what a factor method would render

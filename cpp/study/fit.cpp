@@ -18,6 +18,8 @@
 #include <tuple>
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
 #include <nlohmann/json.hpp>
 
 #include "analysis/metrics.h"
@@ -214,19 +216,25 @@ std::vector<std::size_t> all_of(std::size_t n) {
 // Percentile-bootstrap intervals over a set of variants of N statistics
 // computed together: `statistics` is given the indices of one resample and
 // returns std::array<double, N>. nullopt for a statistic with no finite draw.
+// The resamples are drawn in order from one stream and their statistics
+// computed in parallel, each into its place (a fitted constant's is a
+// search): the bits of a serial loop. `statistics` must be thread-safe.
 template <std::size_t N, typename Statistics>
 std::array<std::optional<Interval>, N> bootstrap_intervals(const std::vector<std::size_t>& index,
                                                            int resamples, std::uint64_t seed,
                                                            Statistics&& statistics) {
   std::mt19937_64 rng(seed);
-  std::array<std::vector<double>, N> draws;
-  std::vector<std::size_t> sample(index.size());
-  for (int r = 0; r < resamples; ++r) {
+  std::vector<std::vector<std::size_t>> samples(std::size_t(std::max(resamples, 0)),
+                                                std::vector<std::size_t>(index.size()));
+  for (std::vector<std::size_t>& sample : samples)
     for (std::size_t& s : sample) s = index[uniform_index(rng, index.size())];
-    const std::array<double, N> d = statistics(sample);
+  std::vector<std::array<double, N>> values(samples.size());
+  tbb::parallel_for(std::size_t(0), samples.size(),
+                    [&](std::size_t r) { values[r] = statistics(samples[r]); });
+  std::array<std::vector<double>, N> draws;
+  for (const std::array<double, N>& d : values)
     for (std::size_t n = 0; n < N; ++n)
       if (std::isfinite(d[n])) draws[n].push_back(d[n]);
-  }
   std::array<std::optional<Interval>, N> intervals;
   for (std::size_t n = 0; n < N; ++n) {
     if (draws[n].empty()) continue;
@@ -459,11 +467,11 @@ class Deshmukh2020Search {
         cos_end_(std::cos(radians(grid.axes[1].max_deg))) {
     n_ = int(std::floor(90.0 / step_ + 1e-9));
     coarse_.resize(std::size_t(n_) * std::size_t(n_));
-    for (int i = 0; i < n_; ++i)
-      for (int j = 0; j < n_; ++j) {
-        const std::vector<double> g = deshmukh2020_table(grid_, constants(node(i), node(j)));
-        for (const TallyVariant* v : variants_) coarse(i, j).push_back(squared(tally_rmse(*v, g)));
-      }
+    tbb::parallel_for(0, n_ * n_, [&](int node_index) {
+      const int i = node_index / n_, j = node_index % n_;
+      const std::vector<double> g = deshmukh2020_table(grid_, constants(node(i), node(j)));
+      for (const TallyVariant* v : variants_) coarse(i, j).push_back(squared(tally_rmse(*v, g)));
+    });
   }
 
   // Where `c` lies on the edge of the search's range (within 1e-3 degrees):
@@ -560,7 +568,16 @@ int jobs_of(const FitOptions& o) {
 void solve_image_floors(const FitOptions& o, const std::vector<PixelRows>& rows, FitResult* r) {
   say(o, fmt::format("image RMSE: each of {} variants' own floor", rows.size()));
   std::vector<std::string> failed(rows.size());
-  run_parallel(jobs_of(o), rows.size(), [&](std::size_t k) {
+  // Largest first, so that no core is left with a large one at the end: a
+  // solve's steps cost about the square of the cells its variant lights.
+  std::vector<std::size_t> order = all_of(rows.size());
+  std::vector<std::size_t> lit(rows.size());
+  for (std::size_t k = 0; k < rows.size(); ++k)
+    lit[k] = std::set<int>(rows[k].cells.begin(), rows[k].cells.end()).size();
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return lit[a] > lit[b]; });
+  run_parallel(jobs_of(o), rows.size(), [&](std::size_t t) {
+    const std::size_t k = order[t];
     try {
       const FloorSolution image = solve_image_floor(o.grid, rows[k]);
       r->variants[k].image_floor = image.variant_rmse.front();

@@ -266,6 +266,59 @@ TEST(Tally, ProbesRenderWhatTheirMethodRenders) {
   EXPECT_GT(darker, 50);  // the factors act: not raw bump in disguise
 }
 
+// The tally through packets (PacketRows), where a packet runs on across
+// pixels, is the scalar path's to the bit: each pixel's cells, light and
+// rest, and every probe's radiance, with a probe that reads the height
+// field's visibility on some pixels only. Otherwise the fit's tallies
+// would depend on whether the machine traced in packets.
+TEST(Tally, PacketsAndTheScalarPathTallyTheSameBits) {
+  for (const std::vector<std::string>& sets :
+       {std::vector<std::string>{"/camera/width=24", "/camera/height=20", "/camera/spp=9",
+                                 "/material/specular={\"weight\": 0.4, \"roughness\": 0.3}",
+                                 "/terminator/lobes=\"diffuse\""},
+        std::vector<std::string>{"/camera/width=30", "/camera/height=16", "/camera/spp=4",
+                                 "/light/direction=[-1, 0, 0.4]"}}) {
+    for (const char* file : {"sphere-weave.json", "cylinder-grating.json"}) {
+      const Scene bump = scene_with(file, sets);
+      const auto probed = [&](bool packets, RenderStats* stats, TallyProbes* probes) {
+        probes->probes.push_back(
+            {Lobes::kDiffuse, false, 2, [](const ShadingPoint& p, double* out) {
+               out[0] = shading_offset(0.2, p.ns, p.wi);
+               out[1] = shading_offset(0.7, p.ns, p.wi);
+             }});
+        probes->probes.push_back({Lobes::kAll, true, 1, [](const ShadingPoint& p, double* out) {
+                                    out[0] =
+                                        microshadow_chan2018(dot(p.ns, p.wi), p.visibility, 2.0);
+                                  }});
+        probes->pixels.assign(std::size_t(bump.camera.width * bump.camera.height), 0);
+        for (std::size_t p = 0; p < probes->pixels.size(); p += 3) probes->pixels[p] = 1;
+        RenderOptions options;
+        options.packets = packets;
+        PixelTally tally;
+        const Image image =
+            render_tallied(bump, light_deviation_grid(1.0), &tally, options, stats, probes);
+        return std::make_pair(image, tally);
+      };
+      RenderStats packet_stats, scalar_stats;
+      TallyProbes packet_probes, scalar_probes;
+      const auto [packet_image, packet_tally] = probed(true, &packet_stats, &packet_probes);
+      const auto [scalar_image, scalar_tally] = probed(false, &scalar_stats, &scalar_probes);
+      ASSERT_TRUE(packet_stats.packets) << file << ": the packet path was not taken";
+      ASSERT_FALSE(scalar_stats.packets) << file;
+      EXPECT_EQ(packet_image.pixels, scalar_image.pixels) << file;
+      EXPECT_EQ(packet_tally.offsets, scalar_tally.offsets) << file;
+      EXPECT_EQ(packet_tally.cells, scalar_tally.cells) << file;
+      EXPECT_EQ(packet_tally.light, scalar_tally.light) << file;
+      EXPECT_EQ(packet_tally.rest, scalar_tally.rest) << file;
+      ASSERT_EQ(packet_probes.radiance.size(), 2u);
+      EXPECT_EQ(packet_probes.radiance, scalar_probes.radiance) << file;
+      int probed_lit = 0;
+      for (double r : packet_probes.radiance[1]) probed_lit += r > 0.0;
+      EXPECT_GT(probed_lit, 20) << file << ": too few probed pixels lit to test anything";
+    }
+  }
+}
+
 TEST(Tally, RefusesAnythingButRawBump) {
   Scene scene = scene_with("sphere-grating.json", {"/camera/width=8", "/camera/height=8"});
   scene.terminator.method.method = TerminatorMethod::kChiang2019;
