@@ -62,9 +62,12 @@ def lines_figure(name, title, lp, series, panels, style, figdir):
     (paths, [(panel name, log y?, zeros on a floor?)])."""
     xs = np.array([num(t) for t in lp.levels]) if lp.numeric else \
         np.arange(len(lp.levels), dtype=float)
+    # Tall enough for the legend beside the panels (a fifth of an inch per
+    # line): a study with many offset values would otherwise squash them.
     fig, axs = plt.subplots(1, len(panels), squeeze=False,
                             layout='constrained',
-                            figsize=(4.3 * len(panels) + 2.4, 4.1))
+                            figsize=(4.3 * len(panels) + 2.4,
+                                     max(4.1, 1.2 + 0.2 * len(series))))
     floors = []
     for ax, (metric, pname, unit, scale) in zip(axs[0], panels):
         ys = {k: s[metric] * scale for k, s in series.items()}
