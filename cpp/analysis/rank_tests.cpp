@@ -89,7 +89,8 @@ LevelTest level_permutation_test(const std::vector<double>& y, const std::vector
   }
   std::vector<std::vector<double>> cells;
   for (const auto& [b, row] : rows)
-    if (!broken[b] && std::all_of(row.begin(), row.end(), [](double v) { return std::isfinite(v); }))
+    if (!broken[b] &&
+        std::all_of(row.begin(), row.end(), [](double v) { return std::isfinite(v); }))
       cells.push_back(row);
   t.blocks = cells.size();
   if (levels < 2 || cells.size() < 2) return t;

@@ -121,7 +121,7 @@ void add_agreement(const Plan& plan, const Measurer& measure, std::size_t i, Com
       ref = static_cast<long>(k);
   if (ref < 0 || !measure.renders.done[ref]) return;
   const Measurement m = measure(i, static_cast<std::size_t>(ref), radiance_scale(job.scene()),
-                                      ComparisonExtent::kProfileOnly);
+                                ComparisonExtent::kProfileOnly);
   AgreementRow row;
   row.variant = job.variant, row.job = i, row.reference_job = static_cast<std::size_t>(ref);
   row.renderer = job.renderer;

@@ -182,8 +182,9 @@ void assign_groups(RankingStatistics& s, const std::map<std::string, Values>& co
   }
   // A group holds every method not separated from its leader, wherever its
   // mean falls: listed by group, then by mean.
-  std::stable_sort(s.methods.begin(), s.methods.end(),
-                   [](const MethodStatistics& a, const MethodStatistics& b) { return a.rank < b.rank; });
+  std::stable_sort(
+      s.methods.begin(), s.methods.end(),
+      [](const MethodStatistics& a, const MethodStatistics& b) { return a.rank < b.rank; });
 }
 
 }  // namespace

@@ -68,7 +68,7 @@ struct MethodStatistics {
   std::string method;    // label
   std::string rejected;  // why the literature rejects it, "" if not
   std::size_t variants = 0;
-  double combined = 0.0;  // mean C over variants
+  double combined = 0.0;       // mean C over variants
   Interval combined_interval;  // at the ranking's confidence
   // 1 - mean(E / E_none): the fraction of raw bump's error removed (negative:
   // added), with wins = variants where E < E_none.
@@ -104,9 +104,9 @@ struct RankingStatistics {
   std::string scene;  // "" for all variants
   std::size_t variants = 0;
   double confidence = kRankingFamilyConfidence;  // of each interval of C (simultaneous)
-  std::vector<MethodStatistics> methods;  // by rank, `none` included
-  std::vector<PairStatistics> pairs;      // every pair; overall ranking only
-  std::vector<std::string> headline;      // findings in sentences, from the numbers above
+  std::vector<MethodStatistics> methods;         // by rank, `none` included
+  std::vector<PairStatistics> pairs;             // every pair; overall ranking only
+  std::vector<std::string> headline;             // findings in sentences, from the numbers above
   const MethodStatistics* find(const std::string& method) const;
 };
 

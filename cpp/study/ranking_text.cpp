@@ -56,7 +56,8 @@ std::string versus_none(const MethodStatistics& m, double confidence) {
       named(m.method, m.rejected), lowers ? "lowers" : "raises",
       percent(std::abs(m.terminator_improvement)),
       percent_interval(lowers ? i : Interval{-i.high, -i.low}), interval_kind(confidence),
-      m.terminator.a_better, m.terminator.n, i.contains(0.0) ? "; its interval contains 0: a tie" : "");
+      m.terminator.a_better, m.terminator.n,
+      i.contains(0.0) ? "; its interval contains 0: a tie" : "");
 }
 
 // Which methods are darker than the truth where the viewer looks edge-on.
@@ -178,15 +179,14 @@ std::string dependence_sentence(const StudyStatistics& s, const AxisStatistics& 
   const MethodStatistics& b = *best->ranking.find(i.method);
   const MethodStatistics& w = *worst->ranking.find(i.method);
   const MethodStatistics& all = *s.overall.find(i.method);
-  const std::string test =
-      fmt::format("interaction {}, Holm-adjusted over {} tests", p_text(i.p_holm),
-                  s.by_axis.size() * a.interactions.size());
+  const std::string test = fmt::format("interaction {}, Holm-adjusted over {} tests",
+                                       p_text(i.p_holm), s.by_axis.size() * a.interactions.size());
   if (verdict(b) == Verdict::kHelps && verdict(w) == Verdict::kHurts)
     return fmt::format(
         "{} helps {} ({} of raw bump's error) and hurts {} ({}): its effect depends on the {} "
         "({}); over all variants it is {}, rank group {}.",
-        i.method, at_level(a, *best), share(b), at_level(a, *worst), share(w), short_label(a),
-        test, share(all), all.rank);
+        i.method, at_level(a, *best), share(b), at_level(a, *worst), share(w), short_label(a), test,
+        share(all), all.rank);
   const char* words[] = {"helps", "ties with raw bump", "hurts"};
   return fmt::format(
       "{}'s effect depends on the {} ({}): {} of raw bump's error {} ({}) against {} {} ({}).",
@@ -255,8 +255,7 @@ std::string leaders_sentence(const StudyStatistics& s) {
     if (it == axis->interactions.end() || !it->depends || clauses.size() == 3) continue;
     const auto [best, worst] = extreme_levels(*axis, m);
     const MethodStatistics &b = *best->ranking.find(m), &w = *worst->ranking.find(m);
-    clauses.push_back(fmt::format("{} {} {} ({}), {} {} ({})", m,
-                                  share(b), at_level(*axis, *best),
+    clauses.push_back(fmt::format("{} {} {} ({}), {} {} ({})", m, share(b), at_level(*axis, *best),
                                   words[static_cast<int>(verdict(b))], share(w),
                                   at_level(*axis, *worst), words[static_cast<int>(verdict(w))]));
   }
@@ -286,9 +285,9 @@ std::string leader_change_sentence(const StudyStatistics& s) {
       const MethodStatistics& lead = l.ranking.methods.front();
       changes |= !first.empty() && lead.method != first;
       if (first.empty()) first = lead.method;
-      parts.push_back(fmt::format("{} {} ({}{})", lead.method, at_level(a, l), share(lead),
-                                  verdict(lead) == Verdict::kHelps ? ""
-                                                                   : ": no better than raw bump"));
+      parts.push_back(
+          fmt::format("{} {} ({}{})", lead.method, at_level(a, l), share(lead),
+                      verdict(lead) == Verdict::kHelps ? "" : ": no better than raw bump"));
     }
     if (changes)
       return fmt::format("The closest method changes with the {}: {}.", short_label(a),

@@ -306,8 +306,9 @@ std::string axis_cell(const json& v, AxisKind kind, std::size_t component) {
 json axis_id_or_value(const StudyAxis& axis, const json& v, AxisKind kind) {
   if (kind != AxisKind::kId) return v;
   const auto it = std::find(axis.values.begin(), axis.values.end(), v);
-  return it == axis.values.end() ? v
-                                 : json(axis_value_ids(axis)[std::size_t(it - axis.values.begin())]);
+  return it == axis.values.end()
+             ? v
+             : json(axis_value_ids(axis)[std::size_t(it - axis.values.begin())]);
 }
 
 // One column per axis (per component of a vector axis), named after its
@@ -328,10 +329,10 @@ Columns axis_columns(const std::vector<StudyAxis>& axes, const Columns& others) 
       base += "_axis";
     for (std::size_t k = 0; k < suffixes.size(); ++k) {
       taken.insert(base + suffixes[k]);
-      out.push_back({base + suffixes[k], [i, k, kind = layout.kind, axis = axes[i]](const CsvRow& r) {
-                       return axis_cell(axis_id_or_value(axis, r.variant.axis_values[i], kind), kind,
-                                        k);
-                     }});
+      out.push_back(
+          {base + suffixes[k], [i, k, kind = layout.kind, axis = axes[i]](const CsvRow& r) {
+             return axis_cell(axis_id_or_value(axis, r.variant.axis_values[i], kind), kind, k);
+           }});
     }
   }
   return out;
@@ -360,7 +361,11 @@ std::vector<CsvRow> csv_rows(const ReportInputs& in, const Section& section) {
   for (const ComparisonRow& row : in.comparisons.rows) {
     const Variant& var = in.plan.variants[row.variant];
     if (var.section != section.kind) continue;
-    CsvRow r{in.study.name,         var, row, in.plan.jobs[row.job], in.plan.jobs[row.reference_job],
+    CsvRow r{in.study.name,
+             var,
+             row,
+             in.plan.jobs[row.job],
+             in.plan.jobs[row.reference_job],
              find_method(section, row.method)};
     const auto none = baseline.find(row.variant);
     if (section.kind == SectionKind::kBump && none != baseline.end() && none->second > 0.0 &&
@@ -758,8 +763,8 @@ json method_statistics_json(const MethodStatistics& m) {
           {"group_leader", m.group_leader},
           {"versus_leader",
            {{"mean_difference", value(m.versus_leader.n ? m.versus_leader.mean_difference : 0.0)},
-            {"ci", m.versus_leader.n ? interval_json(m.versus_leader.interval)
-                                     : json::array({0.0, 0.0})},
+            {"ci",
+             m.versus_leader.n ? interval_json(m.versus_leader.interval) : json::array({0.0, 0.0})},
             {"pairs", m.versus_leader.n}}},
           {"means", means_json(m)},
           {"rejected", m.rejected.empty() ? json() : json(m.rejected)},
@@ -872,38 +877,37 @@ json statistics_json(const ReportInputs& in) {
   const StudyStatistics s = study_statistics(in.plan, in.comparisons.rows, in.study.bump.axes);
   json per_scene = json::array();
   for (const RankingStatistics& r : s.per_scene) per_scene.push_back(ranking_statistics_json(r));
-  return {
-      {"definition",
-       "per variant v and method m, evaluator against its displacement ground truth, both as "
-       "fractions of albedo*E/pi: E_term = terminator-region profile RMSE (binned by the light "
-       "angle, [60, 100) deg); E_view = grazing-view RMSE (lit pixels, theta < 60 deg, binned "
-       "by the view angle, [60, 75) deg); combined relative error C = (E_term + E_view) / "
-       "(E_term(none) + E_view(none)), 1 for raw bump, lower is better; terminator improvement "
-       "= 1 - mean(E_term/E_term(none)); view_vs_none: paired E_view - E_view(none)"},
-      {"primary_metric",
-       {{"id", "combined_relative_error"},
-        {"name", "combined error relative to raw bump"},
-        {"unit", ranked_quantities().front().unit}}},
-      {"confidence", kRankingFamilyConfidence},
-      {"interval",
-       "percentile bootstrap over variants, seed 1: intervals of the combined error and of "
-       "paired differences at each ranking's confidence (95 % simultaneous over its K - 1 "
-       "comparisons, Bonferroni; 10,000 resamples, 20,000 for the rank groups' paired "
-       "differences); means of the other quantities at 95 %, 10,000 resamples"},
-      {"test",
-       fmt::format("rank groups by the rule below; interactions: permutation test of the "
-                   "variance of the level means of C, levels exchanged within matched variants "
-                   "(same scene and other axes), {} permutations, seed 1, Holm-adjusted over "
-                   "every method and axis; depends when p_holm < {}",
-                   kInteractionPermutations, kSignificance)},
-      {"rule", rank_rule_text(s.overall.methods.size())},
-      {"baseline", "none"},
-      {"reference", "evaluator:displacement"},
-      {"overall", ranking_statistics_json(s.overall)},
-      {"per_scene", per_scene},
-      {"by_axis", by_axis_json(s)},
-      {"headline", s.headline},
-      {"notes", s.notes}};
+  return {{"definition",
+           "per variant v and method m, evaluator against its displacement ground truth, both as "
+           "fractions of albedo*E/pi: E_term = terminator-region profile RMSE (binned by the light "
+           "angle, [60, 100) deg); E_view = grazing-view RMSE (lit pixels, theta < 60 deg, binned "
+           "by the view angle, [60, 75) deg); combined relative error C = (E_term + E_view) / "
+           "(E_term(none) + E_view(none)), 1 for raw bump, lower is better; terminator improvement "
+           "= 1 - mean(E_term/E_term(none)); view_vs_none: paired E_view - E_view(none)"},
+          {"primary_metric",
+           {{"id", "combined_relative_error"},
+            {"name", "combined error relative to raw bump"},
+            {"unit", ranked_quantities().front().unit}}},
+          {"confidence", kRankingFamilyConfidence},
+          {"interval",
+           "percentile bootstrap over variants, seed 1: intervals of the combined error and of "
+           "paired differences at each ranking's confidence (95 % simultaneous over its K - 1 "
+           "comparisons, Bonferroni; 10,000 resamples, 20,000 for the rank groups' paired "
+           "differences); means of the other quantities at 95 %, 10,000 resamples"},
+          {"test",
+           fmt::format("rank groups by the rule below; interactions: permutation test of the "
+                       "variance of the level means of C, levels exchanged within matched variants "
+                       "(same scene and other axes), {} permutations, seed 1, Holm-adjusted over "
+                       "every method and axis; depends when p_holm < {}",
+                       kInteractionPermutations, kSignificance)},
+          {"rule", rank_rule_text(s.overall.methods.size())},
+          {"baseline", "none"},
+          {"reference", "evaluator:displacement"},
+          {"overall", ranking_statistics_json(s.overall)},
+          {"per_scene", per_scene},
+          {"by_axis", by_axis_json(s)},
+          {"headline", s.headline},
+          {"notes", s.notes}};
 }
 
 json bump_ranking_json(const ReportInputs& in) {
@@ -989,8 +993,7 @@ json report_json(const ReportInputs& in) {
           // Absolute: the same study run as `study.json` or `./study.json`
           // gives the same report (and keeps its figures).
           {"study", {{"name", in.study.name}, {"file", in.study.absolute_file}}},
-          {"provenance",
-           provenance_json(collect_provenance(in.study.absolute_file, in.versions))},
+          {"provenance", provenance_json(collect_provenance(in.study.absolute_file, in.versions))},
           {"notices", in.study.notices},
           {"figures", {{"methods", in.study.figure_methods}}},
           {"units", units_json()},

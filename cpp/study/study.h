@@ -92,11 +92,11 @@ struct StudyRunStats {
   // Passes that rendered the displacement truths of several lights and
   // materials on one geometry (MethodBatches), and the renders they held.
   std::size_t truth_batches = 0, batched_truths = 0;
-  double fit_s = 0.0;         // penumbra fit's wall time in this run (0: kept, or nothing to fit)
+  double fit_s = 0.0;  // penumbra fit's wall time in this run (0: kept, or nothing to fit)
   // Wall seconds from the start to the end of the renders (truth checks
   // included), and of the figures and report.html (0: not drawn).
   double render_phase_s = 0.0, figures_s = 0.0;
-  int blender_processes = 0;  // Blender processes started; each serves many renders
+  int blender_processes = 0;             // Blender processes started; each serves many renders
   std::optional<SlurmSubmission> slurm;  // what a Slurm run submitted
   CostEstimate cost;                     // dry run: of the renders to do
   bool complete() const { return failed == 0 && not_started == 0; }

@@ -80,8 +80,8 @@ void interaction_tests(const Plan& plan, const std::vector<ComparisonRow>& rows,
                  std::vector<double> y;
                  std::vector<int> l, b;
                  for (std::size_t v = 0; v < plan.variants.size(); ++v)
-                   if (level[v] >= 0) y.push_back(combined[m][v]), l.push_back(level[v]),
-                                      b.push_back(block[v]);
+                   if (level[v] >= 0)
+                     y.push_back(combined[m][v]), l.push_back(level[v]), b.push_back(block[v]);
                  results[k] = level_permutation_test(y, l, b, kInteractionPermutations);
                });
   std::vector<double> p;
@@ -177,12 +177,11 @@ StudyStatistics study_statistics(const Plan& plan, const std::vector<ComparisonR
   StudyStatistics s;
   std::vector<RankingTask> tasks = ranking_tasks(plan, axes, s);
   // Each ranking draws from its own fixed seeds: the threads change no bit.
-  run_parallel(static_cast<int>(std::thread::hardware_concurrency()), tasks.size(),
-               [&](std::size_t k) {
-                 *tasks[k].out = ranking_statistics(plan, rows, tasks[k].selected,
-                                                    tasks[k].all_pairs);
-                 tasks[k].out->scene = tasks[k].scene;
-               });
+  run_parallel(
+      static_cast<int>(std::thread::hardware_concurrency()), tasks.size(), [&](std::size_t k) {
+        *tasks[k].out = ranking_statistics(plan, rows, tasks[k].selected, tasks[k].all_pairs);
+        tasks[k].out->scene = tasks[k].scene;
+      });
   if (s.overall.methods.empty()) return s;
   std::vector<std::string> methods;
   for (const MethodStatistics& m : s.overall.methods) methods.push_back(m.method);

@@ -49,7 +49,7 @@ TEST(RankGroups, AChainIsCutAtTheLeaderNotAtTheNeighbour) {
   for (std::size_t v = 0; v < n; ++v) {
     const double noise = v % 2 ? 0.02 : -0.02;
     a[v] = 1.0;
-    b[v] = 1.0 + 0.004 + noise;  // mean +0.004, spread 0.02: tied with a
+    b[v] = 1.0 + 0.004 + noise;       // mean +0.004, spread 0.02: tied with a
     c[v] = 1.0 + 0.03 + 0.2 * noise;  // +0.03 in every variant: separated from a
   }
   const std::vector<RankGroup> g = rank_groups({a, b, c}, 0.99);

@@ -67,8 +67,7 @@ TEST(Shade, Cycles50KeepsTheGlossyLobeAboveItsOwnNormal) {
   const Vec3 n_glossy = cycles_valid_specular_normal(kZ, p.wo, p.ns);
   ASSERT_LT(dot(p.ns, p.wi), 0.0);
   ASSERT_GT(dot(n_glossy, p.wi), 0.0);
-  const double glossy_only =
-      evaluate_lobes(m, n_glossy, p.wi, p.wo).specular * dot(n_glossy, p.wi);
+  const double glossy_only = evaluate_lobes(m, n_glossy, p.wi, p.wo).specular * dot(n_glossy, p.wi);
   ASSERT_GT(glossy_only, 0.0);
   const Shaded cycles50 = shade(settings_for(TerminatorMethod::kCycles50), m, p, nullptr);
   EXPECT_NEAR(cycles50.value, glossy_only, 1e-14);
@@ -85,8 +84,7 @@ TEST(Shade, Cycles50WithoutCorrectionDropsBothLobesAndNeverSoftens) {
   const Material m = glossy();
   const ShadingPoint p{kZ, kZ, in_plane(40.0 * kPi / 180.0), in_plane(-60.0 * kPi / 180.0),
                        in_plane(-88.0 * kPi / 180.0)};
-  EXPECT_EQ(shade(settings_for(TerminatorMethod::kCycles50NoCorrection), m, p, nullptr).value,
-            0.0);
+  EXPECT_EQ(shade(settings_for(TerminatorMethod::kCycles50NoCorrection), m, p, nullptr).value, 0.0);
   Pcg32 rng(52);
   int compared = 0;
   for (int i = 0; i < 20'000; ++i) {

@@ -158,9 +158,8 @@ TEST(LightVector, AnalysisThetaIsFreeOfTheLightSamplesNoise) {
                  "edge_v": [0, 2, 0], "radiance": 5})";
   auto with_seed = [&](int seed) {
     return render(sphere_grating_with({"/representation=smooth", "/camera/width=32",
-                                       "/camera/height=32", "/camera/spp=4",
-                                       "/camera/jitter=false", quad,
-                                       "/camera/seed=" + std::to_string(seed)}));
+                                       "/camera/height=32", "/camera/spp=4", "/camera/jitter=false",
+                                       quad, "/camera/seed=" + std::to_string(seed)}));
   };
   const Image a = with_seed(1), b = with_seed(2);
   const int alpha = 3, theta = 4;

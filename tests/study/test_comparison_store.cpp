@@ -26,8 +26,7 @@ class ComparisonStoreTest : public TempDirTest {};
 TEST_F(ComparisonStoreTest, GivesBackTheMeasuredMetricsBitForBit) {
   const Image bump = render_small_sphere("bump"), truth = render_small_sphere("displacement");
   const double scale = radiance_scale(load_scene(kSmallSphere));
-  const Measurement full =
-      measure_comparison(bump, truth, scale, ComparisonExtent::kFullShadows);
+  const Measurement full = measure_comparison(bump, truth, scale, ComparisonExtent::kFullShadows);
   ASSERT_TRUE(full.shadow.has_value());
   ASSERT_GT(full.profile.rmse_terminator, 0.0);  // a real difference, not two zeros
   const Measurement profile_only =

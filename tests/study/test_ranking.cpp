@@ -172,8 +172,8 @@ TEST(StudyStatistics, OneRuleDecidesEveryRankAndEveryVerdict) {
   // ranking's own confidence: the same intervals the groups use.
   const Sweep w = interaction_sweep();
   const StudyStatistics s = study_statistics(w.t.plan, w.t.rows, w.axes);
-  for (const RankingStatistics* r : {&s.overall, &s.by_axis[0].levels[0].ranking,
-                                     &s.by_axis[0].levels[1].ranking}) {
+  for (const RankingStatistics* r :
+       {&s.overall, &s.by_axis[0].levels[0].ranking, &s.by_axis[0].levels[1].ranking}) {
     const std::string lead = finding_sentences(*r).front();
     for (const MethodStatistics& m : r->methods) {
       const bool named = lead.find(" " + m.method) != std::string::npos;
